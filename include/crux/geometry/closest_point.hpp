@@ -1,0 +1,36 @@
+#pragma once
+/// @file closest_point.hpp  Closest point of a shape to a point, and squared distances.
+///
+/// All shapes are closed sets: a point inside a solid (sphere, box) is its own closest point.
+
+#include <crux/geometry/shapes.hpp>
+
+namespace crux {
+
+/// Closest point of triangle t to p by Voronoi-region classification (Ericson, RTCD 5.1.5,
+/// ClosestPtPointTriangle), with ties resolved inclusively so a vertex region wins where two
+/// edge tests tie. A degenerate triangle is treated as the segment or point it spans.
+Vec3 closestPoint(const Triangle& t, const Vec3& p);
+/// Closest point of segment s to p (RTCD 5.1.2); start == end is a point.
+Vec3 closestPoint(const Segment& s, const Vec3& p);
+/// Closest point of ray r to p (the origin when p is behind it).
+Vec3 closestPoint(const Ray& r, const Vec3& p);
+/// Closest point of the ball to p (p itself when inside).
+Vec3 closestPoint(const Sphere& s, const Vec3& p);
+/// Closest point of the box to p: per-axis clamp (RTCD 5.1.3).
+Vec3 closestPoint(const Aabb& b, const Vec3& p);
+/// Closest point of the oriented box to p: clamp in box coordinates (RTCD 5.1.4).
+Vec3 closestPoint(const Obb& b, const Vec3& p);
+/// Orthogonal projection of p onto the plane (RTCD 5.1.1).
+Vec3 closestPoint(const Plane& pl, const Vec3& p);
+
+/// Squared Euclidean distance from p to the shape (0 inside solids).
+Real squaredDistance(const Triangle& t, const Vec3& p);
+Real squaredDistance(const Segment& s, const Vec3& p);
+Real squaredDistance(const Ray& r, const Vec3& p);
+Real squaredDistance(const Sphere& s, const Vec3& p);
+Real squaredDistance(const Aabb& b, const Vec3& p);
+Real squaredDistance(const Obb& b, const Vec3& p);
+Real squaredDistance(const Plane& pl, const Vec3& p);
+
+}  // namespace crux

@@ -1,0 +1,83 @@
+#pragma once
+/// @file mesh.hpp  Indexed triangle meshes: flat vertex and index arrays plus their BVH.
+///
+/// Topology is immutable; vertex positions may be replaced (deforming meshes), after which the
+/// BVH is refitted, not rebuilt. Degenerate (zero-area) and duplicate triangles are kept: they
+/// obey the geometry layer's semantics (a degenerate triangle is its segment/point) and never
+/// produce NaN. Models share one Mesh (and so one BVH) by std::shared_ptr<const Mesh>.
+
+#include <crux/geometry/shapes.hpp>
+#include <crux/mesh/bvh.hpp>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace crux {
+
+/// Three vertex indices of a triangle.
+using TriangleIndices = std::array<std::uint32_t, 3>;
+
+/// What a mesh is made of, for `crux info` and sanity checks.
+struct MeshStats {
+  std::size_t triangles = 0;
+  std::size_t vertices = 0;
+  Aabb bounds = Aabb::empty();
+  std::size_t degenerateTriangles = 0;  ///< zero area (collinear or repeated corners), exact test
+  std::size_t duplicateTriangles = 0;   ///< same vertex set as an earlier triangle (any order)
+  std::size_t nonManifoldEdges = 0;     ///< undirected edges used by more than two triangles
+  std::size_t boundaryEdges = 0;        ///< undirected edges used by exactly one triangle
+  /// Watertight: every edge shared by exactly two triangles.
+  bool closed() const { return triangles > 0 && boundaryEdges == 0 && nonManifoldEdges == 0; }
+};
+
+/// An indexed triangle mesh with flat arrays and a BVH over its triangles.
+class Mesh {
+ public:
+  /// Validates the arrays and builds the BVH. Throws InvalidInput (message starts with `name`)
+  /// on an empty mesh, an index out of range (naming the triangle) or a non-finite vertex
+  /// (naming the vertex).
+  Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, std::string name = "mesh",
+       const BvhBuildOptions& options = {});
+
+  const std::vector<Vec3>& vertices() const { return vertices_; }
+  const std::vector<TriangleIndices>& triangles() const { return triangles_; }
+  std::size_t triangleCount() const { return triangles_.size(); }
+  std::size_t vertexCount() const { return vertices_.size(); }
+  const std::string& name() const { return name_; }
+  const Bvh& bvh() const { return bvh_; }
+  /// Bounds of all vertices (= the BVH root's bounds).
+  const Aabb& bounds() const { return bvh_.nodes.front().bounds; }
+  /// Corner positions of triangle i.
+  Triangle triangle(std::uint32_t i) const {
+    const TriangleIndices& t = triangles_[i];
+    return {vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]};
+  }
+  /// Replaces the vertex positions (same count, finite) and refits the BVH.
+  void setVertices(std::vector<Vec3> vertices);
+  /// Counts triangles, vertices, degenerate and duplicate triangles and edge manifoldness.
+  MeshStats stats() const;
+  /// Bytes held by the vertex, index and BVH arrays.
+  std::size_t memoryBytes() const;
+  /// Seconds the last BVH build took (for `crux info`).
+  double buildSeconds() const { return buildSeconds_; }
+
+ private:
+  std::vector<Aabb> triangleBounds() const;
+
+  std::vector<Vec3> vertices_;
+  std::vector<TriangleIndices> triangles_;
+  std::string name_;
+  Bvh bvh_;
+  double buildSeconds_ = 0;
+};
+
+/// Loads a triangle mesh with assimp (OBJ, OFF, PLY, STL ASCII/binary, glTF, ...): polygons
+/// are triangulated, identical vertices merged, every mesh of the file placed by its node
+/// transforms and concatenated. Points and lines are ignored. Throws InvalidInput naming the
+/// file and the problem (missing, unreadable or malformed file, no triangles, non-finite
+/// vertices).
+Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
+
+}  // namespace crux

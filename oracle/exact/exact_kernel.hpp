@@ -1,0 +1,61 @@
+#pragma once
+/// @file exact_kernel.hpp  Internal: CGAL kernel types and exact conversions from crux shapes.
+/// Included only by oracle/exact/*.cpp.
+
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
+
+#include <crux/geometry/shapes.hpp>
+
+#include <array>
+#include <variant>
+
+namespace crux::exact::detail {
+
+using K = CGAL::Exact_predicates_exact_constructions_kernel;
+using FT = K::FT;
+using Point = K::Point_3;
+using Vector = K::Vector_3;
+using Segment3 = K::Segment_3;
+using Triangle3 = K::Triangle_3;
+using Plane3 = K::Plane_3;
+using Ray3 = K::Ray_3;
+using Sphere3 = K::Sphere_3;
+using Cuboid = K::Iso_cuboid_3;
+using Tetra = K::Tetrahedron_3;
+
+/// Exact conversion (every float/double is a dyadic rational).
+inline Point toPoint(const Vec3& v) { return Point(double(v.x()), double(v.y()), double(v.z())); }
+inline Vector toVector(const Vec3& v) { return Vector(double(v.x()), double(v.y()), double(v.z())); }
+
+/// A (possibly degenerate) triangle as the exact object it is.
+using Simplex = std::variant<Point, Segment3, Triangle3>;
+
+/// Classifies a triangle exactly: a proper triangle, the segment its collinear corners span,
+/// or a point.
+inline Simplex toSimplex(const Triangle& t) {
+  const Point a = toPoint(t.a), b = toPoint(t.b), c = toPoint(t.c);
+  if (!CGAL::collinear(a, b, c)) return Triangle3(a, b, c);
+  if (a == b && b == c) return a;
+  const FT ab = CGAL::squared_distance(a, b), bc = CGAL::squared_distance(b, c),
+           ca = CGAL::squared_distance(c, a);
+  if (ab >= bc && ab >= ca) return Segment3(a, b);
+  if (bc >= ca) return Segment3(b, c);
+  return Segment3(c, a);
+}
+
+/// The 8 corners of an OBB computed exactly: corner k has s_i = ((k >> i) & 1) ? +1 : -1.
+inline std::array<Point, 8> corners(const Obb& b) {
+  std::array<Point, 8> out;
+  const Point c = toPoint(b.center);
+  for (int k = 0; k < 8; ++k) {
+    Vector off(0, 0, 0);
+    for (int i = 0; i < 3; ++i) {
+      const FT s = ((k >> i) & 1) ? FT(double(b.half[i])) : FT(-double(b.half[i]));
+      off = off + toVector(Vec3(b.axes.col(i))) * s;
+    }
+    out[k] = c + off;
+  }
+  return out;
+}
+
+}  // namespace crux::exact::detail
