@@ -1,0 +1,253 @@
+#include "cli/batch.hpp"
+
+#include "cli/json_codec.hpp"
+#include "cli/primitive_ops.hpp"
+
+#include <crux/error.hpp>
+
+#include <algorithm>
+#include <array>
+#include <istream>
+#include <ostream>
+
+namespace crux::cli {
+namespace {
+
+constexpr std::array<std::string_view, 4> kBackendNames = {"native", "fcl", "bullet", "exact"};
+
+/// Builds the request DOM from nlohmann's SAX events while tracking the protocol path of the
+/// value being parsed, so that a parse failure inside a value (a number literal that overflows
+/// double, such as 1e400) is reported naming its field, and the "id" and "op" read before the
+/// failure can still be echoed.
+class RequestBuilder {
+ public:
+  using number_integer_t = Json::number_integer_t;
+  using number_unsigned_t = Json::number_unsigned_t;
+  using number_float_t = Json::number_float_t;
+  using string_t = Json::string_t;
+  using binary_t = Json::binary_t;
+
+  Json root;  ///< The request; after a failure, the part parsed so far.
+
+  /// Set when parsing failed.
+  struct Failure {
+    int id = 0;              ///< nlohmann exception id (406: number overflow).
+    std::string what;        ///< nlohmann's message.
+    std::string token;       ///< The last token read.
+    std::string path;        ///< Protocol path of the value being parsed ("" = the request).
+  };
+  std::optional<Failure> failure;
+
+  bool null() { return put(nullptr); }
+  bool boolean(bool value) { return put(value); }
+  bool number_integer(number_integer_t value) { return put(value); }
+  bool number_unsigned(number_unsigned_t value) { return put(value); }
+  bool number_float(number_float_t value, const string_t&) { return put(value); }
+  bool string(string_t& value) { return put(std::move(value)); }
+  bool binary(binary_t& value) { return put(Json::binary(std::move(value))); }
+  bool start_object(std::size_t) { return open(Json::object()); }
+  bool start_array(std::size_t) { return open(Json::array()); }
+  bool key(string_t& name) {
+    key_ = std::move(name);
+    return true;
+  }
+  bool end_object() { return close(); }
+  bool end_array() { return close(); }
+  bool parse_error(std::size_t, const std::string& lastToken, const Json::exception& ex) {
+    failure = Failure{ex.id, ex.what(), lastToken, currentPath()};
+    return false;
+  }
+
+ private:
+  /// Where a value sits in its container: a member key or an array index.
+  struct Slot {
+    bool isMember = false;
+    std::string key;
+    std::size_t index = 0;
+  };
+  std::vector<Json*> open_;  // open containers, innermost last
+  std::vector<Slot> slots_;  // where each open container sits in the one before it
+  std::string key_;          // key of the next value in the innermost object
+
+  Slot currentSlot() const {
+    const Json& top = *open_.back();
+    return top.is_object() ? Slot{true, key_, 0} : Slot{false, {}, top.size()};
+  }
+  /// The path of the value being parsed; built only on failure (linear in the depth).
+  std::string currentPath() const {
+    if (open_.empty()) return "";
+    std::string path;
+    const auto append = [&path](const Slot& slot) {  // as memberPath / elementPath, in place
+      if (slot.isMember) {
+        if (!path.empty()) path += '.';
+        path += slot.key;
+      } else {
+        path += '[' + std::to_string(slot.index) + ']';
+      }
+    };
+    for (std::size_t i = 1; i < slots_.size(); ++i) append(slots_[i]);
+    append(currentSlot());
+    return path;
+  }
+  Json* place(Json value) {
+    if (open_.empty()) {
+      root = std::move(value);
+      return &root;
+    }
+    Json& top = *open_.back();
+    if (top.is_object()) {
+      Json& slot = top[key_];  // a repeated key overwrites: the last one wins
+      slot = std::move(value);
+      return &slot;
+    }
+    top.push_back(std::move(value));
+    return &top.back();
+  }
+  bool put(Json value) {
+    place(std::move(value));
+    return true;
+  }
+  bool open(Json container) {
+    Slot slot = open_.empty() ? Slot{} : currentSlot();
+    open_.push_back(place(std::move(container)));
+    slots_.push_back(std::move(slot));
+    return true;
+  }
+  bool close() {
+    open_.pop_back();
+    slots_.pop_back();
+    return true;
+  }
+};
+
+/// nlohmann's message without its "[json.exception.parse_error.101] " prefix.
+std::string parseMessage(const std::string& what) {
+  const auto end = what.find("] ");
+  return (what.rfind("[json.exception.", 0) == 0 && end != std::string::npos) ? what.substr(end + 2) : what;
+}
+
+/// An answer carrying only the echoed id/op (when the request had them) and `message`.
+Answer errorAnswer(const Json& request, const std::string& message) {
+  Answer answer = Answer::object();
+  if (request.is_object()) {
+    if (const auto id = request.find("id"); id != request.end()) answer["id"] = Answer(*id);
+    if (const auto op = request.find("op"); op != request.end()) answer["op"] = Answer(*op);
+  }
+  answer["error"] = message;
+  return answer;
+}
+
+bool isBlank(std::string_view s) {
+  return std::all_of(s.begin(), s.end(), [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; });
+}
+
+OpTable buildTable(Backend backend) {
+  OpTable table;
+  if (backend == Backend::Native) addPrimitiveOps(table);
+  return table;
+}
+
+}  // namespace
+
+std::string_view backendName(Backend backend) { return kBackendNames[static_cast<std::size_t>(backend)]; }
+
+std::optional<Backend> parseBackend(std::string_view name) {
+  for (std::size_t i = 0; i < kBackendNames.size(); ++i)
+    if (kBackendNames[i] == name) return static_cast<Backend>(i);
+  return std::nullopt;
+}
+
+std::vector<std::string_view> backendNames() { return {kBackendNames.begin(), kBackendNames.end()}; }
+
+const std::vector<std::string_view>& protocolOps() {
+  static const std::vector<std::string_view> ops = [] {
+    std::vector<std::string_view> v = {
+        // primitives
+        "closest_point_triangle", "triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_plane",
+        "triangle_triangle", "ray_triangle", "segment_triangle",
+        // meshes
+        "mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb", "mesh_plane",
+        "mesh_triangle", "mesh_mesh",
+        // models
+        "add_model", "set_transform", "set_parent", "remove_model", "model_ray", "model_segment",
+        "model_sphere", "model_aabb", "model_obb", "model_plane", "model_triangle", "children",
+        // scene
+        "scene_ray", "scene_query", "scene_pairs"};
+    std::sort(v.begin(), v.end());
+    return v;
+  }();
+  return ops;
+}
+
+const OpTable& opTable(Backend backend) {
+  static const std::array<OpTable, kBackendNames.size()> tables = {
+      buildTable(Backend::Native), buildTable(Backend::Fcl), buildTable(Backend::Bullet),
+      buildTable(Backend::Exact)};
+  return tables[static_cast<std::size_t>(backend)];
+}
+
+Answer answerLine(const std::string& rawLine, BatchState& state) {
+  std::string_view line = rawLine;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (isBlank(line)) return errorAnswer(Json(), "empty line");
+
+  RequestBuilder builder;
+  Json::sax_parse(line.begin(), line.end(), &builder);
+  const Json& request = builder.root;
+  if (builder.failure) {
+    const auto& f = *builder.failure;
+    if (f.id == 406) {  // out_of_range.406: a number literal beyond double
+      return errorAnswer(request, (f.path.empty() ? std::string("request") : f.path) + ": number " + f.token +
+                                      " overflows double");
+    }
+    return errorAnswer(request, "invalid JSON: " + parseMessage(f.what));
+  }
+  if (!request.is_object())
+    return errorAnswer(request, std::string("request: expected a JSON object, got ") + request.type_name());
+
+  try {
+    if (const auto id = request.find("id"); id != request.end() && !id->is_string())
+      return errorAnswer(request, std::string("id: expected a string, got ") + id->type_name());
+    const Json& opField = member(request, "op");
+    if (!opField.is_string())
+      return errorAnswer(request, std::string("op: expected a string, got ") + opField.type_name());
+    const std::string& op = opField.get_ref<const std::string&>();
+    const auto& ops = protocolOps();
+    if (!std::binary_search(ops.begin(), ops.end(), std::string_view(op)))
+      return errorAnswer(request, "op: unknown op \"" + op + "\"");
+
+    const OpTable& table = opTable(state.options.backend);
+    const auto handler = table.find(op);
+    if (handler == table.end())
+      return errorAnswer(request, "unsupported: " + op + " on " + std::string(backendName(state.options.backend)));
+
+    Answer answer = Answer::object();
+    if (const auto id = request.find("id"); id != request.end()) answer["id"] = Answer(*id);
+    answer["op"] = op;
+    handler->second(request, answer, state);
+    return answer;
+  } catch (const InvalidInput& e) {
+    return errorAnswer(request, e.what());
+  } catch (const std::exception& e) {
+    return errorAnswer(request, std::string("internal error: ") + e.what());
+  }
+}
+
+void writeAnswer(std::ostream& out, const Answer& answer) {
+  out << answer.dump(-1, ' ', false, Answer::error_handler_t::replace) << '\n';
+}
+
+int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options) {
+  if (options.threads < 1)
+    throw InvalidInput("threads: must be at least 1, got " + std::to_string(options.threads));
+  BatchState state(options);
+  std::string line;
+  while (std::getline(in, line)) {
+    writeAnswer(out, answerLine(line, state));
+    if (!out) return 1;
+  }
+  out.flush();
+  return (in.bad() || !out) ? 1 : 0;
+}
+
+}  // namespace crux::cli

@@ -1,0 +1,131 @@
+#include "cli/json_codec.hpp"
+
+#include <crux/error.hpp>
+
+#include <cmath>
+#include <limits>
+
+namespace crux::cli {
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw InvalidInput((path.empty() ? std::string("request") : path) + ": " + what);
+}
+
+std::string got(const Json& value) { return std::string("got ") + value.type_name(); }
+
+/// `value` as an array of exactly `n` elements.
+const Json& requireArray(const Json& value, std::size_t n, const std::string& path, const char* what) {
+  if (!value.is_array()) fail(path, std::string("expected ") + what + ", " + got(value));
+  if (value.size() != n) {
+    fail(path, std::string("expected ") + what + ", got an array of " + std::to_string(value.size()) +
+                   (value.size() == 1 ? " element" : " elements"));
+  }
+  return value;
+}
+
+const Json& requireObject(const Json& value, const std::string& path, const char* what) {
+  if (!value.is_object()) fail(path, std::string("expected ") + what + ", " + got(value));
+  return value;
+}
+
+}  // namespace
+
+std::string memberPath(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+std::string elementPath(const std::string& parent, std::size_t index) {
+  return parent + "[" + std::to_string(index) + "]";
+}
+
+const Json& member(const Json& object, const std::string& key, const std::string& parent) {
+  const auto it = object.find(key);
+  if (it == object.end()) fail(memberPath(parent, key), "missing field");
+  return *it;
+}
+
+Real readReal(const Json& value, const std::string& path) {
+  if (!value.is_number()) fail(path, "expected a number, " + got(value));
+  const double x = value.get<double>();
+  // The parser rejects overflowing literals (1e400), so x is finite; it may still exceed the
+  // range of a float Real, and converting such a double is undefined behaviour: reject first.
+  if (!std::isfinite(x) || std::fabs(x) > double(std::numeric_limits<Real>::max())) {
+    fail(path, "number " + Json(x).dump() + " overflows crux::Real (" +
+                   (sizeof(Real) == sizeof(float) ? "float" : "double") + ")");
+  }
+  return static_cast<Real>(x);
+}
+
+Vec3 readVec3(const Json& value, const std::string& path) {
+  requireArray(value, 3, path, "[x, y, z]");
+  Vec3 v;
+  for (std::size_t i = 0; i < 3; ++i) v[Eigen::Index(i)] = readReal(value[i], elementPath(path, i));
+  return v;
+}
+
+template <>
+Triangle readShape<Triangle>(const Json& value, const std::string& path) {
+  requireArray(value, 3, path, "a triangle [[ax,ay,az],[bx,by,bz],[cx,cy,cz]]");
+  return {readVec3(value[0], elementPath(path, 0)), readVec3(value[1], elementPath(path, 1)),
+          readVec3(value[2], elementPath(path, 2))};
+}
+
+template <>
+Sphere readShape<Sphere>(const Json& value, const std::string& path) {
+  requireObject(value, path, "a sphere {\"center\": [x,y,z], \"radius\": r}");
+  return {readVec3(member(value, "center", path), memberPath(path, "center")),
+          readReal(member(value, "radius", path), memberPath(path, "radius"))};
+}
+
+template <>
+Aabb readShape<Aabb>(const Json& value, const std::string& path) {
+  requireObject(value, path, "an aabb {\"min\": [x,y,z], \"max\": [x,y,z]}");
+  return {readVec3(member(value, "min", path), memberPath(path, "min")),
+          readVec3(member(value, "max", path), memberPath(path, "max"))};
+}
+
+template <>
+Obb readShape<Obb>(const Json& value, const std::string& path) {
+  requireObject(value, path, "an obb {\"center\": v, \"half\": v, \"axes\": [u, v, w]}");
+  Obb box;
+  box.center = readVec3(member(value, "center", path), memberPath(path, "center"));
+  box.half = readVec3(member(value, "half", path), memberPath(path, "half"));
+  const std::string axesPath = memberPath(path, "axes");
+  const Json& axes = requireArray(member(value, "axes", path), 3, axesPath, "three axes [u, v, w]");
+  for (std::size_t i = 0; i < 3; ++i) box.axes.col(Eigen::Index(i)) = readVec3(axes[i], elementPath(axesPath, i));
+  return box;
+}
+
+template <>
+Plane readShape<Plane>(const Json& value, const std::string& path) {
+  requireObject(value, path, "a plane {\"normal\": [x,y,z], \"d\": d}");
+  return {readVec3(member(value, "normal", path), memberPath(path, "normal")),
+          readReal(member(value, "d", path), memberPath(path, "d"))};
+}
+
+template <>
+Ray readShape<Ray>(const Json& value, const std::string& path) {
+  requireObject(value, path, "a ray {\"origin\": [x,y,z], \"dir\": [x,y,z]}");
+  return {readVec3(member(value, "origin", path), memberPath(path, "origin")),
+          readVec3(member(value, "dir", path), memberPath(path, "dir"))};
+}
+
+template <>
+Segment readShape<Segment>(const Json& value, const std::string& path) {
+  requireObject(value, path, "a segment {\"start\": [x,y,z], \"end\": [x,y,z]}");
+  return {readVec3(member(value, "start", path), memberPath(path, "start")),
+          readVec3(member(value, "end", path), memberPath(path, "end"))};
+}
+
+Answer writeReal(Real x, const std::string& name) {
+  if (!std::isfinite(x)) fail(name, "result is not finite (the computation overflowed)");
+  return Answer(static_cast<double>(x));
+}
+
+Answer writeVec3(const Vec3& v, const std::string& name) {
+  if (!v.allFinite()) fail(name, "result is not finite (the computation overflowed)");
+  return Answer::array({static_cast<double>(v.x()), static_cast<double>(v.y()), static_cast<double>(v.z())});
+}
+
+}  // namespace crux::cli

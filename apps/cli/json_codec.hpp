@@ -1,0 +1,58 @@
+#pragma once
+/// @file json_codec.hpp  Reading crux shapes from the batch protocol's JSON encodings and
+/// writing results back.
+///
+/// Readers check syntax only: presence, JSON type, vector length, and that every number is
+/// representable as a finite crux::Real. Semantic preconditions (radius >= 0, min <= max, ...)
+/// are checked afterwards by crux::validate. Every failure throws crux::InvalidInput whose
+/// message starts with the path of the offending field, e.g. "sphere.center[2]: ...".
+
+#include "cli/batch.hpp"
+
+#include <crux/geometry/shapes.hpp>
+
+#include <string>
+
+namespace crux::cli {
+
+/// Path of member `key` below `parent` ("" is the request itself): "sphere" + "center" ->
+/// "sphere.center".
+std::string memberPath(const std::string& parent, const std::string& key);
+/// Path of element `index` below `parent`: "triangle" + 1 -> "triangle[1]".
+std::string elementPath(const std::string& parent, std::size_t index);
+
+/// Member `key` of `object` (whose own path is `parent`); throws "<path>: missing field".
+const Json& member(const Json& object, const std::string& key, const std::string& parent = "");
+
+/// A JSON number as a finite Real. In float builds the double is rounded to the nearest float;
+/// a magnitude beyond the largest finite Real throws (overflow), it is never turned into inf.
+Real readReal(const Json& value, const std::string& path);
+/// `[x, y, z]`.
+Vec3 readVec3(const Json& value, const std::string& path);
+
+/// Reads a shape from its protocol encoding (see docs/batch.md). Specialised for Triangle,
+/// Sphere, Aabb, Obb, Plane, Ray and Segment.
+template <class Shape>
+Shape readShape(const Json& value, const std::string& path);
+
+template <> Triangle readShape<Triangle>(const Json& value, const std::string& path);
+template <> Sphere readShape<Sphere>(const Json& value, const std::string& path);
+template <> Aabb readShape<Aabb>(const Json& value, const std::string& path);
+template <> Obb readShape<Obb>(const Json& value, const std::string& path);
+template <> Plane readShape<Plane>(const Json& value, const std::string& path);
+template <> Ray readShape<Ray>(const Json& value, const std::string& path);
+template <> Segment readShape<Segment>(const Json& value, const std::string& path);
+
+/// Member `key` of the request read as a Shape; its path is `key`.
+template <class Shape>
+Shape readField(const Json& request, const std::string& key) {
+  return readShape<Shape>(member(request, key), key);
+}
+
+/// A result scalar as a JSON number (Real widened to double, exactly). Throws
+/// "<name>: result is not finite" when a computation overflowed.
+Answer writeReal(Real x, const std::string& name);
+/// A result vector as `[x, y, z]`, as writeReal per coordinate.
+Answer writeVec3(const Vec3& v, const std::string& name);
+
+}  // namespace crux::cli
