@@ -1,0 +1,412 @@
+// Tests of src/geometry/closest_point.cpp: regression tests named after the case they pin down,
+// seeded property tests of the triangle against CGAL's exact closest point, and optimality
+// checks (the variational inequality of a projection onto a convex set) for the other shapes.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <crux/geometry/closest_point.hpp>
+#include <crux/geometry/predicates.hpp>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "exact/exact.hpp"
+
+namespace crux {
+namespace {
+
+constexpr double kEps = std::numeric_limits<Real>::epsilon();
+constexpr double kWideEps = std::numeric_limits<Wide>::epsilon();
+
+/// Accuracy budget of a reported closest point or distance, in units of the error model below.
+/// The worst case observed in the property tests below is 0.7 units (both precisions).
+constexpr double kAccuracyUnits = 4;
+
+std::string str(const Vec3& v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+  return os.str();
+}
+
+std::string str(const Triangle& t) { return "triangle {" + str(t.a) + ", " + str(t.b) + ", " + str(t.c) + "}"; }
+
+double scaleOf(std::initializer_list<Vec3> points) {
+  double s = 1;
+  for (const Vec3& p : points) s = std::max(s, double(p.cwiseAbs().maxCoeff()));
+  return s;
+}
+
+/// Error model of a triangle closest point, the unit of kAccuracyUnits: eps_Real·S for rounding
+/// the answer to Real (S = the largest coordinate magnitude, at least 1), plus eps_Wide·S·κ for
+/// the evaluation in Wide. κ is the condition of the face-region projection
+/// q = p - n(n·ap)/|n|²: the computed normal n = ab × ac is off in direction by about
+/// eps_Wide·(|ab||ac| + S(|ab| + |ac|))/|n| (the products, and the edge differences, which round
+/// when Real = Wide), and that tilt moves q by |ap| times it. The second term is what a
+/// backward-stable algorithm must be allowed on slivers (|n| small against the edge lengths);
+/// in float builds it is negligible against the first.
+double errorUnit(const Triangle& t, const Vec3& p) {
+  const double s = scaleOf({t.a, t.b, t.c, p});
+  const Eigen::Vector3d a = t.a.cast<double>(), ab = t.b.cast<double>() - a, ac = t.c.cast<double>() - a;
+  const double ap = (p.cast<double>() - a).norm(), n = ab.cross(ac).norm();
+  const double kappa = n > 0 ? 1 + ap * (ab.norm() * ac.norm() + s * (ab.norm() + ac.norm())) / (n * s) : 1 + ap / s;
+  return kEps * s + kWideEps * s * kappa;
+}
+
+::testing::AssertionResult near(const Vec3& got, const Vec3& want, Real tolerance) {
+  if ((got - want).norm() <= tolerance) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "got " << str(got) << ", want " << str(want) << " (|diff| "
+                                       << (got - want).norm() << " > " << tolerance << ")";
+}
+
+const Triangle kUnit{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+
+// ---- triangle regressions -------------------------------------------------------------------
+
+TEST(ClosestPointTriangle, VertexRegionTieGoesToTheVertex) {
+  // The errata's example: the book's strict '<' between edge distances returned (0,0,0).
+  EXPECT_EQ(closestPoint(kUnit, Vec3(2, Real(-0.5), 0)), Vec3(1, 0, 0));
+  EXPECT_EQ(squaredDistance(kUnit, Vec3(2, Real(-0.5), 0)), Real(1.25));
+}
+
+TEST(ClosestPointTriangle, EachVoronoiRegion) {
+  // Vertex regions.
+  EXPECT_EQ(closestPoint(kUnit, Vec3(-1, -2, 3)), Vec3(0, 0, 0));
+  EXPECT_EQ(closestPoint(kUnit, Vec3(3, -1, -1)), Vec3(1, 0, 0));
+  EXPECT_EQ(closestPoint(kUnit, Vec3(-1, 4, 2)), Vec3(0, 1, 0));
+  // Edge regions: AB (y < 0), AC (x < 0), BC (x + y > 1).
+  EXPECT_EQ(closestPoint(kUnit, Vec3(Real(0.25), -3, 1)), Vec3(Real(0.25), 0, 0));
+  EXPECT_EQ(closestPoint(kUnit, Vec3(-2, Real(0.75), -1)), Vec3(0, Real(0.75), 0));
+  EXPECT_TRUE(near(closestPoint(kUnit, Vec3(1, 1, 5)), Vec3(Real(0.5), Real(0.5), 0), Real(4 * kEps)));
+  EXPECT_TRUE(near(closestPoint(kUnit, Vec3(Real(1.5), Real(0.5), 0)), Vec3(1, 0, 0), Real(4 * kEps)));
+  // Face region, above and below.
+  EXPECT_EQ(closestPoint(kUnit, Vec3(Real(0.25), Real(0.25), 7)), Vec3(Real(0.25), Real(0.25), 0));
+  EXPECT_EQ(closestPoint(kUnit, Vec3(Real(0.25), Real(0.5), -2)), Vec3(Real(0.25), Real(0.5), 0));
+  EXPECT_EQ(squaredDistance(kUnit, Vec3(Real(0.25), Real(0.5), -2)), Real(4));
+}
+
+TEST(ClosestPointTriangle, PointOnTheTriangleIsItsOwnClosestPoint) {
+  for (const Vec3& p : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(Real(0.5), Real(0.5), 0), Vec3(Real(0.25), 0, 0),
+                        Vec3(Real(0.125), Real(0.25), 0)}) {
+    EXPECT_EQ(closestPoint(kUnit, p), p);
+    EXPECT_EQ(squaredDistance(kUnit, p), Real(0));
+  }
+}
+
+TEST(ClosestPointTriangle, TiltedTriangleFaceRegion) {
+  // Plane x + y + z = 1; p = (1,1,1) projects to its centroid (1/3, 1/3, 1/3).
+  const Triangle t{Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  const Real third = Real(1) / 3;
+  EXPECT_TRUE(near(closestPoint(t, Vec3(1, 1, 1)), Vec3(third, third, third), Real(4 * kEps)));
+  EXPECT_NEAR(squaredDistance(t, Vec3(1, 1, 1)), Real(4) / 3, 8 * kEps);
+}
+
+TEST(ClosestPointTriangle, CollinearTriangleIsTheSegmentOfItsFarthestCorners) {
+  // Corner c lies between a and b: the set is the segment [a, b].
+  const Triangle t{Vec3(0, 0, 0), Vec3(4, 0, 0), Vec3(1, 0, 0)};
+  EXPECT_EQ(closestPoint(t, Vec3(6, 1, 0)), Vec3(4, 0, 0));
+  EXPECT_EQ(closestPoint(t, Vec3(-3, 0, 2)), Vec3(0, 0, 0));
+  EXPECT_EQ(closestPoint(t, Vec3(3, 5, -5)), Vec3(3, 0, 0));
+  EXPECT_EQ(squaredDistance(t, Vec3(3, 5, -5)), Real(50));
+  // Diagonal, with the middle corner listed first.
+  const Triangle d{Vec3(1, 1, 1), Vec3(2, 2, 2), Vec3(0, 0, 0)};
+  EXPECT_EQ(closestPoint(d, Vec3(3, 3, 3)), Vec3(2, 2, 2));
+  EXPECT_EQ(closestPoint(d, Vec3(-1, -1, -1)), Vec3(0, 0, 0));
+  EXPECT_TRUE(near(closestPoint(d, Vec3(1, 0, 2)), Vec3(1, 1, 1), Real(4 * kEps)));
+}
+
+TEST(ClosestPointTriangle, RepeatedCornerTriangleIsASegment) {
+  const Triangle t{Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 2, 0)};
+  EXPECT_EQ(closestPoint(t, Vec3(1, 1, 0)), Vec3(0, 1, 0));
+  EXPECT_EQ(closestPoint(t, Vec3(0, -1, 0)), Vec3(0, 0, 0));
+  EXPECT_EQ(squaredDistance(t, Vec3(1, 1, 0)), Real(1));
+}
+
+TEST(ClosestPointTriangle, AllCornersEqualIsAPoint) {
+  const Triangle t{Vec3(1, 2, 3), Vec3(1, 2, 3), Vec3(1, 2, 3)};
+  EXPECT_EQ(closestPoint(t, Vec3(5, 5, 5)), Vec3(1, 2, 3));
+  EXPECT_EQ(closestPoint(t, Vec3(1, 2, 3)), Vec3(1, 2, 3));
+  EXPECT_EQ(squaredDistance(t, Vec3(2, 2, 3)), Real(1));
+}
+
+TEST(ClosestPointTriangle, NearlyCollinearSliverIsFinite) {
+  // Not exactly collinear (so not classified as a segment), but far too thin for its shape to
+  // matter: the answer must be finite and on the segment up to rounding.
+  const Triangle t{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, Real(1e-30), 0)};
+  const Vec3 q = closestPoint(t, Vec3(1, 1, 0));
+  ASSERT_TRUE(q.allFinite());
+  EXPECT_TRUE(near(q, Vec3(1, 0, 0), Real(4 * kEps)));
+  EXPECT_TRUE(std::isfinite(squaredDistance(t, Vec3(1, 1, 0))));
+}
+
+// ---- other shapes: regressions ----------------------------------------------------------------
+
+TEST(ClosestPointSegment, StartEqualsEndIsAPoint) {
+  const Segment s{Vec3(1, 1, 1), Vec3(1, 1, 1)};
+  EXPECT_EQ(closestPoint(s, Vec3(4, 5, 1)), Vec3(1, 1, 1));
+  EXPECT_EQ(squaredDistance(s, Vec3(4, 5, 1)), Real(25));
+}
+
+TEST(ClosestPointSegment, ClampsToTheEndpointsAndProjectsBetween) {
+  const Segment s{Vec3(0, 0, 0), Vec3(0, 0, 4)};
+  EXPECT_EQ(closestPoint(s, Vec3(1, 0, -3)), Vec3(0, 0, 0));
+  EXPECT_EQ(closestPoint(s, Vec3(1, 0, 9)), Vec3(0, 0, 4));
+  EXPECT_EQ(closestPoint(s, Vec3(3, 4, 1)), Vec3(0, 0, 1));
+  EXPECT_EQ(squaredDistance(s, Vec3(3, 4, 1)), Real(25));
+}
+
+TEST(ClosestPointRay, PointBehindTheOriginGetsTheOrigin) {
+  const Ray r{Vec3(1, 0, 0), Vec3(2, 0, 0)};  // non-unit direction
+  EXPECT_EQ(closestPoint(r, Vec3(-5, 3, 0)), Vec3(1, 0, 0));
+  EXPECT_EQ(squaredDistance(r, Vec3(-5, 3, 0)), Real(45));
+  EXPECT_EQ(closestPoint(r, Vec3(7, 3, 0)), Vec3(7, 0, 0));
+  EXPECT_EQ(squaredDistance(r, Vec3(7, 3, 0)), Real(9));
+}
+
+TEST(ClosestPointSphere, PointInsideIsItsOwnClosestPoint) {
+  const Sphere s{Vec3(1, 1, 1), 2};
+  EXPECT_EQ(closestPoint(s, Vec3(2, 1, 0)), Vec3(2, 1, 0));
+  EXPECT_EQ(squaredDistance(s, Vec3(2, 1, 0)), Real(0));
+  EXPECT_EQ(closestPoint(s, Vec3(1, 1, 3)), Vec3(1, 1, 3));  // on the surface
+  EXPECT_EQ(closestPoint(s, Vec3(1, 1, 7)), Vec3(1, 1, 3));
+  EXPECT_EQ(squaredDistance(s, Vec3(1, 1, 7)), Real(16));
+}
+
+TEST(ClosestPointSphere, ZeroRadiusIsItsCentre) {
+  const Sphere s{Vec3(1, 2, 3), 0};
+  EXPECT_EQ(closestPoint(s, Vec3(1, 2, 5)), Vec3(1, 2, 3));
+  EXPECT_EQ(closestPoint(s, Vec3(1, 2, 3)), Vec3(1, 2, 3));
+  EXPECT_EQ(squaredDistance(s, Vec3(1, 2, 5)), Real(4));
+}
+
+TEST(ClosestPointAabb, EachAxisUsesItsOwnBounds) {
+  // The book clamped y and z against min.x/max.x: with these disjoint per-axis ranges that
+  // would give (1, 1, 1).
+  const Aabb b{Vec3(0, 10, 20), Vec3(1, 11, 21)};
+  EXPECT_EQ(closestPoint(b, Vec3(5, 5, 25)), Vec3(1, 10, 21));
+  EXPECT_EQ(squaredDistance(b, Vec3(5, 5, 25)), Real(16 + 25 + 16));
+  EXPECT_EQ(closestPoint(b, Vec3(Real(0.5), Real(10.5), 0)), Vec3(Real(0.5), Real(10.5), 20));
+}
+
+TEST(ClosestPointAabb, PointInsideIsItsOwnClosestPoint) {
+  const Aabb b{Vec3(-1, -1, -1), Vec3(1, 2, 3)};
+  EXPECT_EQ(closestPoint(b, Vec3(Real(0.3), 2, -1)), Vec3(Real(0.3), 2, -1));
+  EXPECT_EQ(squaredDistance(b, Vec3(Real(0.3), 2, -1)), Real(0));
+}
+
+TEST(ClosestPointObb, PointInsideIsItsOwnClosestPoint) {
+  const Mat3 r = Quat(Eigen::AngleAxis<Real>(Real(0.6), Vec3(1, -2, 2).normalized())).toRotationMatrix();
+  const Obb b{Vec3(1, 2, 3), Vec3(1, 2, 3), r};
+  const Vec3 p = b.center + r * Vec3(Real(0.5), Real(-1.5), Real(2.9));
+  EXPECT_EQ(closestPoint(b, p), p);
+  EXPECT_EQ(squaredDistance(b, p), Real(0));
+}
+
+TEST(ClosestPointObb, RotatedBoxClampsInItsOwnFrame) {
+  // Box rotated 90° about z: its local x is world y. Half extents (1, 2, 3).
+  Mat3 r;
+  r << 0, -1, 0, 1, 0, 0, 0, 0, 1;
+  const Obb b{Vec3(0, 0, 0), Vec3(1, 2, 3), r};
+  // World (5, 5, 5) is local (5, -5, 5): clamped to (1, -2, 3), world (2, 1, 3).
+  EXPECT_EQ(closestPoint(b, Vec3(5, 5, 5)), Vec3(2, 1, 3));
+  EXPECT_EQ(squaredDistance(b, Vec3(5, 5, 5)), Real(9 + 16 + 4));
+}
+
+TEST(ClosestPointPlane, ProjectsWithANonUnitNormal) {
+  const Plane pl{Vec3(0, 0, 2), 4};  // z = 2
+  EXPECT_EQ(closestPoint(pl, Vec3(3, -1, 7)), Vec3(3, -1, 2));
+  EXPECT_EQ(squaredDistance(pl, Vec3(3, -1, 7)), Real(25));
+  EXPECT_EQ(closestPoint(pl, Vec3(3, -1, 2)), Vec3(3, -1, 2));
+}
+
+// ---- triangle property tests against the exact oracle -----------------------------------------
+
+/// Which kind of set a triangle is, for coverage counts.
+predicates::TriangleKind kindOf(const Triangle& t) { return predicates::classify(t).kind; }
+
+struct Coverage {
+  long cases = 0, degenerate = 0, onTriangle = 0;
+};
+
+/// The exact answer for one case.
+struct ExactAnswer {
+  exact::Vec3d point;
+  double squaredDistance;
+};
+
+ExactAnswer exactAnswer(const Triangle& t, const Vec3& p) {
+  return {exact::closestPoint(t, p), exact::squaredDistance(t, p)};
+}
+
+/// Compares crux with the exact answer on one case; returns false (after reporting) on a
+/// mismatch. worstUnits tracks the largest error seen, in units of errorUnit().
+bool agreesWithExact(const Triangle& t, const Vec3& p, const ExactAnswer& want, double& worstUnits) {
+  const Vec3 got = closestPoint(t, p);
+  const double gotD = std::sqrt(double(squaredDistance(t, p)));
+  const double wantD = std::sqrt(want.squaredDistance);
+  const double unit = errorUnit(t, p);
+  const double pointErr = (got.cast<double>() - want.point).norm();
+  const double distErr = std::abs(gotD - wantD);
+  worstUnits = std::max({worstUnits, pointErr / unit, distErr / unit});
+  if (got.allFinite() && pointErr <= kAccuracyUnits * unit && distErr <= kAccuracyUnits * unit) return true;
+  ADD_FAILURE() << str(t) << ", p = " << str(p) << ": crux " << str(got) << " (distance " << gotD << "), exact "
+                << str(Vec3(want.point.cast<Real>())) << " (distance " << wantD << "), tolerance "
+                << kAccuracyUnits * unit;
+  return false;
+}
+
+TEST(ClosestPointTriangleProperty, IntegerGridMatchesExact) {
+  // Small integer coordinates so that ties between regions (p on a region boundary), points on
+  // the triangle and degenerate triangles are all frequent.
+  std::mt19937_64 rng(0xC105E57);
+  std::uniform_int_distribution<int> coord(-4, 4);
+  std::uniform_int_distribution<int> pick(0, 9);
+  const auto v = [&] { return Vec3(Real(coord(rng)), Real(coord(rng)), Real(coord(rng))); };
+  Coverage cov;
+  double worst = 0;
+  int failures = 0;
+  for (int i = 0; i < 100000 && failures < 10; ++i) {
+    Triangle t{v(), v(), v()};
+    const int shape = pick(rng);
+    if (shape == 0) t.c = t.a;                                   // repeated corner
+    if (shape == 1) t.c = t.a + (t.b - t.a) * Real(coord(rng));  // collinear (any order)
+    if (shape == 2) t.b = t.c = t.a;                             // a point
+    if (shape == 3) t.c = t.a + (t.b - t.a) * Real(0.5);         // midpoint, collinear
+    Vec3 p = v();
+    if (pick(rng) == 0) p = Vec3(t.a.x(), p.y(), t.a.z());  // shares coordinates with a corner
+    const ExactAnswer want = exactAnswer(t, p);
+    failures += !agreesWithExact(t, p, want, worst);
+    ++cov.cases;
+    cov.degenerate += kindOf(t) != predicates::TriangleKind::Triangle;
+    cov.onTriangle += want.squaredDistance == 0;
+  }
+  EXPECT_EQ(failures, 0);
+  std::printf("integer grid: %ld cases, %ld degenerate, %ld points on the triangle, worst error %.3g units\n",
+              cov.cases, cov.degenerate, cov.onTriangle, worst);
+  EXPECT_GE(cov.degenerate, cov.cases / 5);
+  EXPECT_GE(cov.onTriangle, cov.cases / 100);
+}
+
+TEST(ClosestPointTriangleProperty, GeneralPositionMatchesExact) {
+  std::mt19937_64 rng(0xF10A7);
+  std::uniform_real_distribution<double> coord(-10, 10), bary(-0.25, 1), offset(-5, 5), jitter(-1, 1);
+  const auto v = [&] { return Vec3(Real(coord(rng)), Real(coord(rng)), Real(coord(rng))); };
+  double worst = 0;
+  int failures = 0;
+  long faceRegion = 0;
+  for (int i = 0; i < 100000 && failures < 10; ++i) {
+    const Triangle t{v(), v(), v()};
+    // p off a point of the plane near the triangle (affine coordinates around [0, 1]), mostly
+    // along the normal, so that face, edge and vertex regions all occur.
+    const Vec3 n = (t.b - t.a).cross(t.c - t.a).normalized();
+    const Vec3 p = t.a + (t.b - t.a) * Real(bary(rng)) + (t.c - t.a) * Real(bary(rng)) + n * Real(offset(rng)) +
+                   Vec3(Real(jitter(rng)), Real(jitter(rng)), Real(jitter(rng)));
+    const ExactAnswer want = exactAnswer(t, p);
+    failures += !agreesWithExact(t, p, want, worst);
+    // Face region iff the closest point is the projection onto the plane (coverage count only).
+    const double planeD = std::abs(double(n.dot(p - t.a)));
+    faceRegion += std::abs(std::sqrt(want.squaredDistance) - planeD) <= 1e-4 * (1 + planeD);
+  }
+  EXPECT_EQ(failures, 0);
+  std::printf("general position: 100000 cases, %ld in a face region, worst error %.3g units\n", faceRegion, worst);
+  // Every region kind must be exercised: face regions neither absent nor everything.
+  EXPECT_GE(faceRegion, 10000);
+  EXPECT_LE(faceRegion, 90000);
+}
+
+// ---- other shapes: optimality of the projection ---------------------------------------------
+
+/// q is the closest point of a convex set C to p iff q ∈ C and (p - q)·(x - q) <= 0 for every
+/// x ∈ C; for polytopes it suffices to check the vertices. Tolerances are kAccuracyUnits·kEps
+/// relative to the magnitudes involved.
+::testing::AssertionResult isProjection(const Vec3& p, const Vec3& q, std::initializer_list<Vec3> vertices,
+                                        Real scale) {
+  const Real tol = Real(kAccuracyUnits * kEps) * scale;
+  for (const Vec3& x : vertices) {
+    const Real v = (p - q).dot(x - q);
+    if (v > tol * ((p - q).norm() + (x - q).norm()) * 2)
+      return ::testing::AssertionFailure()
+             << "p = " << str(p) << ", q = " << str(q) << ", vertex " << str(x) << ": (p-q)·(x-q) = " << v;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+Mat3 randomRotation(std::mt19937_64& rng) {
+  std::normal_distribution<double> n(0, 1);
+  Eigen::Quaterniond q(n(rng), n(rng), n(rng), n(rng));
+  q.normalize();
+  return q.toRotationMatrix().cast<Real>();
+}
+
+TEST(ClosestPointProperty, SegmentRayAabbObbSphereAndPlaneAreProjections) {
+  std::mt19937_64 rng(0x5EED);
+  std::uniform_real_distribution<double> coord(-8, 8), ext(0, 4);
+  const auto v = [&] { return Vec3(Real(coord(rng)), Real(coord(rng)), Real(coord(rng))); };
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 p = v();
+    // Bound on the magnitude of every point and difference formed below (coordinates <= 8,
+    // extents <= 4, so differences <= 2·(8 + 4)·√3 < 64); the rays' far points are scaled apart.
+    const Real scale = 64;
+    const Real tol = Real(kAccuracyUnits * kEps) * scale;
+    {
+      const Segment s{v(), v()};
+      const Vec3 q = closestPoint(s, p);
+      ASSERT_TRUE(isProjection(p, q, {s.start, s.end}, scale));
+      // q on the segment: collinear with the endpoints and between them.
+      ASSERT_LE(((q - s.start).cross(s.end - s.start)).norm(), tol * (s.end - s.start).norm() * 4);
+      ASSERT_NEAR(squaredDistance(s, p), (p - q).squaredNorm(), tol * scale * 4);
+    }
+    {
+      const Ray r{v(), v()};
+      const Vec3 q = closestPoint(r, p);
+      ASSERT_TRUE(isProjection(p, q, {r.origin, r.origin + r.dir * 100}, scale * 100));
+      ASSERT_NEAR(squaredDistance(r, p), (p - q).squaredNorm(), tol * scale * 4);
+    }
+    {
+      Aabb b{v(), Vec3::Zero()};
+      b.max = b.min + Vec3(Real(ext(rng)), Real(ext(rng)), Real(ext(rng)));
+      const Vec3 q = closestPoint(b, p);
+      ASSERT_TRUE(((q.array() >= b.min.array()) && (q.array() <= b.max.array())).all());
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 corner((k & 1) ? b.max.x() : b.min.x(), (k & 2) ? b.max.y() : b.min.y(),
+                          (k & 4) ? b.max.z() : b.min.z());
+        ASSERT_TRUE(isProjection(p, q, {corner}, scale));
+      }
+      ASSERT_NEAR(squaredDistance(b, p), (p - q).squaredNorm(), tol * scale * 4);
+    }
+    {
+      const Obb b{v(), Vec3(Real(ext(rng)), Real(ext(rng)), Real(ext(rng))), randomRotation(rng)};
+      const Vec3 q = closestPoint(b, p);
+      const Vec3 local = b.axes.transpose() * (q - b.center);
+      ASSERT_TRUE((local.cwiseAbs().array() <= b.half.array() + tol).all())
+          << str(local) << " half " << str(b.half) << " p " << str(p) << " q " << str(q) << " c " << str(b.center);
+      for (int k = 0; k < 8; ++k) {
+        const Vec3 s((k & 1) ? 1 : -1, (k & 2) ? 1 : -1, (k & 4) ? 1 : -1);
+        ASSERT_TRUE(isProjection(p, q, {Vec3(b.center + b.axes * s.cwiseProduct(b.half))}, scale));
+      }
+      ASSERT_NEAR(squaredDistance(b, p), (p - q).squaredNorm(), tol * scale * 4);
+    }
+    {
+      const Sphere s{v(), Real(ext(rng))};
+      const Vec3 q = closestPoint(s, p);
+      ASSERT_LE((q - s.center).norm(), s.radius + tol);
+      const Real gap = std::max(Real(0), (p - s.center).norm() - s.radius);
+      ASSERT_NEAR((p - q).norm(), gap, tol);
+      ASSERT_NEAR(squaredDistance(s, p), gap * gap, tol * scale * 4);
+    }
+    {
+      const Plane pl{v(), Real(coord(rng))};
+      if (pl.normal.norm() < Real(0.1)) continue;
+      const Vec3 q = closestPoint(pl, p);
+      ASSERT_NEAR(pl.normal.dot(q), pl.d, tol * scale * 4);
+      ASSERT_LE((p - q).cross(pl.normal).norm(), tol * pl.normal.norm() * 4);
+      ASSERT_NEAR(squaredDistance(pl, p), (p - q).squaredNorm(), tol * scale * 4);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace crux

@@ -1,0 +1,123 @@
+// Tests of src/geometry/shapes.cpp: validate() accepts valid shapes (degenerate ones included)
+// and rejects each broken precondition with an InvalidInput naming the field.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <crux/geometry/shapes.hpp>
+#include <limits>
+#include <string>
+
+namespace crux {
+namespace {
+
+constexpr Real kNaN = std::numeric_limits<Real>::quiet_NaN();
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+
+/// Success iff f throws InvalidInput whose message contains `part`.
+template <class F>
+::testing::AssertionResult throwsNaming(F&& f, const std::string& part) {
+  try {
+    f();
+  } catch (const InvalidInput& e) {
+    const std::string message = e.what();
+    if (message.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << "message \"" << message << "\" does not name \"" << part << "\"";
+  }
+  return ::testing::AssertionFailure() << "no InvalidInput thrown (expected one naming \"" << part << "\")";
+}
+
+TEST(ValidateShapes, ValidShapesPass) {
+  EXPECT_NO_THROW(validate(Ray{Vec3(1, 2, 3), Vec3(0, 0, -1)}));
+  EXPECT_NO_THROW(validate(Segment{Vec3(1, 2, 3), Vec3(1, 2, 3)}));  // a point
+  EXPECT_NO_THROW(validate(Sphere{Vec3(0, 0, 0), 0}));               // a point
+  EXPECT_NO_THROW(validate(Aabb{Vec3(0, 0, 0), Vec3(1, 0, 2)}));     // flat
+  EXPECT_NO_THROW(validate(Obb{Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity()}));
+  Mat3 permuted;
+  permuted << 0, -1, 0, 0, 0, 1, 1, 0, 0;  // signed permutation, left-handed is fine
+  EXPECT_NO_THROW(validate(Obb{Vec3(0, 0, 0), Vec3(1, 2, 3), permuted}));
+  const Mat3 rotation = Quat(Eigen::AngleAxis<Real>(Real(0.7), Vec3(1, 2, 3).normalized())).toRotationMatrix();
+  EXPECT_NO_THROW(validate(Obb{Vec3(0, 0, 0), Vec3(1, 2, 3), rotation}));
+  EXPECT_NO_THROW(validate(Plane{Vec3(0, 0, 5), -2}));                               // non-unit normal
+  EXPECT_NO_THROW(validate(Triangle{Vec3(0, 0, 0), Vec3(1, 1, 1), Vec3(2, 2, 2)}));  // collinear
+  EXPECT_NO_THROW(validate(Triangle{Vec3(3, 3, 3), Vec3(3, 3, 3), Vec3(3, 3, 3)}));  // a point
+  EXPECT_NO_THROW(validatePoint(Vec3(-1, 0, 1e30f)));
+}
+
+TEST(ValidateShapes, NonFiniteCoordinatesNameTheField) {
+  EXPECT_TRUE(throwsNaming([] { validate(Ray{Vec3(kNaN, 0, 0), Vec3(1, 0, 0)}); }, "ray.origin"));
+  EXPECT_TRUE(throwsNaming([] { validate(Ray{Vec3(0, 0, 0), Vec3(0, kInf, 0)}); }, "ray.dir"));
+  EXPECT_TRUE(throwsNaming([] { validate(Segment{Vec3(0, 0, 0), Vec3(0, 0, -kInf)}); }, "segment.end"));
+  EXPECT_TRUE(throwsNaming([] { validate(Segment{Vec3(kNaN, 0, 0), Vec3(0, 0, 0)}); }, "segment.start"));
+  EXPECT_TRUE(throwsNaming([] { validate(Sphere{Vec3(0, kNaN, 0), 1}); }, "sphere.center"));
+  EXPECT_TRUE(throwsNaming([] { validate(Sphere{Vec3(0, 0, 0), kInf}); }, "sphere.radius"));
+  EXPECT_TRUE(throwsNaming([] { validate(Aabb{Vec3(kNaN, 0, 0), Vec3(1, 1, 1)}); }, "aabb.min"));
+  EXPECT_TRUE(throwsNaming([] { validate(Aabb{Vec3(0, 0, 0), Vec3(1, kInf, 1)}); }, "aabb.max"));
+  EXPECT_TRUE(throwsNaming([] { validate(Obb{Vec3(0, 0, kNaN), Vec3(1, 1, 1), Mat3::Identity()}); }, "obb.center"));
+  EXPECT_TRUE(throwsNaming([] { validate(Obb{Vec3(0, 0, 0), Vec3(1, kNaN, 1), Mat3::Identity()}); }, "obb.half"));
+  EXPECT_TRUE(throwsNaming(
+      [] {
+        Mat3 axes = Mat3::Identity();
+        axes(1, 2) = kNaN;
+        validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), axes});
+      },
+      "obb.axes[2]"));
+  EXPECT_TRUE(throwsNaming([] { validate(Plane{Vec3(0, kInf, 1), 0}); }, "plane.normal"));
+  EXPECT_TRUE(throwsNaming([] { validate(Plane{Vec3(0, 0, 1), kNaN}); }, "plane.d"));
+  EXPECT_TRUE(throwsNaming([] { validate(Triangle{Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(kNaN, 0, 0)}); }, "triangle[2]"));
+  EXPECT_TRUE(throwsNaming([] { validatePoint(Vec3(0, -kInf, 0), "query"); }, "query"));
+}
+
+TEST(ValidateShapes, CallerChosenNameIsUsed) {
+  EXPECT_TRUE(throwsNaming([] { validate(Sphere{Vec3(0, 0, 0), -1}, "b"); }, "b.radius"));
+}
+
+TEST(ValidateShapes, ZeroRayDirection) {
+  EXPECT_TRUE(throwsNaming([] { validate(Ray{Vec3(1, 2, 3), Vec3(0, 0, 0)}); }, "ray.dir"));
+}
+
+TEST(ValidateShapes, NegativeRadius) {
+  EXPECT_TRUE(throwsNaming([] { validate(Sphere{Vec3(0, 0, 0), Real(-0.5)}); }, "sphere.radius is negative"));
+}
+
+TEST(ValidateShapes, MinGreaterThanMaxNamesTheAxis) {
+  EXPECT_TRUE(throwsNaming([] { validate(Aabb{Vec3(0, 2, 0), Vec3(1, 1, 1)}); }, "aabb.min.y"));
+  EXPECT_TRUE(throwsNaming([] { validate(Aabb{Vec3(0, 0, 1), Vec3(1, 1, 0)}); }, "aabb.min.z"));
+  // The empty box is not a valid query shape.
+  EXPECT_TRUE(throwsNaming([] { validate(Aabb::empty()); }, "aabb"));
+}
+
+TEST(ValidateShapes, NegativeObbHalfExtent) {
+  EXPECT_TRUE(throwsNaming([] { validate(Obb{Vec3(0, 0, 0), Vec3(1, -1, 1), Mat3::Identity()}); }, "obb.half"));
+}
+
+TEST(ValidateShapes, NonOrthonormalObbAxes) {
+  EXPECT_TRUE(throwsNaming(
+      [] {
+        Mat3 a = Mat3::Identity();
+        a(0, 0) = 2;  // a non-unit axis
+        validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), a});
+      },
+      "obb.axes"));
+  EXPECT_TRUE(throwsNaming(
+      [] {
+        Mat3 sheared = Mat3::Identity();
+        sheared(0, 1) = Real(0.1);  // axes not orthogonal
+        validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), sheared});
+      },
+      "orthonormal"));
+  EXPECT_TRUE(throwsNaming([] { validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), Mat3::Zero()}); }, "obb.axes"));
+  // Just beyond the documented tolerance is rejected, well inside it is accepted.
+  Mat3 nearly = Mat3::Identity();
+  nearly(2, 2) = 1 + 4 * kObbOrthonormalityTolerance;
+  EXPECT_THROW(validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), nearly}), InvalidInput);
+  nearly(2, 2) = 1 + kObbOrthonormalityTolerance / 4;
+  EXPECT_NO_THROW(validate(Obb{Vec3(0, 0, 0), Vec3(1, 1, 1), nearly}));
+}
+
+TEST(ValidateShapes, ZeroPlaneNormal) {
+  EXPECT_TRUE(throwsNaming([] { validate(Plane{Vec3(0, 0, 0), 1}); }, "plane.normal"));
+}
+
+}  // namespace
+}  // namespace crux
