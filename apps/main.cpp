@@ -1,6 +1,7 @@
 /// @file main.cpp  The `crux` command line: argument parsing only; the work is in apps/cli/.
 
 #include "cli/batch.hpp"
+#include "cli/info.hpp"
 
 #include <crux/config.hpp>
 #include <crux/error.hpp>
@@ -10,6 +11,7 @@
 #include <iostream>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -57,6 +59,17 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
 
+  CLI::App* info = app.add_subcommand(
+      "info",
+      "Load mesh files (any format crux::loadMesh reads) and print, per file: triangle and vertex "
+      "counts, bounds, degenerate and duplicate triangles, non-manifold and boundary edges, whether "
+      "it is closed, load and BVH build times, BVH nodes/leaves/depth and bytes per triangle. A file "
+      "that fails to load is reported on stderr, the others are still reported, and the exit status is 1.");
+  std::vector<std::string> meshPaths;
+  bool infoJson = false;
+  info->add_option("meshes", meshPaths, "Mesh files")->required();
+  info->add_flag("--json", infoJson, "One JSON object per file and line instead of the text report");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -77,6 +90,11 @@ int main(int argc, char** argv) {
       std::cerr << "crux batch: " << e.what() << '\n';
       return 2;
     }
+  }
+  if (info->parsed()) {
+    crux::cli::InfoOptions options;
+    options.json = infoJson;
+    return crux::cli::runInfo(meshPaths, options, std::cout, std::cerr);
   }
   return 0;
 }

@@ -1,6 +1,7 @@
 #include "cli/batch.hpp"
 
 #include "cli/json_codec.hpp"
+#include "cli/mesh_ops.hpp"
 #include "cli/primitive_ops.hpp"
 
 #include <crux/error.hpp>
@@ -143,7 +144,10 @@ bool isBlank(std::string_view s) {
 
 OpTable buildTable(Backend backend) {
   OpTable table;
-  if (backend == Backend::Native) addPrimitiveOps(table);
+  if (backend == Backend::Native) {
+    addPrimitiveOps(table);
+    addMeshOps(table);
+  }
   return table;
 }
 

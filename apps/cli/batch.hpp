@@ -6,11 +6,14 @@
 /// request is dispatched through a table op-name -> handler chosen by the backend; an op the
 /// protocol names but the backend's table lacks answers "unsupported: <op> on <backend>".
 
+#include <crux/mesh/mesh.hpp>
+
 #include <nlohmann/json.hpp>
 
 #include <functional>
 #include <iosfwd>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -42,10 +45,14 @@ struct BatchOptions {
   int threads = 1;
 };
 
-/// State that lives for a whole batch (later: meshes, models and the scene by name).
+/// State that lives for a whole batch (later also models and the scene, by name).
 struct BatchState {
   explicit BatchState(BatchOptions opts = {}) : options(opts) {}
   BatchOptions options;
+  /// Meshes defined by `mesh` and `load_mesh`, by name. Meshes are immutable and shared:
+  /// redefining a name replaces the entry for later requests, while anything already holding
+  /// the old pointer keeps the old mesh. A failed definition leaves the entry unchanged.
+  std::map<std::string, std::shared_ptr<const Mesh>, std::less<>> meshes;
 };
 
 /// Answers one request: reads the fields it needs from `request` and adds the answer fields

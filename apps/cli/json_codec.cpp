@@ -57,6 +57,18 @@ Real readReal(const Json& value, const std::string& path) {
   return static_cast<Real>(x);
 }
 
+const std::string& readString(const Json& value, const std::string& path, const char* what) {
+  if (!value.is_string()) fail(path, std::string("expected ") + what + ", " + got(value));
+  return value.get_ref<const std::string&>();
+}
+
+bool readFlag(const Json& object, const std::string& key, const std::string& parent) {
+  const auto it = object.find(key);
+  if (it == object.end()) return false;
+  if (!it->is_boolean()) fail(memberPath(parent, key), "expected true or false, " + got(*it));
+  return it->get<bool>();
+}
+
 Vec3 readVec3(const Json& value, const std::string& path) {
   requireArray(value, 3, path, "[x, y, z]");
   Vec3 v;
@@ -116,6 +128,29 @@ Segment readShape<Segment>(const Json& value, const std::string& path) {
   requireObject(value, path, "a segment {\"start\": [x,y,z], \"end\": [x,y,z]}");
   return {readVec3(member(value, "start", path), memberPath(path, "start")),
           readVec3(member(value, "end", path), memberPath(path, "end"))};
+}
+
+Transform readTransform(const Json& value, const std::string& path) {
+  requireObject(value, path, "a transform {\"translation\": [x,y,z], \"rotation\": [w,x,y,z]}");
+  Transform transform;
+  if (const auto t = value.find("translation"); t != value.end())
+    transform.translation = readVec3(*t, memberPath(path, "translation"));
+  if (const auto r = value.find("rotation"); r != value.end()) {
+    const std::string rotationPath = memberPath(path, "rotation");
+    requireArray(*r, 4, rotationPath, "a unit quaternion [w, x, y, z]");
+    Real q[4];
+    for (std::size_t i = 0; i < 4; ++i) q[i] = readReal((*r)[i], elementPath(rotationPath, i));
+    Wide squaredNorm = 0;
+    for (const Real c : q) squaredNorm += Wide(c) * Wide(c);
+    const Wide norm = std::sqrt(squaredNorm);
+    if (!(std::fabs(norm - 1) <= kUnitQuaternionTolerance)) {
+      fail(rotationPath, "not a unit quaternion (|q| = " + Json(norm).dump() + ", tolerance " +
+                             Json(kUnitQuaternionTolerance).dump() + ")");
+    }
+    transform.rotation = Quat(q[0], q[1], q[2], q[3]);  // Eigen's order is (w, x, y, z) too
+    transform.rotation.normalize();
+  }
+  return transform;
 }
 
 Answer writeReal(Real x, const std::string& name) {

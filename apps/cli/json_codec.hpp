@@ -30,6 +30,11 @@ Real readReal(const Json& value, const std::string& path);
 /// `[x, y, z]`.
 Vec3 readVec3(const Json& value, const std::string& path);
 
+/// A JSON string (`what` describes it in the error, e.g. "a mesh name").
+const std::string& readString(const Json& value, const std::string& path, const char* what = "a string");
+/// Optional boolean member `key` of `object` (path `key` below `parent`): false when absent.
+bool readFlag(const Json& object, const std::string& key, const std::string& parent = "");
+
 /// Reads a shape from its protocol encoding (see docs/batch.md). Specialised for Triangle,
 /// Sphere, Aabb, Obb, Plane, Ray and Segment.
 template <class Shape>
@@ -42,6 +47,17 @@ template <> Obb readShape<Obb>(const Json& value, const std::string& path);
 template <> Plane readShape<Plane>(const Json& value, const std::string& path);
 template <> Ray readShape<Ray>(const Json& value, const std::string& path);
 template <> Segment readShape<Segment>(const Json& value, const std::string& path);
+
+/// Accepted deviation of a transform's rotation quaternion from unit length: |(|q| - 1)| must
+/// not exceed this (a relative tolerance, |q| being dimensionless). 1e-6 accepts quaternions
+/// printed with 7 significant digits or more (and every float-rounded unit quaternion) and
+/// rejects quaternions that were never normalised. Accepted quaternions are normalised.
+inline constexpr double kUnitQuaternionTolerance = 1e-6;
+
+/// `{"translation": [x,y,z], "rotation": [w,x,y,z]}`; either key may be absent (identity).
+/// Throws, naming the field, unless the rotation is finite and |q| is within
+/// kUnitQuaternionTolerance of 1; the returned rotation is normalised.
+Transform readTransform(const Json& value, const std::string& path);
 
 /// Member `key` of the request read as a Shape; its path is `key`.
 template <class Shape>

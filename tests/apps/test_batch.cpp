@@ -2,6 +2,7 @@
 // op on hand-checked cases, id/op echo, every error path, unsupported ops and backends, line
 // accounting, round-trip exact doubles, the shipped examples, and the `crux` executable itself.
 
+#include "apps/batch_test_util.hpp"
 #include "cli/batch.hpp"
 #include "cli/json_codec.hpp"
 
@@ -18,24 +19,17 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 namespace crux::cli {
 namespace {
 
-/// Tolerance for computed (non-boolean) results on hand-checked cases whose coordinates are at
-/// most ~10: a few ulps of Real at that magnitude.
-constexpr double kResultTolerance = 16.0 * 10.0 * std::numeric_limits<Real>::epsilon();
+using test::errorOf;
+using test::isPoint;
+using test::kResultTolerance;
+using test::splitLines;
 
 Answer ask(const std::string& line, Backend backend = Backend::Native) {
   BatchState state(BatchOptions{backend, 1});
   return answerLine(line, state);
-}
-
-/// The error message of an answer ("" when it has none).
-std::string errorOf(const Answer& a) {
-  const auto it = a.find("error");
-  return it == a.end() ? std::string() : it->get<std::string>();
 }
 
 ::testing::AssertionResult answersHit(const std::string& line, bool expected) {
@@ -45,16 +39,6 @@ std::string errorOf(const Answer& a) {
     return ::testing::AssertionFailure() << "no boolean hit in " << a.dump();
   if (a["hit"].get<bool>() != expected)
     return ::testing::AssertionFailure() << "hit " << a["hit"] << " expected " << expected << " for " << line;
-  return ::testing::AssertionSuccess();
-}
-
-::testing::AssertionResult isPoint(const Answer& v, double x, double y, double z) {
-  if (!v.is_array() || v.size() != 3) return ::testing::AssertionFailure() << "not a point: " << v.dump();
-  const double want[3] = {x, y, z};
-  for (std::size_t i = 0; i < 3; ++i) {
-    if (!v[i].is_number() || std::fabs(v[i].get<double>() - want[i]) > kResultTolerance)
-      return ::testing::AssertionFailure() << v.dump() << " != [" << x << ", " << y << ", " << z << "]";
-  }
   return ::testing::AssertionSuccess();
 }
 
@@ -464,9 +448,12 @@ TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThree) {
     EXPECT_TRUE(std::binary_search(ops.begin(), ops.end(), std::string_view(name))) << name;
 }
 
-TEST(BatchUnsupported, NativeAnswersEveryPrimitiveAndDefersTheRest) {
+TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   const OpTable& native = opTable(Backend::Native);
-  EXPECT_EQ(native.size(), 8u);
+  EXPECT_EQ(native.size(), 18u);  // 8 primitive ops, mesh, load_mesh and 8 mesh queries
+  for (const char* name : {"mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb",
+                           "mesh_plane", "mesh_triangle", "mesh_mesh"})
+    EXPECT_EQ(native.count(name), 1u) << name;
   for (const auto& [name, handler] : native) {
     EXPECT_TRUE(std::binary_search(protocolOps().begin(), protocolOps().end(), std::string_view(name))) << name;
     EXPECT_TRUE(handler) << name;
@@ -502,20 +489,13 @@ TEST(BatchUnsupported, BackendNames) {
 // ---------------------------------------------------------------------------------------------
 // Whole runs.
 
-std::vector<std::string> splitLines(const std::string& text) {
-  std::vector<std::string> lines;
-  std::istringstream in(text);
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
-
 TEST(BatchRun, RunContinuesAfterErrorsAndAnswersEveryLineInOrder) {
   const std::vector<std::string> input = {
       R"({"id":"1","op":"triangle_plane","triangle":[[0,0,0],[1,0,0],[0,1,0]],"plane":{"normal":[0,0,1],"d":0}})",
       "not json",
       "",
       R"({"id":"4","op":"nope"})",
-      R"({"id":"5","op":"mesh","name":"m"})",
+      R"({"id":"5","op":"add_model","name":"m"})",
       R"({"id":"6","op":"triangle_sphere","triangle":[[0,0,0],[1,0,0],[0,1,0]],"sphere":{"center":[0,0,0],"radius":-1}})",
       R"({"id":"7","op":"segment_triangle","triangle":[[0,0,0],[1,0,0],[0,1,0]],"segment":{"start":[0.1,0.1,1],"end":[0.1,0.1,-1]}})",
       "[]\r",
@@ -539,7 +519,7 @@ TEST(BatchRun, RunContinuesAfterErrorsAndAnswersEveryLineInOrder) {
   EXPECT_EQ(answers[0]["id"], "1");
   EXPECT_TRUE(answers[0]["hit"].get<bool>());
   EXPECT_EQ(answers[3]["id"], "4");
-  EXPECT_EQ(answers[4]["error"], "unsupported: mesh on native");
+  EXPECT_EQ(answers[4]["error"], "unsupported: add_model on native");
   EXPECT_EQ(answers[6]["id"], "7");
   EXPECT_TRUE(answers[6]["hit"].get<bool>());
   EXPECT_EQ(answers[8]["id"], "9");
@@ -637,13 +617,15 @@ TEST(BatchNumbers, RayHitTravelsThroughTheProtocolBitExactly) {
 // ---------------------------------------------------------------------------------------------
 // The shipped examples and the executable.
 
-TEST(BatchExamples, PrimitivesJsonlAnswersAsItsIdsSay) {
-  std::ifstream file(std::string(CRUX_SOURCE_DIR) + "/examples/primitives.jsonl");
-  ASSERT_TRUE(file) << "examples/primitives.jsonl not found";
+/// Runs examples/<name> as one batch and checks every answer against its request's id:
+/// "err-..." an error, "hit-..." hit true, "miss-..." hit false, anything else no error.
+void checkExampleFile(const std::string& name, std::size_t minLines, std::size_t minErrors) {
+  std::ifstream file(std::string(CRUX_SOURCE_DIR) + "/examples/" + name);
+  ASSERT_TRUE(file) << "examples/" << name << " not found";
   std::stringstream text;
   text << file.rdbuf();
   const auto input = splitLines(text.str());
-  ASSERT_GE(input.size(), 20u);
+  ASSERT_GE(input.size(), minLines);
   std::istringstream in(text.str());
   std::ostringstream out;
   ASSERT_EQ(runBatch(in, out, BatchOptions{}), 0);
@@ -655,7 +637,6 @@ TEST(BatchExamples, PrimitivesJsonlAnswersAsItsIdsSay) {
     const Json answer = Json::parse(lines[i]);
     const std::string id = request.value("id", "");
     ASSERT_EQ(answer.value("id", ""), id) << lines[i];
-    // Ids say what to expect: "err-..." an error, "hit-..." hit true, "miss-..." hit false.
     if (id.rfind("err-", 0) == 0) {
       EXPECT_TRUE(answer.contains("error")) << input[i] << " -> " << lines[i];
       ++errors;
@@ -665,35 +646,21 @@ TEST(BatchExamples, PrimitivesJsonlAnswersAsItsIdsSay) {
     if (id.rfind("hit-", 0) == 0) EXPECT_EQ(answer.value("hit", false), true) << input[i] << " -> " << lines[i];
     if (id.rfind("miss-", 0) == 0) EXPECT_EQ(answer.value("hit", true), false) << input[i] << " -> " << lines[i];
   }
-  EXPECT_GE(errors, 2u);
+  EXPECT_GE(errors, minErrors);
 }
 
-/// Path of the `crux` executable, built next to this test (CMAKE_RUNTIME_OUTPUT_DIRECTORY).
-std::string cruxExecutable() {
-  char self[4096];
-  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
-  if (n <= 0) return "";
-  std::string path(self, std::size_t(n));
-  return path.substr(0, path.rfind('/') + 1) + "crux";
-}
+TEST(BatchExamples, PrimitivesJsonlAnswersAsItsIdsSay) { checkExampleFile("primitives.jsonl", 20, 2); }
 
-/// Runs a shell command; returns its exit status and standard output.
-std::pair<int, std::string> run(const std::string& command) {
-  std::string output;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return {-1, ""};
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0;) output.append(buffer, n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
-}
+TEST(BatchExamples, MeshesJsonlAnswersAsItsIdsSay) { checkExampleFile("meshes.jsonl", 20, 3); }
 
 TEST(BatchExecutable, CommandLine) {
-  const std::string crux = cruxExecutable();
+  using test::run;
+  const std::string crux = test::cruxExecutable();
   if (access(crux.c_str(), X_OK) != 0) GTEST_SKIP() << crux << " not built";
   const auto [helpStatus, help] = run("'" + crux + "' --help");
   EXPECT_EQ(helpStatus, 0);
   EXPECT_NE(help.find("batch"), std::string::npos) << help;
+  EXPECT_NE(help.find("info"), std::string::npos) << help;
   const auto [versionStatus, version] = run("'" + crux + "' --version");
   EXPECT_EQ(versionStatus, 0);
   EXPECT_NE(version.find("crux "), std::string::npos) << version;

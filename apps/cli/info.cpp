@@ -1,0 +1,165 @@
+#include "cli/info.hpp"
+
+#include "cli/batch.hpp"
+
+#include <crux/error.hpp>
+#include <crux/mesh/mesh.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <iomanip>
+#include <limits>
+#include <ostream>
+#include <sstream>
+#include <utility>
+
+namespace crux::cli {
+namespace {
+
+/// Everything reported for one loaded file.
+struct MeshReport {
+  std::string path;
+  MeshStats stats;
+  double loadSeconds = 0;
+  double buildSeconds = 0;
+  BvhShape bvh;
+  std::size_t memoryBytes = 0;
+  double bytesPerTriangle = 0;
+};
+
+MeshReport report(const std::string& path, const Mesh& mesh, double loadSeconds) {
+  MeshReport r;
+  r.path = path;
+  r.stats = mesh.stats();
+  r.loadSeconds = loadSeconds;
+  r.buildSeconds = mesh.buildSeconds();
+  r.bvh = bvhShape(mesh.bvh());
+  r.memoryBytes = mesh.memoryBytes();
+  r.bytesPerTriangle = double(r.memoryBytes) / double(std::max<std::size_t>(1, r.stats.triangles));
+  return r;
+}
+
+Answer vec3Json(const Vec3& v) { return Answer::array({double(v.x()), double(v.y()), double(v.z())}); }
+
+Answer toJson(const MeshReport& r) {
+  Answer j = Answer::object();
+  j["path"] = r.path;
+  j["triangles"] = r.stats.triangles;
+  j["vertices"] = r.stats.vertices;
+  j["bounds"] = Answer::object({{"min", vec3Json(r.stats.bounds.min)}, {"max", vec3Json(r.stats.bounds.max)}});
+  j["degenerate_triangles"] = r.stats.degenerateTriangles;
+  j["duplicate_triangles"] = r.stats.duplicateTriangles;
+  j["non_manifold_edges"] = r.stats.nonManifoldEdges;
+  j["boundary_edges"] = r.stats.boundaryEdges;
+  j["closed"] = r.stats.closed();
+  j["load_seconds"] = r.loadSeconds;
+  j["bvh_build_seconds"] = r.buildSeconds;
+  Answer bvh = Answer::object();
+  bvh["nodes"] = r.bvh.nodes;
+  bvh["leaves"] = r.bvh.leaves;
+  bvh["depth"] = r.bvh.depth;
+  bvh["mean_leaf_depth"] = r.bvh.meanLeafDepth;
+  bvh["mean_leaf_size"] = r.bvh.meanLeafSize;
+  bvh["max_leaf_size"] = r.bvh.maxLeafSize;
+  j["bvh"] = std::move(bvh);
+  j["memory_bytes"] = r.memoryBytes;
+  j["bytes_per_triangle"] = r.bytesPerTriangle;
+  return j;
+}
+
+std::string text(const Vec3& v) {
+  std::ostringstream os;
+  os << std::setprecision(std::numeric_limits<Real>::max_digits10) << "[" << v.x() << ", " << v.y() << ", "
+     << v.z() << "]";
+  return os.str();
+}
+
+void writeText(std::ostream& out, const MeshReport& r) {
+  const MeshStats& s = r.stats;
+  const auto row = [&out](const char* label) -> std::ostream& {
+    return out << "  " << std::left << std::setw(22) << label << std::right;
+  };
+  out << r.path << '\n';
+  row("triangles") << s.triangles << '\n';
+  row("vertices") << s.vertices << '\n';
+  row("bounds") << text(s.bounds.min) << " .. " << text(s.bounds.max) << '\n';
+  row("degenerate triangles") << s.degenerateTriangles << '\n';
+  row("duplicate triangles") << s.duplicateTriangles << '\n';
+  row("non-manifold edges") << s.nonManifoldEdges << '\n';
+  row("boundary edges") << s.boundaryEdges << '\n';
+  row("closed") << (s.closed() ? "yes" : "no") << '\n';
+  out << std::fixed << std::setprecision(6);
+  row("load time") << r.loadSeconds << " s (BVH build " << r.buildSeconds << " s)\n";
+  out << std::setprecision(2);
+  row("BVH") << r.bvh.nodes << " nodes, " << r.bvh.leaves << " leaves, depth " << r.bvh.depth
+             << " (mean leaf depth " << r.bvh.meanLeafDepth << "), leaf size mean " << r.bvh.meanLeafSize
+             << " max " << r.bvh.maxLeafSize << '\n';
+  row("memory") << r.memoryBytes << " bytes (" << r.bytesPerTriangle << " bytes/triangle)\n";
+  out.unsetf(std::ios::floatfield);
+  out << std::setprecision(6);
+}
+
+}  // namespace
+
+BvhShape bvhShape(const Bvh& bvh) {
+  BvhShape shape;
+  shape.nodes = bvh.nodes.size();
+  if (bvh.nodes.empty()) return shape;
+  std::size_t leafDepthSum = 0, leafSizeSum = 0;
+  std::vector<std::pair<std::uint32_t, std::size_t>> stack = {{0u, 0u}};  // node, depth
+  while (!stack.empty()) {
+    const auto [index, depth] = stack.back();
+    stack.pop_back();
+    const BvhNode& node = bvh.nodes[index];
+    if (node.isLeaf()) {
+      ++shape.leaves;
+      shape.depth = std::max(shape.depth, depth);
+      shape.maxLeafSize = std::max<std::size_t>(shape.maxLeafSize, node.count);
+      leafDepthSum += depth;
+      leafSizeSum += node.count;
+    } else {
+      stack.emplace_back(node.first, depth + 1);
+      stack.emplace_back(node.first + 1, depth + 1);
+    }
+  }
+  shape.meanLeafDepth = double(leafDepthSum) / double(shape.leaves);
+  shape.meanLeafSize = double(leafSizeSum) / double(shape.leaves);
+  return shape;
+}
+
+int runInfo(const std::vector<std::string>& paths, const InfoOptions& options, std::ostream& out,
+            std::ostream& err) {
+  int status = 0;
+  bool first = true;
+  for (const std::string& path : paths) {
+    try {
+      const auto start = std::chrono::steady_clock::now();
+      const Mesh mesh = loadMesh(path);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const MeshReport r = report(path, mesh, seconds);
+      if (options.json) {
+        out << toJson(r).dump(-1, ' ', false, Answer::error_handler_t::replace) << '\n';
+      } else {
+        if (!first) out << '\n';
+        writeText(out, r);
+      }
+      first = false;
+    } catch (const std::exception& e) {
+      // loadMesh's InvalidInput messages start with the path; anything else gets it prepended.
+      const std::string message =
+          dynamic_cast<const InvalidInput*>(&e) ? std::string(e.what()) : path + ": " + e.what();
+      err << "crux info: " << message << '\n';
+      if (options.json) {
+        Answer j = Answer::object();
+        j["path"] = path;
+        j["error"] = message;
+        out << j.dump(-1, ' ', false, Answer::error_handler_t::replace) << '\n';
+      }
+      status = 1;
+    }
+  }
+  out.flush();
+  return status;
+}
+
+}  // namespace crux::cli
