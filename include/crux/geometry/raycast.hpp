@@ -14,7 +14,8 @@
 namespace crux {
 
 /// A ray hit: distance along the ray in world units, the point, and the unit surface
-/// normal facing the ray origin (for a hit at t = 0 inside a solid: -dir/|dir|; for a ray
+/// normal facing the ray origin (for a hit at t = 0 inside a solid, and for a hit on a
+/// degenerate triangle — a segment or point has no surface normal: -dir/|dir|; for a ray
 /// lying in a triangle's or plane's plane: the plane normal, either side).
 struct RayHit {
   Real t = 0;
