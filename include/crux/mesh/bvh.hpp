@@ -30,7 +30,8 @@ struct BvhBuildOptions {
 };
 
 /// A flat BVH: node 0 is the root (absent for zero primitives); each primitive is referenced
-/// exactly once in primIndices.
+/// exactly once in primIndices. buildBvh places children after their parent (larger index), so
+/// a reverse sweep of `nodes` visits every child before its parent (refitBvh relies on it).
 struct Bvh {
   std::vector<BvhNode> nodes;
   std::vector<std::uint32_t> primIndices;

@@ -1,0 +1,365 @@
+/// @file bvh.cpp  Binned-SAH BVH construction and bottom-up refit.
+///
+/// Layout: the builder appends both children of a node at the end of the node array when it
+/// splits that node, so siblings are adjacent and every child has a larger index than its
+/// parent. Refit therefore sweeps the array once in reverse (children before parents).
+///
+/// Depth bound: a node at depth d holding c primitives is split by SAH only while
+/// d + ceil(log2 c) <= kBvhMaxDepth - 2; otherwise it is halved by count (median split). By
+/// induction every node satisfies d + ceil(log2 c) <= kBvhMaxDepth - 1, so no leaf is deeper than
+/// kBvhMaxDepth - 1 whatever the input (identical triangles, collinear points, exponentially
+/// spaced clusters that make SAH peel off one primitive per level).
+
+#include <crux/error.hpp>
+#include <crux/mesh/bvh.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace crux {
+namespace {
+
+/// Upper limit of BvhBuildOptions::bins.
+constexpr std::uint32_t kMaxBins = 256;
+
+/// Four-lane coordinates (x, y, z, 0) so box growth is two SIMD min/max operations.
+using Lanes = Eigen::Array<Real, 4, 1>;
+using LaneIndex = Eigen::Array<int, 4, 1>;
+
+Lanes lanes(const Vec3& v) { return Lanes(v.x(), v.y(), v.z(), 0); }
+Vec3 vec(const Lanes& l) { return Vec3(l[0], l[1], l[2]); }
+
+/// A box over lanes; the empty box has min = +inf, max = -inf.
+struct LaneBox {
+  Lanes min = Lanes::Constant(std::numeric_limits<Real>::infinity());
+  Lanes max = Lanes::Constant(-std::numeric_limits<Real>::infinity());
+  void grow(const Lanes& lo, const Lanes& hi) {
+    min = min.min(lo);
+    max = max.max(hi);
+  }
+  void grow(const LaneBox& b) { grow(b.min, b.max); }
+  Aabb aabb() const { return {vec(min), vec(max)}; }
+};
+
+/// A primitive as the builder moves it around: its bounds in lanes, partitioned in place
+/// together with its original index (a parallel array).
+struct BuildPrim {
+  Lanes min, max;
+  /// The centroid, computed the same way everywhere (halves first: no overflow near the float
+  /// limit).
+  Lanes centroid() const { return min * Real(0.5) + max * Real(0.5); }
+};
+
+/// A SAH bin: the primitives' bounds and their count.
+struct Bin {
+  LaneBox bounds;
+  std::uint32_t count = 0;
+};
+
+int ceilLog2(std::uint32_t c) {
+  int l = 0;
+  while ((std::uint64_t(1) << l) < c) ++l;
+  return l;
+}
+
+/// SAH cost measure of a non-empty box: its surface area, or for boxes of zero area (segments
+/// and points, e.g. nodes over collinear degenerate triangles) the sum of its extents, so that
+/// such nodes are still split where it shortens them instead of arbitrarily. Products are taken
+/// in Wide so that areas times counts do not overflow.
+Wide costMeasure(const LaneBox& b, bool useLength) {
+  const Lanes e = b.max - b.min;
+  const Wide x = e[0], y = e[1], z = e[2];
+  if (useLength) return x + y + z;
+  return 2 * (x * y + y * z + z * x);
+}
+
+class Builder {
+ public:
+  Builder(const std::vector<Aabb>& prims, const BvhBuildOptions& options, Bvh& out)
+      : options_(options), bvh_(out), bins_(3 * std::size_t(options.bins)), rightCost_(options.bins) {
+    const auto n = static_cast<std::uint32_t>(prims.size());
+    prims_.resize(n);
+    bvh_.primIndices.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      BuildPrim& p = prims_[i];
+      p.min = lanes(prims[i].min);
+      p.max = lanes(prims[i].max);
+      bvh_.primIndices[i] = i;
+    }
+  }
+
+  void run() {
+    const auto n = static_cast<std::uint32_t>(prims_.size());
+    bvh_.nodes.reserve(2 * std::size_t(n) - 1);
+    LaneBox bounds, centroids;
+    for (const BuildPrim& p : prims_) {
+      bounds.grow(p.min, p.max);
+      const Lanes c = p.centroid();
+      centroids.grow(c, c);
+    }
+    BvhNode root;
+    root.bounds = bounds.aabb();
+    root.first = 0;
+    root.count = n;
+    bvh_.nodes.push_back(root);
+
+    std::vector<Work> work;
+    work.reserve(2 * kBvhMaxDepth + 2);
+    work.push_back({0, 0, centroids});
+    while (!work.empty()) {
+      const Work w = work.back();
+      work.pop_back();
+      process(w, work);
+    }
+    bvh_.nodes.shrink_to_fit();
+  }
+
+ private:
+  /// A node whose bounds are set, waiting to be split or made a leaf.
+  struct Work {
+    std::uint32_t node;
+    int depth;
+    LaneBox centroids;
+  };
+
+  /// A chosen split: the left part's size and both parts' bounds and centroid bounds.
+  struct Split {
+    std::uint32_t leftCount = 0;  // 0: no split
+    LaneBox left, right, leftCentroids, rightCentroids;
+  };
+
+  /// Splits node w.node if worthwhile, appending both children as a pair (left at index k,
+  /// right at k + 1, both after the parent) and queueing them.
+  void process(const Work& w, std::vector<Work>& work) {
+    const std::uint32_t first = bvh_.nodes[w.node].first;
+    const std::uint32_t count = bvh_.nodes[w.node].count;
+    if (count <= 1) return;
+
+    Split split;
+    const bool forceBalanced = w.depth + ceilLog2(count) > kBvhMaxDepth - 2;
+    if (!forceBalanced) split = sahSplit(first, count, bvh_.nodes[w.node].bounds, w.centroids);
+    if (split.leftCount == 0) {
+      if (count <= options_.maxLeafSize) return;
+      split = medianSplit(first, count, w.centroids);
+    }
+
+    const auto child = static_cast<std::uint32_t>(bvh_.nodes.size());
+    BvhNode left, right;
+    left.bounds = split.left.aabb();
+    left.first = first;
+    left.count = split.leftCount;
+    right.bounds = split.right.aabb();
+    right.first = first + split.leftCount;
+    right.count = count - split.leftCount;
+    bvh_.nodes.push_back(left);
+    bvh_.nodes.push_back(right);
+    BvhNode& parent = bvh_.nodes[w.node];
+    parent.first = child;
+    parent.count = 0;
+    work.push_back({child + 1, w.depth + 1, split.rightCentroids});
+    work.push_back({child, w.depth + 1, split.leftCentroids});
+  }
+
+  /// Binned SAH over all three axes (Wald 2007) with min(bins, count) bins per axis. Partitions
+  /// the range in place; leftCount 0 when no split beats a leaf (only allowed within the leaf
+  /// cap) or the centroids cannot be binned (all equal).
+  Split sahSplit(std::uint32_t first, std::uint32_t count, const Aabb& nodeBounds, const LaneBox& centroidBounds) {
+    const std::uint32_t bins = std::min(options_.bins, std::max(count, 2u));
+    Bin* bin[3] = {bins_.data(), bins_.data() + bins, bins_.data() + 2 * bins};
+    Lanes scale = Lanes::Zero();
+    bool any = false;
+    for (int a = 0; a < 3; ++a) {
+      const Real extent = centroidBounds.max[a] - centroidBounds.min[a];
+      const Real s = extent > 0 ? Real(bins) / extent : Real(0);
+      // Unusable axes get scale 0: every centroid lands in bin 0 and no split is a candidate.
+      if (extent > 0 && s > 0 && std::isfinite(s)) scale[a] = s, any = true;
+      for (std::uint32_t b = 0; b < bins; ++b) bin[a][b] = Bin{};
+    }
+    if (!any) return {};
+
+    const Lanes cmin = centroidBounds.min;
+    const Real lastBin = Real(bins - 1);
+    // The one binning formula (lane-wise, so the scalar use in the partition below computes
+    // bit-identical values): bin = min(floor((centroid - cmin) * scale), bins - 1).
+    auto binOf = [&](const BuildPrim& p) -> LaneIndex {
+      return ((p.centroid() - cmin) * scale).min(lastBin).template cast<int>();
+    };
+    auto binOnAxis = [&](const BuildPrim& p, int a) -> std::uint32_t {
+      const Real c = p.min[a] * Real(0.5) + p.max[a] * Real(0.5);
+      return static_cast<std::uint32_t>(std::min((c - cmin[a]) * scale[a], lastBin));
+    };
+    BuildPrim* prims = prims_.data() + first;
+    for (std::uint32_t i = 0; i < count; ++i) {
+      const BuildPrim& p = prims[i];
+      const LaneIndex b = binOf(p);
+      for (int a = 0; a < 3; ++a) {
+        Bin& target = bin[a][b[a]];
+        target.bounds.grow(p.min, p.max);
+        ++target.count;
+      }
+    }
+
+    LaneBox parent;
+    parent.grow(lanes(nodeBounds.min), lanes(nodeBounds.max));
+    const bool useLength = !(costMeasure(parent, false) > 0);
+    Wide bestCost = std::numeric_limits<Wide>::infinity();
+    int bestAxis = -1;
+    std::uint32_t bestSplit = 0;
+    Wide* rightCost = rightCost_.data();
+    for (int a = 0; a < 3; ++a) {
+      if (scale[a] == 0) continue;
+      // rightCost[s] = measure(bins s..end) * count(bins s..end)
+      LaneBox acc;
+      std::uint32_t n = 0;
+      for (std::uint32_t s = bins - 1; s >= 1; --s) {
+        if (bin[a][s].count == 0) {
+          rightCost[s] = s + 1 < bins ? rightCost[s + 1] : 0;
+          continue;
+        }
+        acc.grow(bin[a][s].bounds);
+        n += bin[a][s].count;
+        rightCost[s] = costMeasure(acc, useLength) * Wide(n);
+      }
+      acc = LaneBox{};
+      n = 0;
+      for (std::uint32_t s = 1; s < bins; ++s) {
+        if (bin[a][s - 1].count == 0 && n == 0) continue;
+        acc.grow(bin[a][s - 1].bounds);
+        n += bin[a][s - 1].count;
+        if (n == count) break;
+        const Wide cost = costMeasure(acc, useLength) * Wide(n) + rightCost[s];
+        if (cost < bestCost) {
+          bestCost = cost;
+          bestAxis = a;
+          bestSplit = s;
+        }
+      }
+    }
+    if (bestAxis < 0) return {};
+    const Wide parentMeasure = costMeasure(parent, useLength);
+    const Wide splitCost = Wide(options_.traversalCost) * parentMeasure + bestCost;
+    const Wide leafCost = Wide(count) * parentMeasure;
+    if (count <= options_.maxLeafSize && leafCost <= splitCost) return {};
+
+    Split split;
+    for (std::uint32_t s = 0; s < bins; ++s) {
+      const Bin& b = bin[bestAxis][s];
+      if (s < bestSplit) {
+        split.left.grow(b.bounds);
+        split.leftCount += b.count;
+      } else {
+        split.right.grow(b.bounds);
+      }
+    }
+    // Hoare partition of the primitives and their indices together; each primitive is passed by
+    // exactly one of the two scans, which collect the children's centroid bounds.
+    std::uint32_t* ids = bvh_.primIndices.data() + first;
+    std::uint32_t i = 0, j = count;
+    auto goesLeft = [&](const BuildPrim& p) { return binOnAxis(p, bestAxis) < bestSplit; };
+    for (;;) {
+      while (i < j && goesLeft(prims[i])) {
+        const Lanes c = prims[i++].centroid();
+        split.leftCentroids.grow(c, c);
+      }
+      while (i < j && !goesLeft(prims[j - 1])) {
+        const Lanes c = prims[--j].centroid();
+        split.rightCentroids.grow(c, c);
+      }
+      if (i >= j) break;
+      std::swap(prims[i], prims[j - 1]);
+      std::swap(ids[i], ids[j - 1]);
+    }
+    return split;
+  }
+
+  /// Balanced split by count: the median centroid along the widest centroid axis (or simply the
+  /// halves when every centroid is equal).
+  Split medianSplit(std::uint32_t first, std::uint32_t count, const LaneBox& centroidBounds) {
+    Split split;
+    split.leftCount = count / 2;
+    const Lanes extent = centroidBounds.max - centroidBounds.min;
+    int axis = 0;
+    if (extent[1] > extent[axis]) axis = 1;
+    if (extent[2] > extent[axis]) axis = 2;
+    BuildPrim* prims = prims_.data() + first;
+    std::uint32_t* ids = bvh_.primIndices.data() + first;
+    if (extent[axis] > 0) {
+      // Sort a permutation so the primitives and their indices move together.
+      order_.resize(count);
+      for (std::uint32_t k = 0; k < count; ++k) order_[k] = k;
+      std::nth_element(order_.begin(), order_.begin() + split.leftCount, order_.end(),
+                       [&](std::uint32_t p, std::uint32_t q) { return prims[p].centroid()[axis] < prims[q].centroid()[axis]; });
+      scratchPrims_.resize(count);
+      scratchIds_.resize(count);
+      for (std::uint32_t k = 0; k < count; ++k) {
+        scratchPrims_[k] = prims[order_[k]];
+        scratchIds_[k] = ids[order_[k]];
+      }
+      std::copy(scratchPrims_.begin(), scratchPrims_.end(), prims);
+      std::copy(scratchIds_.begin(), scratchIds_.end(), ids);
+    }
+    for (std::uint32_t k = 0; k < count; ++k) {
+      const BuildPrim& p = prims[k];
+      LaneBox& b = k < split.leftCount ? split.left : split.right;
+      LaneBox& c = k < split.leftCount ? split.leftCentroids : split.rightCentroids;
+      b.grow(p.min, p.max);
+      c.grow(p.centroid(), p.centroid());
+    }
+    return split;
+  }
+
+  const BvhBuildOptions& options_;
+  Bvh& bvh_;
+  std::vector<BuildPrim> prims_;
+  std::vector<Bin> bins_;        // 3 × options.bins, reused by every node
+  std::vector<Wide> rightCost_;  // options.bins, reused by every node
+  std::vector<std::uint32_t> order_, scratchIds_;  // median splits only
+  std::vector<BuildPrim> scratchPrims_;
+};
+
+bool validBounds(const Aabb& b) {
+  return b.min.allFinite() && b.max.allFinite() && (b.min.array() <= b.max.array()).all();
+}
+
+}  // namespace
+
+Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  if (options.maxLeafSize == 0) throw InvalidInput("buildBvh: maxLeafSize must be at least 1");
+  if (options.bins < 2 || options.bins > kMaxBins)
+    throw InvalidInput("buildBvh: bins must be in [2, " + std::to_string(kMaxBins) + "], got " +
+                       std::to_string(options.bins));
+  if (!(options.traversalCost >= 0) || !std::isfinite(options.traversalCost))
+    throw InvalidInput("buildBvh: traversalCost must be finite and >= 0");
+  if (primBounds.size() >= std::size_t(std::numeric_limits<std::uint32_t>::max()) / 2)
+    throw InvalidInput("buildBvh: too many primitives (" + std::to_string(primBounds.size()) + ")");
+  for (std::size_t i = 0; i < primBounds.size(); ++i)
+    if (!validBounds(primBounds[i]))
+      throw InvalidInput("buildBvh: primitive " + std::to_string(i) + " has non-finite or empty bounds");
+
+  Bvh bvh;
+  if (primBounds.empty()) return bvh;
+  Builder(primBounds, options, bvh).run();
+  return bvh;
+}
+
+void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
+  if (primBounds.size() != bvh.primIndices.size())
+    throw InvalidInput("refitBvh: expected " + std::to_string(bvh.primIndices.size()) + " primitive bounds, got " +
+                       std::to_string(primBounds.size()));
+  // Children always follow their parent in the array, so a reverse sweep sees them first.
+  for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
+    BvhNode& node = bvh.nodes[i];
+    Aabb b = Aabb::empty();
+    if (node.isLeaf()) {
+      for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k) b.grow(primBounds[bvh.primIndices[k]]);
+    } else {
+      b = bvh.nodes[node.first].bounds;
+      b.grow(bvh.nodes[node.first + 1].bounds);
+    }
+    node.bounds = b;
+  }
+}
+
+}  // namespace crux

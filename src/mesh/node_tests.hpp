@@ -1,0 +1,173 @@
+#pragma once
+/// @file node_tests.hpp  Internal: conservative BVH node culling tests for the mesh queries.
+///
+/// A node test may say "maybe" for a box that the query shape misses (a little extra work) but
+/// must never say "no" for a box that contains a triangle the exact per-triangle test accepts;
+/// otherwise the BVH path would disagree with the brute-force path. The tests run in Real and
+/// pad every comparison so that rounding can only enlarge what they accept:
+///  - kNodeBoxPad: boxes are grown by this fraction of the query's coordinate scale (the
+///    largest magnitude among the mesh bounds and the query shape), which dominates the
+///    absolute rounding of differences of coordinates in Real, and also the error of the
+///    geometry layer's double-precision decisions on non-integer inputs;
+///  - kSlabRoundingPad: relative pad on ray slab parameters (the slab arithmetic has a relative
+///    error of at most 2·γ(3) ≈ 3ε; Ize, "Robust BVH Ray Traversal", JCGT 2013);
+///  - kRayPruneSlack: relative (and, times the scale, absolute) slack when a node is pruned
+///    because its entry distance is beyond the best hit, covering the difference between the
+///    geometry layer's rounded t and the exact one, so a triangle whose reported t ties or
+///    beats the best hit is never pruned away.
+
+#include <crux/geometry/shapes.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace crux::mesh_detail {
+
+inline constexpr Real kEps = std::numeric_limits<Real>::epsilon();
+/// Box growth in units of the query scale (64 ulps).
+inline constexpr Real kNodeBoxPad = 64 * kEps;
+/// Relative pad on ray slab parameters (8 ulps > 2·γ(3)).
+inline constexpr Real kSlabRoundingPad = 8 * kEps;
+/// Relative/absolute slack of the best-hit pruning (1024 ulps).
+inline constexpr Real kRayPruneSlack = 1024 * kEps;
+/// Added to |R_ij| in the OBB separating-axis test so near-parallel cross axes (whose rounded
+/// direction may be garbage) can never separate (RTCD 4.4.1), 16 ulps.
+inline constexpr Real kAxisPad = 16 * kEps;
+
+/// Largest coordinate magnitude of a box.
+inline Real maxAbs(const Aabb& b) { return std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()); }
+
+/// A ray (or a segment as a ray with a distance limit) prepared for slab tests against boxes.
+///
+/// The direction is scaled by a power of two (exact) so its largest component lies in [1, 2):
+/// slab parameters then neither overflow nor underflow for tiny or huge directions. A scaled
+/// component that is zero gives ±inf inverses, and the resulting 0·inf = NaN (origin exactly on
+/// a slab plane) is ignored by the NaN-dropping min/max below, which is the closed-slab answer;
+/// a component that underflowed to a subnormal is treated as unbounded (NaN inverse). The
+/// rounding pads are folded into the inverses (near planes ×(1-pad), far planes ×(1+pad)) and
+/// distance limits are converted once into parameter limits, so a node test is 6 subtractions,
+/// 6 multiplications and 6 comparisons.
+class RayBoxTest {
+ public:
+  RayBoxTest(const Vec3& origin, const Vec3& dir, Real scale) {
+    const Real m = dir.cwiseAbs().maxCoeff();
+    const int k = (m > 0 && std::isfinite(m)) ? -std::ilogb(m) : 0;
+    // Scaling by 2^k is exact (unless a component underflows); one multiplier when 2^k is finite.
+    const bool oneFactor = k < std::numeric_limits<Real>::max_exponent;
+    const Real f = oneFactor ? std::ldexp(Real(1), k) : Real(1);
+    const Real pad = kNodeBoxPad * scale;
+    Vec3 scaled;
+    for (int i = 0; i < 3; ++i) {
+      const Real d = oneFactor ? dir[i] * f : std::ldexp(dir[i], k);
+      const bool negative = std::signbit(d);
+      nearIsMax_[i] = negative;
+      Real inv = Real(1) / d;
+      if (dir[i] != 0 && std::fabs(d) < std::numeric_limits<Real>::min()) inv = std::numeric_limits<Real>::quiet_NaN();
+      invNear_[i] = inv * (1 - kSlabRoundingPad);
+      invFar_[i] = inv * (1 + kSlabRoundingPad);
+      originNear_[i] = negative ? origin[i] - pad : origin[i] + pad;
+      originFar_[i] = negative ? origin[i] + pad : origin[i] - pad;
+      scaled[i] = d;
+    }
+    length_ = scaled.norm();
+    absSlack_ = kRayPruneSlack * scale;
+  }
+
+  /// The parameter limit for enter/keep that keeps every subtree which can hold a hit at world
+  /// distance <= limit (inclusive, with the pruning slack). inf stays inf; a zero direction (a
+  /// segment whose ends coincide) has no parameter scale and gets no limit.
+  Real parameterLimit(Real limit) const {
+    if (!(length_ > 0)) return std::numeric_limits<Real>::infinity();
+    return (limit * (1 + kRayPruneSlack) + absSlack_) / length_ * (1 + kSlabRoundingPad);
+  }
+
+  /// Whether the ray enters the padded box at a parameter <= sLimit; `key` receives the entry
+  /// parameter (padded low), which orders siblings front to back.
+  bool enter(const Aabb& b, Real sLimit, Real& key) const {
+    Real lo = 0, hi = std::numeric_limits<Real>::max();  // lo = +inf (parallel miss) fails lo <= hi
+    for (int i = 0; i < 3; ++i) {
+      const Real nearPlane = nearIsMax_[i] ? b.max[i] : b.min[i];
+      const Real farPlane = nearIsMax_[i] ? b.min[i] : b.max[i];
+      const Real t0 = (nearPlane - originNear_[i]) * invNear_[i];
+      const Real t1 = (farPlane - originFar_[i]) * invFar_[i];
+      lo = t0 > lo ? t0 : lo;  // NaN (0·inf) is dropped
+      hi = t1 < hi ? t1 : hi;
+    }
+    key = lo;
+    return lo <= hi && lo <= sLimit;
+  }
+
+  /// Whether a subtree entered at parameter `key` can still matter under sLimit.
+  static bool keep(Real key, Real sLimit) { return key <= sLimit; }
+
+ private:
+  Vec3 originNear_, originFar_, invNear_, invFar_;
+  bool nearIsMax_[3];
+  Real length_ = 1;
+  Real absSlack_ = 0;
+};
+
+/// Sphere vs box grown by pad: squared distance from the centre <= (r + pad)², with a relative
+/// pad on the rounded sum of squares.
+inline bool sphereTouchesBox(const Vec3& c, Real r, const Aabb& b, Real pad) {
+  Real d2 = 0;
+  for (int i = 0; i < 3; ++i) {
+    Real d = 0;
+    if (c[i] < b.min[i] - pad) d = (b.min[i] - pad) - c[i];
+    else if (c[i] > b.max[i] + pad) d = c[i] - (b.max[i] + pad);
+    d2 += d * d;
+  }
+  const Real rr = r + pad;
+  return d2 * (1 - kSlabRoundingPad) <= rr * rr;
+}
+
+/// Box vs box grown by pad (comparisons only).
+inline bool boxTouchesBox(const Aabb& q, const Aabb& b, Real pad) {
+  return (q.min.array() <= b.max.array() + pad).all() && (b.min.array() - pad <= q.max.array()).all();
+}
+
+/// Plane {n·x = d} vs box, |n·c - d| <= Σ h_i|n_i| plus pad·(|n|₁·scale + |d|).
+inline bool planeTouchesBox(const Vec3& n, Real d, const Aabb& b, Real padFraction, Real scale) {
+  const Vec3 c = b.center(), h = b.half();
+  const Real s = n.dot(c) - d;
+  const Real r = h.dot(n.cwiseAbs());
+  return std::fabs(s) <= r + padFraction * (n.cwiseAbs().sum() * scale + std::fabs(d));
+}
+
+/// An OBB (orthonormal axes as columns) prepared for separating-axis tests against axis-aligned
+/// boxes (RTCD 4.4.1 with the AABB as box A), restricted to the six face axes: the nine
+/// edge–edge axes cost more than the few extra "maybe" answers they would remove, and skipping
+/// axes keeps the test conservative. Comparisons are padded by an absolute pad; |R| by kAxisPad.
+class ObbBoxTest {
+ public:
+  ObbBoxTest(const Mat3& axes, Real pad) : r_(axes), pad_(pad) { absR_ = r_.cwiseAbs().array() + kAxisPad; }
+
+  /// An OBB with these axes placed at `center` with half extents `half`, prepared for touches():
+  /// doubled centre and half extents (exact), and its world box grown by the pad.
+  struct Placed {
+    Vec3 center2, half2, lo, hi;
+  };
+  Placed place(const Vec3& center, const Vec3& half) const {
+    const Vec3 ext = absR_ * half + Vec3::Constant(pad_);
+    return {2 * center, 2 * half, center - ext, center + ext};
+  }
+
+  /// Does the placed OBB touch box b (grown by the pad)?
+  bool touches(const Placed& o, const Aabb& b) const {
+    // Box A's face axes: the OBB's world box against b (comparisons only).
+    if ((o.lo.array() > b.max.array()).any() || (o.hi.array() < b.min.array()).any()) return false;
+    // The OBB's face axes u_j: |t·u_j| > Σ_i h_i |R_ij| + e_j, all doubled (2t, 2h, 2e).
+    const Vec3 t2 = o.center2 - (b.min + b.max);
+    const Vec3 h2 = b.max - b.min;
+    for (int j = 0; j < 3; ++j)
+      if (std::fabs(t2.dot(r_.col(j))) > absR_.col(j).dot(h2) + o.half2[j] + 2 * pad_) return false;
+    return true;
+  }
+
+ private:
+  Mat3 r_, absR_;
+  Real pad_;
+};
+
+}  // namespace crux::mesh_detail
