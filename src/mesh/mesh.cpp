@@ -129,6 +129,8 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, s
   } catch (const InvalidInput& e) {  // bad build options
     throw InvalidInput(name_ + ": " + e.what());
   }
+  slotTriangles_.resize(triangles_.size());
+  for (std::size_t k = 0; k < triangles_.size(); ++k) slotTriangles_[k] = triangles_[bvh_.primIndices[k]];
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -180,7 +182,8 @@ MeshStats Mesh::stats() const {
 }
 
 std::size_t Mesh::memoryBytes() const {
-  return vertices_.capacity() * sizeof(Vec3) + triangles_.capacity() * sizeof(TriangleIndices) + bvh_.memoryBytes();
+  return vertices_.capacity() * sizeof(Vec3) + (triangles_.capacity() + slotTriangles_.capacity()) * sizeof(TriangleIndices) +
+         bvh_.memoryBytes();
 }
 
 }  // namespace crux

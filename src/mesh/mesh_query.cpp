@@ -37,18 +37,15 @@ bool backFacing(const Triangle& t, const Vec3& dir) {
 /// The one per-triangle ray decision of every ray query (BVH and brute force).
 class TriangleRayTest {
  public:
-  TriangleRayTest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options)
-      : mesh_(mesh), ray_(ray), options_(options), filter_(ray) {}
+  TriangleRayTest(const Ray& ray, const RayQueryOptions& options) : ray_(ray), options_(options), filter_(ray) {}
 
-  std::optional<RayHit> operator()(std::uint32_t i) const {
-    const Triangle t = mesh_.triangle(i);
+  std::optional<RayHit> operator()(const Triangle& t) const {
     if (filter_.certainlyMisses(t)) return std::nullopt;
     if (options_.cullBackFaces && backFacing(t, ray_.dir)) return std::nullopt;
     return raycast(ray_, t, options_.maxDistance);
   }
 
  private:
-  const Mesh& mesh_;
   const Ray& ray_;
   const RayQueryOptions& options_;
   mesh_detail::RayTriangleFilter filter_;
@@ -68,6 +65,7 @@ mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
 
 /// Visitor for closest / any hit: keeps the best (t, index), prunes beyond it.
 struct RayVisitor {
+  const Mesh& mesh;
   const mesh_detail::RayBoxTest& box;
   const TriangleRayTest& test;
   bool stopAtFirst;
@@ -77,8 +75,9 @@ struct RayVisitor {
 
   bool enter(const BvhNode& node, Real& key) const { return box.enter(node.bounds, sLimit, key); }
   bool keep(Real key) const { return box.keep(key, sLimit); }
-  bool leaf(std::uint32_t tri) {
-    const std::optional<RayHit> h = test(tri);
+  bool slot(std::uint32_t k) { return hit(mesh.slotTriangle(k), mesh.bvh().primIndices[k]); }
+  bool hit(const Triangle& t, std::uint32_t tri) {
+    const std::optional<RayHit> h = test(t);
     if (!h) return true;
     if (!found || before(h->t, tri, best)) {
       best = meshHit(*h, tri);
@@ -91,6 +90,7 @@ struct RayVisitor {
 
 /// Visitor collecting every hit.
 struct RayAllVisitor {
+  const Mesh& mesh;
   const mesh_detail::RayBoxTest& box;
   const TriangleRayTest& test;
   Real sLimit;
@@ -98,22 +98,22 @@ struct RayAllVisitor {
 
   bool enter(const BvhNode& node, Real& key) const { return box.enter(node.bounds, sLimit, key); }
   bool keep(Real) const { return true; }
-  bool leaf(std::uint32_t tri) {
-    if (const std::optional<RayHit> h = test(tri)) hits.push_back(meshHit(*h, tri));
+  bool slot(std::uint32_t k) {
+    if (const std::optional<RayHit> h = test(mesh.slotTriangle(k))) hits.push_back(meshHit(*h, mesh.bvh().primIndices[k]));
     return true;
   }
 };
 
 std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                       QueryPath path, bool stopAtFirst) {
-  const TriangleRayTest test(mesh, ray, options);
+  const TriangleRayTest test(ray, options);
   const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
-  RayVisitor v{box, test, stopAtFirst, box.parameterLimit(options.maxDistance)};
+  RayVisitor v{mesh, box, test, stopAtFirst, box.parameterLimit(options.maxDistance)};
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
-      if (!v.leaf(i)) break;
+      if (!v.hit(mesh.triangle(i), i)) break;
   } else {
-    traverseBvh(mesh.bvh(), v);
+    traverseBvhSlots(mesh.bvh(), v);
   }
   if (!v.found) return std::nullopt;
   return v.best;
@@ -146,15 +146,15 @@ bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, cons
     bool any = false;
     bool enter(const BvhNode& node, Real&) const { return nodeTest(node.bounds); }
     bool keep(Real) const { return true; }
-    bool leaf(std::uint32_t tri) {
-      if (!triTest(mesh.triangle(tri))) return true;
+    bool slot(std::uint32_t k) {
+      if (!triTest(mesh.slotTriangle(k))) return true;
       any = true;
       if (!out) return false;
-      out->push_back(tri);
+      out->push_back(mesh.bvh().primIndices[k]);
       return true;
     }
   } v{mesh, nodeTest, triTest, out};
-  traverseBvh(mesh.bvh(), v);
+  traverseBvhSlots(mesh.bvh(), v);
   if (out) std::sort(out->begin(), out->end());
   return v.any;
 }
@@ -323,18 +323,17 @@ bool meshMeshBvh(const Mesh& a, const Mesh& b, const RelativeFrame& frame, PairL
     for (std::uint32_t j0 = nb.first, je = nb.first + nb.count; j0 < je; j0 += kChunk) {
       const std::uint32_t m = std::min(kChunk, je - j0);
       for (std::uint32_t k = 0; k < m; ++k) {
-        mapped[k] = frame.map(b.triangle(bb.primIndices[j0 + k]));
+        mapped[k] = frame.map(b.slotTriangle(j0 + k));
         mappedBox[k] = bounds(mapped[k]);
       }
       for (std::uint32_t i = na.first, ie = na.first + na.count; i < ie; ++i) {
-        const std::uint32_t ia = ba.primIndices[i];
-        const Triangle ta = a.triangle(ia);
+        const Triangle ta = a.slotTriangle(i);
         const Aabb boxA = bounds(ta);
         for (std::uint32_t k = 0; k < m; ++k) {
           if (!trianglePair(ta, boxA, mapped[k], mappedBox[k])) continue;
           any = true;
           if (!out) return true;
-          out->emplace_back(ia, bb.primIndices[j0 + k]);
+          out->emplace_back(ba.primIndices[i], bb.primIndices[j0 + k]);
         }
       }
     }
@@ -392,14 +391,14 @@ bool raycastAny(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options
 std::vector<MeshRayHit> raycastAll(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                    QueryPath path) {
   std::vector<MeshRayHit> hits;
-  const TriangleRayTest test(mesh, ray, options);
+  const TriangleRayTest test(ray, options);
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
-      if (const std::optional<RayHit> h = test(i)) hits.push_back(meshHit(*h, i));
+      if (const std::optional<RayHit> h = test(mesh.triangle(i))) hits.push_back(meshHit(*h, i));
   } else {
     const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
-    RayAllVisitor v{box, test, box.parameterLimit(options.maxDistance), hits};
-    traverseBvh(mesh.bvh(), v);
+    RayAllVisitor v{mesh, box, test, box.parameterLimit(options.maxDistance), hits};
+    traverseBvhSlots(mesh.bvh(), v);
   }
   std::sort(hits.begin(), hits.end(), [](const MeshRayHit& x, const MeshRayHit& y) {
     return x.t < y.t || (x.t == y.t && x.triangle < y.triangle);

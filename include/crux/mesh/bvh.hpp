@@ -26,7 +26,7 @@ struct BvhNode {
 struct BvhBuildOptions {
   std::uint32_t maxLeafSize = 4;  ///< leaf size cap (a leaf never holds more)
   std::uint32_t bins = 16;        ///< SAH bins per axis
-  Real traversalCost = 1;         ///< SAH cost of visiting a node, relative to one primitive test
+  Real traversalCost = 2;         ///< SAH cost of visiting a node, relative to one primitive test
 };
 
 /// A flat BVH: node 0 is the root (absent for zero primitives); each primitive is referenced
@@ -62,10 +62,12 @@ inline constexpr int kBvhMaxDepth = 96;
 ///       siblings (smaller first) and is re-checked when a deferred sibling is popped;
 ///   `bool keep(Real key)` — whether a deferred subtree with this key still matters (e.g.
 ///       key <= best hit so far); return true for plain overlap queries;
-///   `bool leaf(std::uint32_t prim)` — visits a primitive; false stops the traversal.
+///   `bool slot(std::uint32_t k)` — visits the primitive in slot k of a leaf (the primitive
+///       bvh.primIndices[k]; slots let callers read data stored in leaf order); false stops
+///       the traversal.
 /// Returns false when the visitor stopped it early.
 template <class Visitor>
-bool traverseBvh(const Bvh& bvh, Visitor& visitor) {
+bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
   if (bvh.nodes.empty()) return true;
   Real rootKey = 0;
   if (!visitor.enter(bvh.nodes[0], rootKey)) return true;
@@ -79,8 +81,8 @@ bool traverseBvh(const Bvh& bvh, Visitor& visitor) {
   for (;;) {
     const BvhNode& node = bvh.nodes[current];
     if (node.isLeaf()) {
-      for (std::uint32_t i = node.first, e = node.first + node.count; i < e; ++i)
-        if (!visitor.leaf(bvh.primIndices[i])) return false;
+      for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k)
+        if (!visitor.slot(k)) return false;
     } else {
       const std::uint32_t l = node.first, r = node.first + 1;
       Real kl = 0, kr = 0;
@@ -106,6 +108,20 @@ bool traverseBvh(const Bvh& bvh, Visitor& visitor) {
       }
     }
   }
+}
+
+/// traverseBvhSlots with a visitor that sees primitive indices instead of slots:
+/// `bool leaf(std::uint32_t prim)` in place of `slot`.
+template <class Visitor>
+bool traverseBvh(const Bvh& bvh, Visitor& visitor) {
+  struct Slots {
+    const Bvh& bvh;
+    Visitor& v;
+    bool enter(const BvhNode& node, Real& key) { return v.enter(node, key); }
+    bool keep(Real key) { return v.keep(key); }
+    bool slot(std::uint32_t k) { return v.leaf(bvh.primIndices[k]); }
+  } slots{bvh, visitor};
+  return traverseBvhSlots(bvh, slots);
 }
 
 }  // namespace crux
