@@ -183,8 +183,10 @@ std::optional<Fraction> rayPoint3D(const WVec3& d, const WVec3& p) {
 /// First parameter s >= 0 where o + s*d meets the closed (possibly degenerate) triangle.
 /// `normal` receives a non-unit normal facing the origin for a proper triangle crossed by the
 /// ray, the plane normal (either side) for a ray in the triangle's plane, zero otherwise.
-std::optional<Fraction> firstHit(const WVec3& o, const WVec3& d, const Triangle& tri, WVec3& normal) {
+std::optional<Fraction> firstHit(const WVec3& o, const WVec3& d, const Triangle& tri, WVec3& normal,
+                                 int* crossingSign = nullptr) {
   normal.setZero();
+  if (crossingSign) *crossingSign = 0;
   const predicates::TriangleShape shape = predicates::classify(tri);
   if (shape.kind == TriangleKind::Point) return rayPoint3D(d, shape.p - o);
   if (shape.kind == TriangleKind::Segment) return raySegment3D(d, shape.p - o, shape.q - o);
@@ -205,11 +207,22 @@ std::optional<Fraction> firstHit(const WVec3& o, const WVec3& d, const Triangle&
   // Parameter of the plane crossing, s = n·(A - o) / n·d (accurate: error ~ eps |A - o| / cos θ).
   // n·d equals det; should rounding make their signs differ (a ray nearly parallel to the
   // plane), use the barycentric form (u a + v b + w c) / det of the hit point instead.
+  // In front or behind is decided by the exact sign of n·a = a·(b × c) (orient3d of the
+  // triangle and the origin): rounding of n·a would otherwise reject rays starting exactly on
+  // a corner or in the plane (found by the world sanity tests: ~15% of general-position rays
+  // from a corner missed).
+  if (crossingSign) *crossingSign = det > 0 ? 1 : -1;
+  const int side = predicates::sign(edgeFunction(a, b, c));
+  if (side == 0) {
+    normal = det > 0 ? WVec3(-n) : n;
+    return Fraction{0, 1};  // the origin lies in the triangle's plane (and the line meets it there)
+  }
+  if ((side > 0) != (det > 0)) return std::nullopt;  // the plane is behind the origin
   const Wide nd = n.dot(d);
-  const Fraction s = (nd != 0 && (nd > 0) == (det > 0))
-                         ? fraction(n.dot(a), nd)
-                         : fraction(u * a.dot(d) + v * b.dot(d) + w * c.dot(d), det * d.squaredNorm());
-  if (s.num < 0) return std::nullopt;  // the plane is behind the origin
+  Fraction s = (nd != 0 && (nd > 0) == (det > 0))
+                   ? fraction(n.dot(a), nd)
+                   : fraction(u * a.dot(d) + v * b.dot(d) + w * c.dot(d), det * d.squaredNorm());
+  if (s.num < 0) s.num = 0;  // rounding of a value whose exact sign is known to be >= 0
   normal = det > 0 ? WVec3(-n) : n;
   return s;
 }
@@ -335,8 +348,16 @@ bool intersects(const Segment& seg, const Triangle& t) {
   const WVec3 o = wide(seg.start), d = wide(seg.end) - o;
   if (d.isZero(0)) return contains(t, o);
   WVec3 normal;
-  const auto s = firstHit(o, d, t, normal);
-  return s && s->num <= s->den;
+  int crossing = 0;  // sign of d·n when the segment's line crosses the plane, 0 otherwise
+  const auto s = firstHit(o, d, t, normal, &crossing);
+  if (!s) return false;
+  if (crossing == 0 || s->num == 0) return s->num <= s->den;
+  // Does the segment reach the plane? Exact sign of n·(A - E) against d·n, E = o + d (the
+  // end point; exact in float builds, where d = end - start is exact in Wide): s <= 1.
+  const WVec3 e = o + d;
+  const WVec3 A = wide(t.a) - e, B = wide(t.b) - e, C = wide(t.c) - e;
+  const int endSide = predicates::sign(edgeFunction(A, B, C));
+  return endSide == 0 || (endSide > 0) != (crossing > 0);
 }
 
 bool intersects(const Segment& seg, const Sphere& sp) {

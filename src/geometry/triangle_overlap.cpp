@@ -267,33 +267,30 @@ bool segmentWithinRadius(const WVec3& x, const WVec3& p, const WVec3& q, Wide r2
   return w.cross(d).squaredNorm() <= r2 * dd;
 }
 
-/// Proper triangle abc: plane distance first (cheap rejection), then the Voronoi region of x
-/// (Ericson, RTCD 5.1.5) picks the vertex, edge line or plane whose distance is the
-/// triangle's distance. All tests are inclusive, so ties between regions are harmless.
-bool triangleWithinRadius(const WVec3& x, const WVec3& a, const WVec3& b, const WVec3& c, Wide r2) {
-  const WVec3 ab = b - a, ac = c - a, ap = x - a;
-  const WVec3 n = ab.cross(ac);
-  const Wide h = n.dot(ap);
-  if (h * h > r2 * n.squaredNorm()) return false;
+/// Proper triangle abc: |x - T|² <= r2. The distance to a closed triangle is the plane
+/// distance when x projects inside it, else the distance to the nearest edge, so: reject by
+/// the plane distance (h² > r2|n|², a lower bound), accept when x projects inside (exact
+/// orientation signs n·(e_i × (x - v_i))), else test the three edges as segments. Unlike
+/// RTCD 5.1.5's region classification by products of dot products, nothing here cancels
+/// catastrophically on sliver triangles; on the integer grid every sign is exact.
+/// A triangle whose corner angle at a has sin² below this is a sliver whose computed normal is
+/// rounding noise (relative error ~1e-16 / sin): it is measured by its edges alone, which moves
+/// the answer by at most its width (~1e-12 of its edges). Never reached on the integer grid,
+/// where sin² >= 1 / (3·128²)².
+constexpr Wide kSliverSine2 = 1e-24;
 
-  const Wide d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm() <= r2;  // vertex a
-  const WVec3 bp = x - b;
-  const Wide d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm() <= r2;  // vertex b
-  const Wide vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return ap.cross(ab).squaredNorm() <= r2 * ab.squaredNorm();
-  const WVec3 cp = x - c;
-  const Wide d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm() <= r2;  // vertex c
-  const Wide vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return ap.cross(ac).squaredNorm() <= r2 * ac.squaredNorm();
-  const Wide va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    const WVec3 bc = c - b;
-    return bp.cross(bc).squaredNorm() <= r2 * bc.squaredNorm();
-  }
-  return true;  // face region: the plane distance, already accepted
+bool triangleWithinRadius(const WVec3& x, const WVec3& a, const WVec3& b, const WVec3& c, Wide r2) {
+  const WVec3 ab = b - a, bc = c - b, ca = a - c;
+  const WVec3 n = ab.cross(c - a);
+  if (n.squaredNorm() <= kSliverSine2 * ab.squaredNorm() * ca.squaredNorm())
+    return segmentWithinRadius(x, a, b, r2) || segmentWithinRadius(x, b, c, r2) ||
+           segmentWithinRadius(x, c, a, r2);
+  const Wide h = n.dot(x - a);
+  if (h * h > r2 * n.squaredNorm()) return false;
+  const Wide sa = n.dot(ab.cross(x - a)), sb = n.dot(bc.cross(x - b)), sc = n.dot(ca.cross(x - c));
+  if (sa >= 0 && sb >= 0 && sc >= 0) return true;  // projects inside: the plane distance decides
+  return segmentWithinRadius(x, a, b, r2) || segmentWithinRadius(x, b, c, r2) ||
+         segmentWithinRadius(x, c, a, r2);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -306,9 +303,11 @@ inline bool separated(Wide p0, Wide p1, Wide r) {
 }
 
 /// Triangle v[3] (box coordinates) against the box [-h, h]. Axes: the 3 box normals, the 9
-/// products u_j × e_i, the triangle normal. For a degenerate triangle the zero axes never
-/// separate and the rest (box normals, u_j × segment direction) are still complete.
-bool triangleCenteredBox(const WVec3 v[3], const WVec3& h) {
+/// products u_j × e_i, and the triangle normal when `proper`. A degenerate triangle (classified
+/// exactly in world coordinates by the caller) skips the normal axis: after mapping into a
+/// rotated box frame its computed normal is rounding noise, not an axis; the remaining axes
+/// (box normals, u_j × segment direction) are complete for a segment or point.
+bool triangleCenteredBox(const WVec3 v[3], const WVec3& h, bool proper) {
   for (int i = 0; i < 3; ++i) {
     if (std::min({v[0][i], v[1][i], v[2][i]}) > h[i]) return false;
     if (std::max({v[0][i], v[1][i], v[2][i]}) < -h[i]) return false;
@@ -328,6 +327,7 @@ bool triangleCenteredBox(const WVec3 v[3], const WVec3& h) {
                   h.x() * std::abs(e.y()) + h.y() * std::abs(e.x())))
       return false;
   }
+  if (!proper) return true;
   const WVec3 n = (v[1] - v[0]).cross(v[2] - v[0]);
   return std::abs(n.dot(v[0])) <= h.dot(n.cwiseAbs());
 }
@@ -371,14 +371,14 @@ bool overlaps(const Triangle& t, const Aabb& b) {
   const WVec3 c = (wide(b.min) + wide(b.max)) * Wide(0.5);
   const WVec3 h = (wide(b.max) - wide(b.min)) * Wide(0.5);
   const WVec3 v[3] = {wide(t.a) - c, wide(t.b) - c, wide(t.c) - c};
-  return triangleCenteredBox(v, h);
+  return triangleCenteredBox(v, h, predicates::classify(t).kind == TriangleKind::Triangle);
 }
 
 bool overlaps(const Triangle& t, const Obb& b) {
   const WVec3 c = wide(b.center);
   const Eigen::Matrix<Wide, 3, 3> rt = b.axes.cast<Wide>().transpose();
   const WVec3 v[3] = {rt * (wide(t.a) - c), rt * (wide(t.b) - c), rt * (wide(t.c) - c)};
-  return triangleCenteredBox(v, wide(b.half));
+  return triangleCenteredBox(v, wide(b.half), predicates::classify(t).kind == TriangleKind::Triangle);
 }
 
 bool overlaps(const Triangle& t, const Plane& p) {

@@ -744,3 +744,47 @@ TEST(TrianglePlaneProperty, GeneralPositionMatchesExactOracle) {
 }
 
 }  // namespace
+
+// ---- Defects found by the model-layer property tests (double build), fixed ------------------
+
+// A sliver (rounding-level non-collinear) triangle: RTCD's region classification and the
+// plane-distance shortcut used a normal that is rounding noise and rejected a sphere that
+// touches it. Now measured by its edges.
+TEST(TriangleSphere, SliverTriangleIsMeasuredByItsEdges) {
+  const Triangle t{Vec3(Real(-2.8926843790454511), Real(-0.70199343488746058), Real(1.1455606737941069)),
+                   Vec3(Real(-2.6212904977943592), Real(-0.56899390054496957), Real(0.93524714693770716)),
+                   Vec3(Real(-2.3498966165432669), Real(-0.43599436620247872), Real(0.72493362008130746))};
+  const Sphere s{Vec3(Real(-2.3900854007255905), Real(-0.40613728528036508), Real(0.91365837721576804)),
+                 Real(0.15229573833426094)};
+  EXPECT_EQ(overlaps(t, s), crux::exact::overlaps(t, s));
+  EXPECT_TRUE(overlaps(t, s));  // squared distance ~0.0221 < r² ~0.0232: not a near-tie
+}
+
+// An exactly collinear triangle mapped into a rotated box's frame: its computed normal there is
+// rounding noise and used to separate wrongly. Degenerate triangles now skip the normal axis.
+TEST(TriangleObb, CollinearTriangleAgainstRotatedBoxes) {
+  std::mt19937_64 rng(0xC011);
+  std::uniform_real_distribution<double> u(-1, 1);
+  int hits = 0, cases = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 a(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+    const Vec3 d(Real(std::ldexp(std::round(u(rng) * 64), -6)), Real(std::ldexp(std::round(u(rng) * 64), -6)),
+                 Real(std::ldexp(std::round(u(rng) * 64), -6)));
+    const Triangle t{a, Vec3(a + d), Vec3(a + 2 * d)};  // small dyadic steps: exactly collinear
+    if (crux::predicates::classify(t).kind == crux::predicates::TriangleKind::Triangle) continue;
+    Obb b;
+    b.center = Vec3(a + d + Vec3(Real(0.6 * u(rng)), Real(0.6 * u(rng)), Real(0.6 * u(rng))));
+    b.half = Vec3(Real(0.2 + 0.3 * std::abs(u(rng))), Real(0.2 + 0.3 * std::abs(u(rng))),
+                  Real(0.2 + 0.3 * std::abs(u(rng))));
+    b.axes = Eigen::Quaternion<Real>(Real(u(rng)), Real(u(rng)), Real(u(rng)), Real(u(rng)))
+                 .normalized()
+                 .toRotationMatrix();
+    const bool got = overlaps(t, b), want = crux::exact::overlaps(t, b);
+    ++cases;
+    hits += want;
+    ASSERT_EQ(got, want) << "case " << i;
+  }
+  EXPECT_GT(cases, 10000);
+  EXPECT_GE(hits, cases / 5);
+  EXPECT_LE(hits, cases * 4 / 5);
+}

@@ -398,6 +398,9 @@ void expectMeaningful(const Rate& r, const std::string& what) {
   EXPECT_LE(r.value(), 0.8) << what;
   // Cases near a change of answer must stay rare, or agreement would prove little.
   EXPECT_LE(r.nearBand, r.cases / 100 + 1) << what;
+  // Geometry-layer defects found here (sliver triangle–sphere, collinear triangle–OBB) were
+  // fixed and have regression tests in tests/geometry/test_triangle_overlap.cpp: any new one fails.
+  EXPECT_EQ(r.geometryDefects, 0) << what;
 }
 
 constexpr int kPlacements = 300;  // per family
