@@ -1,0 +1,397 @@
+#pragma once
+/// @file collision_world.hpp  crux::CollisionWorld: one interface in front of several collision
+/// libraries (crux itself, FCL, Bullet, the exact CGAL kernel), so the same questions can be put
+/// to each and their answers compared (the batch protocol's `--backend`, the sanity suite and
+/// the differential fuzzer).
+///
+/// Shape of the interface (non-virtual interface idiom): every public query is a non-virtual
+/// function that validates its input at the edge (crux::InvalidInput naming the field), calls
+/// the backend's protected virtual `do...` hook, and converts anything a peer library throws into
+/// crux::BackendFailure — no exception from a peer ever crosses the boundary. A hook a backend
+/// does not override throws crux::Unsupported: a backend that cannot answer an op says so and
+/// never guesses. `supports(op)` tells in advance.
+///
+/// Semantics are those of the batch protocol (/work/shared/contracts/batch-protocol.md): closed
+/// point sets, touching intersects, a plane is the plane itself, degenerate triangles are the
+/// segment/point they span, rays hit both faces, mesh tests are surface tests. Numbers come
+/// back in double so a peer's answers are not rounded again on the way out.
+
+#include <crux/error.hpp>
+#include <crux/geometry/shapes.hpp>
+#include <crux/mesh/mesh_query.hpp>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <variant>
+#include <vector>
+
+namespace crux {
+
+/// Double-precision vector in which worlds report points and normals.
+using Vec3d = Eigen::Vector3d;
+
+/// Every query and state change a world can be asked for, named as in the batch protocol.
+enum class WorldOp : std::uint8_t {
+  // primitive ops
+  ClosestPointTriangle,
+  TriangleSphere,
+  TriangleAabb,
+  TriangleObb,
+  TrianglePlane,
+  TriangleTriangle,
+  RayTriangle,
+  SegmentTriangle,
+  // meshes: definition, then queries (in the mesh's own space, except mesh_mesh which places
+  // both meshes)
+  Mesh,
+  LoadMesh,
+  MeshRay,
+  MeshSegment,
+  MeshSphere,
+  MeshAabb,
+  MeshObb,
+  MeshPlane,
+  MeshTriangle,
+  MeshMesh,
+  // models and their hierarchy
+  AddModel,
+  SetTransform,
+  SetParent,
+  RemoveModel,
+  Children,
+  ModelRay,
+  ModelSegment,
+  ModelSphere,
+  ModelAabb,
+  ModelObb,
+  ModelPlane,
+  ModelTriangle,
+  // the scene
+  SceneRay,
+  SceneQuery,
+  ScenePairs,
+};
+
+/// Number of WorldOp values.
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::ScenePairs) + 1;
+
+/// The protocol name of an op ("closest_point_triangle", "mesh_mesh", ...). Mesh and LoadMesh
+/// ("mesh", "load_mesh") both arrive as CollisionWorld::addMesh (the file is loaded by
+/// crux::loadMesh first).
+std::string_view opName(WorldOp op);
+/// The op with protocol name `name`, or nothing.
+std::optional<WorldOp> parseOp(std::string_view name);
+/// Every op, in declaration order.
+const std::array<WorldOp, kWorldOpCount>& allWorldOps();
+
+/// Thrown for an op a backend cannot answer. what() is the protocol's error text
+/// "unsupported: <op> on <backend>".
+class Unsupported : public std::runtime_error {
+ public:
+  Unsupported(WorldOp op, std::string_view backend);
+  WorldOp op() const { return op_; }
+  const std::string& backend() const { return backend_; }
+
+ private:
+  WorldOp op_;
+  std::string backend_;
+};
+
+/// Thrown when a peer library failed while answering (it threw, or could not build its
+/// structures). what() is "<backend> failed on <op>: <the peer's message>". The world stays
+/// usable.
+class BackendFailure : public std::runtime_error {
+ public:
+  BackendFailure(WorldOp op, std::string_view backend, const std::string& message);
+  WorldOp op() const { return op_; }
+
+ private:
+  WorldOp op_;
+};
+
+/// A mesh held by a world. Stable until the mesh is removed; never reused by the same world.
+struct MeshHandle {
+  std::uint32_t index = 0xffffffffu;
+  bool valid() const { return index != 0xffffffffu; }
+  friend bool operator==(MeshHandle a, MeshHandle b) { return a.index == b.index; }
+  friend bool operator!=(MeshHandle a, MeshHandle b) { return a.index != b.index; }
+  friend bool operator<(MeshHandle a, MeshHandle b) { return a.index < b.index; }
+};
+
+/// A model held by a world (issued by the backend that implements models).
+struct ModelHandle {
+  std::uint32_t index = 0xffffffffu;
+  bool valid() const { return index != 0xffffffffu; }
+  friend bool operator==(ModelHandle a, ModelHandle b) { return a.index == b.index; }
+  friend bool operator!=(ModelHandle a, ModelHandle b) { return a.index != b.index; }
+  friend bool operator<(ModelHandle a, ModelHandle b) { return a.index < b.index; }
+};
+
+/// A ray hit as a world reports it: distance along the ray in world units, the point, the unit
+/// normal facing the ray origin (for a ray lying in the triangle's plane: the plane normal,
+/// either side; for a degenerate triangle: -dir/|dir|), the triangle index within its mesh, and
+/// for model and scene rays the model hit.
+struct WorldRayHit {
+  double t = 0;
+  Vec3d point = Vec3d::Zero();
+  Vec3d normal = Vec3d::Zero();
+  std::uint32_t triangle = 0;
+  ModelHandle model;
+};
+
+/// What a ray query collects (cf. Jolt's ClosestHit / AnyHit / AllHit collectors).
+enum class RayCollect {
+  Closest,  ///< the nearest hit (ties: lowest model, then lowest triangle index)
+  Any,      ///< whether there is a hit at all; the query may stop at the first one
+  All,      ///< every hit, sorted by (t, model, triangle)
+};
+
+/// Receives the hits of one ray query. Backends offer hits in any order with add(); the
+/// collector keeps what its mode asks for and publishes an early-out distance (hits beyond it
+/// cannot change the result) and whether it is done. One collector serves one query; reset()
+/// to reuse it.
+class RayHitCollector {
+ public:
+  explicit RayHitCollector(RayCollect mode = RayCollect::Closest) : mode_(mode) {}
+
+  RayCollect mode() const { return mode_; }
+  /// Offers a hit.
+  void add(const WorldRayHit& hit);
+  /// Records that a hit exists without its details: for Any queries answered by a backend
+  /// that only says yes or no.
+  void addAnonymousHit() { anonymousHit_ = true; }
+  /// Hits with t beyond this cannot change the result: the best t so far (Closest), -inf once
+  /// a hit is known (Any), +inf (All).
+  double earlyOut() const;
+  /// True when no further hit can change the result (Any, after a hit).
+  bool done() const { return mode_ == RayCollect::Any && hasHit(); }
+  bool hasHit() const { return anonymousHit_ || !hits_.empty(); }
+  /// Closest: the nearest hit; Any: the hit found, when it came with details; All: the first
+  /// of the sorted hits.
+  std::optional<WorldRayHit> hit() const;
+  /// The hits kept: at most one (Closest, Any), or all sorted (All).
+  const std::vector<WorldRayHit>& hits() const { return hits_; }
+  void reset() {
+    hits_.clear();
+    anonymousHit_ = false;
+  }
+
+ private:
+  RayCollect mode_;
+  std::vector<WorldRayHit> hits_;
+  bool anonymousHit_ = false;
+};
+
+/// Largest | |q| - 1 | a world accepts in a transform's rotation quaternion (transforms must
+/// also be finite; anything else throws InvalidInput naming the field).
+inline constexpr double kUnitRotationTolerance = 1e-6;
+
+/// How far a backend's answers may be from the exact ones, and where it works at all. For
+/// operands whose largest coordinate magnitude is s, a distance or point may be off by
+/// relative·s + absolute; a boolean must be exact when the operands are separated or
+/// penetrate by more than that, provided every shape is at least minFeature across (peers
+/// with absolute epsilons lose contacts between smaller shapes).
+struct WorldTolerance {
+  double relative = 0;
+  double absolute = 0;
+  double minFeature = 0;
+  /// The error bound for operands of magnitude s.
+  double at(double s) const { return relative * s + absolute; }
+};
+
+/// Shapes a scene query accepts.
+using SceneQueryShape = std::variant<Sphere, Aabb, Obb>;
+
+/// A world of meshes, models and a scene, answering every query of the batch protocol through
+/// one collision library. Not thread-safe: one world per thread.
+///
+/// Meshes are held by name and handle. Redefining a name replaces the mesh for later queries
+/// (the old handle becomes invalid); models made from a mesh keep it (meshes are shared and
+/// immutable). Unknown handles and names throw InvalidInput.
+class CollisionWorld {
+ public:
+  virtual ~CollisionWorld();
+  CollisionWorld(const CollisionWorld&) = delete;
+  CollisionWorld& operator=(const CollisionWorld&) = delete;
+
+  /// The backend's protocol name ("native", "fcl", "bullet", "exact").
+  virtual std::string_view backend() const = 0;
+  /// One line naming the library behind the backend, its version and precision.
+  virtual std::string description() const = 0;
+  /// Whether the backend answers `op` (the others throw Unsupported).
+  virtual bool supports(WorldOp op) const = 0;
+  /// The backend's declared accuracy and working range (documented per backend in
+  /// oracle/README.md).
+  virtual WorldTolerance tolerance() const = 0;
+
+  // ---- meshes ---------------------------------------------------------------------------------
+
+  /// Adds a mesh under `name` (a non-empty string), replacing any mesh of that name. The
+  /// backend builds its own structures from the mesh's vertex and index arrays.
+  MeshHandle addMesh(const std::string& name, std::shared_ptr<const Mesh> mesh);
+  /// Removes a mesh by handle or by name.
+  void removeMesh(MeshHandle mesh);
+  void removeMesh(std::string_view name);
+  /// The handle of the mesh named `name`, or nothing.
+  std::optional<MeshHandle> findMesh(std::string_view name) const;
+  /// The handle of the mesh named `name`; throws InvalidInput naming it when there is none.
+  MeshHandle meshHandle(std::string_view name) const;
+  /// The crux mesh behind a handle.
+  const Mesh& mesh(MeshHandle mesh) const;
+  const std::shared_ptr<const Mesh>& sharedMesh(MeshHandle mesh) const;
+  const std::string& meshName(MeshHandle mesh) const;
+  /// Live meshes, ascending handles.
+  std::vector<MeshHandle> meshes() const;
+
+  // ---- primitive ops ---------------------------------------------------------------------------
+
+  /// closest_point_triangle.
+  Vec3d closestPoint(const Triangle& t, const Vec3& p);
+  /// triangle_sphere, triangle_aabb, triangle_obb, triangle_plane, triangle_triangle.
+  bool overlaps(const Triangle& t, const Sphere& s);
+  bool overlaps(const Triangle& t, const Aabb& b);
+  bool overlaps(const Triangle& t, const Obb& b);
+  bool overlaps(const Triangle& t, const Plane& p);
+  bool overlaps(const Triangle& a, const Triangle& b);
+  /// The reversed argument order, derived: overlap is symmetric.
+  template <class Shape, std::enable_if_t<!std::is_same_v<Shape, Triangle> &&
+                                              std::is_same_v<decltype(std::declval<CollisionWorld&>().overlaps(
+                                                                 std::declval<const Triangle&>(),
+                                                                 std::declval<const Shape&>())),
+                                                             bool>,
+                                          int> = 0>
+  bool overlaps(const Shape& s, const Triangle& t) {
+    return overlaps(t, s);
+  }
+  /// ray_triangle: the first hit (triangle index 0), or nothing.
+  std::optional<WorldRayHit> raycast(const Ray& r, const Triangle& t);
+  /// segment_triangle.
+  bool intersects(const Segment& s, const Triangle& t);
+
+  // ---- mesh ops (the shape in the mesh's own space) -------------------------------------------
+
+  /// mesh_ray: hits within options.maxDistance (back faces skipped when options.cullBackFaces)
+  /// go to the collector.
+  void raycast(MeshHandle mesh, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options = {});
+  /// mesh_segment, mesh_sphere, mesh_aabb, mesh_obb, mesh_plane, mesh_triangle: does the shape
+  /// touch the mesh's surface?
+  bool intersects(MeshHandle mesh, const Segment& s);
+  bool overlaps(MeshHandle mesh, const Sphere& s);
+  bool overlaps(MeshHandle mesh, const Aabb& b);
+  bool overlaps(MeshHandle mesh, const Obb& b);
+  bool overlaps(MeshHandle mesh, const Plane& p);
+  bool overlaps(MeshHandle mesh, const Triangle& t);
+  /// mesh_mesh: do the surfaces of a (placed by ta) and b (placed by tb) touch or cross?
+  bool overlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb);
+
+  // ---- models (declared for the scene layer; backends without models throw Unsupported) ------
+
+  /// add_model: a model of `mesh` named `name`, placed by `local` relative to `parent` (none:
+  /// the world). World transform = parent_world ∘ local.
+  ModelHandle addModel(const std::string& name, MeshHandle mesh, const Transform& local = {},
+                       std::optional<ModelHandle> parent = std::nullopt);
+  /// remove_model: its children move to its parent, keeping their world pose.
+  void removeModel(ModelHandle model);
+  /// set_transform: the local transform (relative to the parent).
+  void setTransform(ModelHandle model, const Transform& local);
+  /// set_parent: re-parents keeping the world pose; a cycle throws InvalidInput.
+  void setParent(ModelHandle model, std::optional<ModelHandle> parent);
+  /// The handle of the model named `name`, or nothing.
+  std::optional<ModelHandle> findModel(std::string_view name);
+  /// children: the names of every descendant, sorted.
+  std::vector<std::string> descendants(ModelHandle model);
+  /// model_ray and model_segment / sphere / aabb / obb / plane / triangle, shapes in world space.
+  void raycast(ModelHandle model, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options = {});
+  bool intersects(ModelHandle model, const Segment& s);
+  bool overlaps(ModelHandle model, const Sphere& s);
+  bool overlaps(ModelHandle model, const Aabb& b);
+  bool overlaps(ModelHandle model, const Obb& b);
+  bool overlaps(ModelHandle model, const Plane& p);
+  bool overlaps(ModelHandle model, const Triangle& t);
+
+  // ---- the scene --------------------------------------------------------------------------------
+
+  /// scene_ray: hits on every model (WorldRayHit::model set).
+  void sceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options = {});
+  /// scene_query: sorted names of the models whose triangles touch the shape, or with
+  /// boundsOnly whose world bounding boxes do (broad phase only).
+  std::vector<std::string> sceneQuery(const SceneQueryShape& shape, bool boundsOnly = false);
+  /// scene_pairs: sorted name pairs (a < b) of models whose triangles touch.
+  std::vector<std::pair<std::string, std::string>> scenePairs();
+
+ protected:
+  CollisionWorld() = default;
+
+  /// Throws Unsupported(op, backend()).
+  [[noreturn]] void unsupported(WorldOp op) const;
+
+  // Hooks. A backend overrides those it answers; inputs are validated and handles resolved.
+  /// Builds the backend's structures for a newly added mesh.
+  virtual void onMeshAdded(MeshHandle handle, const Mesh& mesh) = 0;
+  /// Releases them (the Mesh itself stays alive while models hold it).
+  virtual void onMeshRemoved(MeshHandle handle) = 0;
+
+  virtual Vec3d doClosestPoint(const Triangle& t, const Vec3& p);
+  virtual bool doOverlaps(const Triangle& t, const Sphere& s);
+  virtual bool doOverlaps(const Triangle& t, const Aabb& b);
+  virtual bool doOverlaps(const Triangle& t, const Obb& b);
+  virtual bool doOverlaps(const Triangle& t, const Plane& p);
+  virtual bool doOverlaps(const Triangle& a, const Triangle& b);
+  virtual std::optional<WorldRayHit> doRaycast(const Ray& r, const Triangle& t);
+  virtual bool doIntersects(const Segment& s, const Triangle& t);
+
+  virtual void doRaycast(MeshHandle mesh, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options);
+  virtual bool doIntersects(MeshHandle mesh, const Segment& s);
+  virtual bool doOverlaps(MeshHandle mesh, const Sphere& s);
+  virtual bool doOverlaps(MeshHandle mesh, const Aabb& b);
+  virtual bool doOverlaps(MeshHandle mesh, const Obb& b);
+  virtual bool doOverlaps(MeshHandle mesh, const Plane& p);
+  virtual bool doOverlaps(MeshHandle mesh, const Triangle& t);
+  virtual bool doOverlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb);
+
+  virtual ModelHandle doAddModel(const std::string& name, MeshHandle mesh, const Transform& local,
+                                 std::optional<ModelHandle> parent);
+  virtual void doRemoveModel(ModelHandle model);
+  virtual void doSetTransform(ModelHandle model, const Transform& local);
+  virtual void doSetParent(ModelHandle model, std::optional<ModelHandle> parent);
+  virtual std::optional<ModelHandle> doFindModel(std::string_view name);
+  virtual std::vector<std::string> doDescendants(ModelHandle model);
+  virtual void doRaycast(ModelHandle model, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options);
+  virtual bool doIntersects(ModelHandle model, const Segment& s);
+  virtual bool doOverlaps(ModelHandle model, const Sphere& s);
+  virtual bool doOverlaps(ModelHandle model, const Aabb& b);
+  virtual bool doOverlaps(ModelHandle model, const Obb& b);
+  virtual bool doOverlaps(ModelHandle model, const Plane& p);
+  virtual bool doOverlaps(ModelHandle model, const Triangle& t);
+
+  virtual void doSceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options);
+  virtual std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly);
+  virtual std::vector<std::pair<std::string, std::string>> doScenePairs();
+
+ private:
+  struct MeshEntry {
+    std::string name;
+    std::shared_ptr<const Mesh> mesh;
+  };
+  /// Runs a hook, letting crux's own exceptions through and wrapping any other.
+  template <class F>
+  auto guarded(WorldOp op, F&& f) -> decltype(f());
+  const MeshEntry& entry(MeshHandle mesh, std::string_view field) const;
+
+  std::map<std::uint32_t, MeshEntry> meshes_;
+  std::map<std::string, std::uint32_t, std::less<>> meshNames_;
+  std::uint32_t nextMesh_ = 0;
+};
+
+}  // namespace crux

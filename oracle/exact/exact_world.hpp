@@ -1,0 +1,29 @@
+#pragma once
+/// @file exact_world.hpp  The "exact" backend: CGAL's exact kernel (Epeck), brute force over
+/// triangles. The arbiter of the differential fuzzer; slow by design.
+
+#include <crux/world/collision_world.hpp>
+
+#include <limits>
+#include <memory>
+
+namespace crux::exact {
+
+/// A world answered by the exact oracle (exact.hpp): every primitive op by the CGAL function
+/// of the same op; every mesh op by brute force over the mesh's triangles (no BVH, so no
+/// culling that could be wrong); mesh–mesh by all triangle pairs, O(n·m) exact tests after a
+/// conservative interval-box filter — fine for the small meshes the fuzzer makes, slow for
+/// real ones (a 10k × 10k pair is 10^8 box tests). Transforms of mesh_mesh are applied
+/// exactly: the rotation is the exact rational matrix of q/|q| (the rotation the quaternion
+/// denotes), the translation is added exactly. Model and scene ops: Unsupported.
+///
+/// Booleans are exact. Distances are exact values rounded once (a few ulps of double); the
+/// choice among mesh ray hits whose exact distances differ by less than that (and the
+/// max-distance cut) is made on the rounded distances.
+std::unique_ptr<CollisionWorld> makeExactWorld();
+
+/// CollisionWorld::tolerance of the exact backend: booleans exact, numbers within 16 ulps of
+/// double of the operands' magnitude.
+inline constexpr WorldTolerance kExactTolerance{16.0 * std::numeric_limits<double>::epsilon(), 0, 0};
+
+}  // namespace crux::exact

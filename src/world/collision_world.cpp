@@ -1,0 +1,429 @@
+/// @file collision_world.cpp  The non-virtual edge of crux::CollisionWorld: validation, handle
+/// resolution, the mesh table, exception containment, default "unsupported" hooks, and the
+/// ray-hit collector.
+
+#include <crux/world/collision_world.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace crux {
+namespace {
+
+constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
+    "closest_point_triangle", "triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_plane",
+    "triangle_triangle", "ray_triangle", "segment_triangle", "mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere",
+    "mesh_aabb", "mesh_obb", "mesh_plane", "mesh_triangle", "mesh_mesh", "add_model", "set_transform",
+    "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
+    "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs"};
+
+std::array<WorldOp, kWorldOpCount> makeOpList() {
+  std::array<WorldOp, kWorldOpCount> ops{};
+  for (std::size_t i = 0; i < kWorldOpCount; ++i) ops[i] = static_cast<WorldOp>(i);
+  return ops;
+}
+
+void validateTransform(const Transform& t, const std::string& name) {
+  const auto& q = t.rotation.coeffs();
+  if (!t.translation.allFinite()) throw InvalidInput(name + ".translation: not finite");
+  if (!q.allFinite()) throw InvalidInput(name + ".rotation: not finite");
+  const double norm = q.cast<double>().norm();
+  if (!(std::abs(norm - 1) <= kUnitRotationTolerance)) {
+    std::ostringstream os;
+    os.precision(17);
+    os << name << ".rotation: not a unit quaternion (|q| = " << norm << ")";
+    throw InvalidInput(os.str());
+  }
+}
+
+void validateRayOptions(const RayQueryOptions& options) {
+  if (std::isnan(options.maxDistance) || options.maxDistance < 0) {
+    std::ostringstream os;
+    os.precision(17);
+    os << "max: must be >= 0, got " << options.maxDistance;
+    throw InvalidInput(os.str());
+  }
+}
+
+/// Hit order of every collector: t, then model, then triangle.
+bool before(const WorldRayHit& a, const WorldRayHit& b) {
+  if (a.t != b.t) return a.t < b.t;
+  if (a.model.index != b.model.index) return a.model.index < b.model.index;
+  return a.triangle < b.triangle;
+}
+
+}  // namespace
+
+std::string_view opName(WorldOp op) { return kOpNames[static_cast<std::size_t>(op)]; }
+
+std::optional<WorldOp> parseOp(std::string_view name) {
+  for (std::size_t i = 0; i < kWorldOpCount; ++i)
+    if (kOpNames[i] == name) return static_cast<WorldOp>(i);
+  return std::nullopt;
+}
+
+const std::array<WorldOp, kWorldOpCount>& allWorldOps() {
+  static const std::array<WorldOp, kWorldOpCount> ops = makeOpList();
+  return ops;
+}
+
+Unsupported::Unsupported(WorldOp op, std::string_view backend)
+    : std::runtime_error("unsupported: " + std::string(opName(op)) + " on " + std::string(backend)),
+      op_(op),
+      backend_(backend) {}
+
+BackendFailure::BackendFailure(WorldOp op, std::string_view backend, const std::string& message)
+    : std::runtime_error(std::string(backend) + " failed on " + std::string(opName(op)) + ": " + message), op_(op) {}
+
+// ---- collector ---------------------------------------------------------------------------------
+
+void RayHitCollector::add(const WorldRayHit& hit) {
+  switch (mode_) {
+    case RayCollect::Closest:
+      if (hits_.empty())
+        hits_.push_back(hit);
+      else if (before(hit, hits_.front()))
+        hits_.front() = hit;
+      break;
+    case RayCollect::Any:
+      if (hits_.empty()) hits_.push_back(hit);
+      break;
+    case RayCollect::All:
+      hits_.insert(std::upper_bound(hits_.begin(), hits_.end(), hit, before), hit);
+      break;
+  }
+}
+
+double RayHitCollector::earlyOut() const {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  switch (mode_) {
+    case RayCollect::Closest:
+      return hits_.empty() ? inf : hits_.front().t;
+    case RayCollect::Any:
+      return hasHit() ? -inf : inf;
+    case RayCollect::All:
+      break;
+  }
+  return inf;
+}
+
+std::optional<WorldRayHit> RayHitCollector::hit() const {
+  if (hits_.empty()) return std::nullopt;
+  return hits_.front();
+}
+
+// ---- the world's edge ---------------------------------------------------------------------------
+
+CollisionWorld::~CollisionWorld() = default;
+
+void CollisionWorld::unsupported(WorldOp op) const { throw Unsupported(op, backend()); }
+
+template <class F>
+auto CollisionWorld::guarded(WorldOp op, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Unsupported&) {
+    throw;
+  } catch (const InvalidInput&) {
+    throw;
+  } catch (const BackendFailure&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw BackendFailure(op, backend(), e.what());
+  } catch (...) {
+    throw BackendFailure(op, backend(), "unknown exception");
+  }
+}
+
+const CollisionWorld::MeshEntry& CollisionWorld::entry(MeshHandle mesh, std::string_view field) const {
+  const auto it = meshes_.find(mesh.index);
+  if (it == meshes_.end())
+    throw InvalidInput(std::string(field) + ": no mesh with handle " + std::to_string(mesh.index) + " in this world");
+  return it->second;
+}
+
+MeshHandle CollisionWorld::addMesh(const std::string& name, std::shared_ptr<const Mesh> mesh) {
+  if (name.empty()) throw InvalidInput("name: a mesh name must not be empty");
+  if (!mesh) throw InvalidInput("mesh: null mesh");
+  const MeshHandle handle{nextMesh_};
+  // Build the backend's structures first: when that fails, the old mesh of this name stays.
+  guarded(WorldOp::Mesh, [&] { onMeshAdded(handle, *mesh); });
+  ++nextMesh_;
+  if (const auto old = meshNames_.find(name); old != meshNames_.end()) removeMesh(MeshHandle{old->second});
+  meshes_.emplace(handle.index, MeshEntry{name, std::move(mesh)});
+  meshNames_.emplace(name, handle.index);
+  return handle;
+}
+
+void CollisionWorld::removeMesh(MeshHandle mesh) {
+  const MeshEntry& e = entry(mesh, "mesh");
+  meshNames_.erase(e.name);
+  meshes_.erase(mesh.index);
+  onMeshRemoved(mesh);
+}
+
+void CollisionWorld::removeMesh(std::string_view name) { removeMesh(meshHandle(name)); }
+
+std::optional<MeshHandle> CollisionWorld::findMesh(std::string_view name) const {
+  const auto it = meshNames_.find(name);
+  if (it == meshNames_.end()) return std::nullopt;
+  return MeshHandle{it->second};
+}
+
+MeshHandle CollisionWorld::meshHandle(std::string_view name) const {
+  if (const auto h = findMesh(name)) return *h;
+  throw InvalidInput("mesh: no mesh named \"" + std::string(name) + "\"");
+}
+
+const Mesh& CollisionWorld::mesh(MeshHandle mesh) const { return *entry(mesh, "mesh").mesh; }
+const std::shared_ptr<const Mesh>& CollisionWorld::sharedMesh(MeshHandle mesh) const {
+  return entry(mesh, "mesh").mesh;
+}
+const std::string& CollisionWorld::meshName(MeshHandle mesh) const { return entry(mesh, "mesh").name; }
+
+std::vector<MeshHandle> CollisionWorld::meshes() const {
+  std::vector<MeshHandle> out;
+  out.reserve(meshes_.size());
+  for (const auto& [index, e] : meshes_) out.push_back(MeshHandle{index});
+  return out;
+}
+
+// ---- primitive ops ------------------------------------------------------------------------------
+
+Vec3d CollisionWorld::closestPoint(const Triangle& t, const Vec3& p) {
+  validate(t, "triangle");
+  validatePoint(p, "point");
+  return guarded(WorldOp::ClosestPointTriangle, [&] { return doClosestPoint(t, p); });
+}
+
+bool CollisionWorld::overlaps(const Triangle& t, const Sphere& s) {
+  validate(t, "triangle");
+  validate(s, "sphere");
+  return guarded(WorldOp::TriangleSphere, [&] { return doOverlaps(t, s); });
+}
+
+bool CollisionWorld::overlaps(const Triangle& t, const Aabb& b) {
+  validate(t, "triangle");
+  validate(b, "aabb");
+  return guarded(WorldOp::TriangleAabb, [&] { return doOverlaps(t, b); });
+}
+
+bool CollisionWorld::overlaps(const Triangle& t, const Obb& b) {
+  validate(t, "triangle");
+  validate(b, "obb");
+  return guarded(WorldOp::TriangleObb, [&] { return doOverlaps(t, b); });
+}
+
+bool CollisionWorld::overlaps(const Triangle& t, const Plane& p) {
+  validate(t, "triangle");
+  validate(p, "plane");
+  return guarded(WorldOp::TrianglePlane, [&] { return doOverlaps(t, p); });
+}
+
+bool CollisionWorld::overlaps(const Triangle& a, const Triangle& b) {
+  validate(a, "a");
+  validate(b, "b");
+  return guarded(WorldOp::TriangleTriangle, [&] { return doOverlaps(a, b); });
+}
+
+std::optional<WorldRayHit> CollisionWorld::raycast(const Ray& r, const Triangle& t) {
+  validate(t, "triangle");
+  validate(r, "ray");
+  return guarded(WorldOp::RayTriangle, [&] { return doRaycast(r, t); });
+}
+
+bool CollisionWorld::intersects(const Segment& s, const Triangle& t) {
+  validate(t, "triangle");
+  validate(s, "segment");
+  return guarded(WorldOp::SegmentTriangle, [&] { return doIntersects(s, t); });
+}
+
+// ---- mesh ops -----------------------------------------------------------------------------------
+
+void CollisionWorld::raycast(MeshHandle mesh, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) {
+  entry(mesh, "mesh");
+  validate(r, "ray");
+  validateRayOptions(options);
+  guarded(WorldOp::MeshRay, [&] { doRaycast(mesh, r, hits, options); });
+}
+
+bool CollisionWorld::intersects(MeshHandle mesh, const Segment& s) {
+  entry(mesh, "mesh");
+  validate(s, "segment");
+  return guarded(WorldOp::MeshSegment, [&] { return doIntersects(mesh, s); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle mesh, const Sphere& s) {
+  entry(mesh, "mesh");
+  validate(s, "sphere");
+  return guarded(WorldOp::MeshSphere, [&] { return doOverlaps(mesh, s); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle mesh, const Aabb& b) {
+  entry(mesh, "mesh");
+  validate(b, "aabb");
+  return guarded(WorldOp::MeshAabb, [&] { return doOverlaps(mesh, b); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle mesh, const Obb& b) {
+  entry(mesh, "mesh");
+  validate(b, "obb");
+  return guarded(WorldOp::MeshObb, [&] { return doOverlaps(mesh, b); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle mesh, const Plane& p) {
+  entry(mesh, "mesh");
+  validate(p, "plane");
+  return guarded(WorldOp::MeshPlane, [&] { return doOverlaps(mesh, p); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle mesh, const Triangle& t) {
+  entry(mesh, "mesh");
+  validate(t, "triangle");
+  return guarded(WorldOp::MeshTriangle, [&] { return doOverlaps(mesh, t); });
+}
+
+bool CollisionWorld::overlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) {
+  entry(a, "a");
+  entry(b, "b");
+  validateTransform(ta, "transform_a");
+  validateTransform(tb, "transform_b");
+  return guarded(WorldOp::MeshMesh, [&] { return doOverlaps(a, ta, b, tb); });
+}
+
+// ---- models -------------------------------------------------------------------------------------
+
+ModelHandle CollisionWorld::addModel(const std::string& name, MeshHandle mesh, const Transform& local,
+                                     std::optional<ModelHandle> parent) {
+  if (name.empty()) throw InvalidInput("name: a model name must not be empty");
+  entry(mesh, "mesh");
+  validateTransform(local, "transform");
+  return guarded(WorldOp::AddModel, [&] { return doAddModel(name, mesh, local, parent); });
+}
+
+void CollisionWorld::removeModel(ModelHandle model) {
+  guarded(WorldOp::RemoveModel, [&] { doRemoveModel(model); });
+}
+
+void CollisionWorld::setTransform(ModelHandle model, const Transform& local) {
+  validateTransform(local, "transform");
+  guarded(WorldOp::SetTransform, [&] { doSetTransform(model, local); });
+}
+
+void CollisionWorld::setParent(ModelHandle model, std::optional<ModelHandle> parent) {
+  guarded(WorldOp::SetParent, [&] { doSetParent(model, parent); });
+}
+
+std::optional<ModelHandle> CollisionWorld::findModel(std::string_view name) {
+  return guarded(WorldOp::AddModel, [&] { return doFindModel(name); });
+}
+
+std::vector<std::string> CollisionWorld::descendants(ModelHandle model) {
+  return guarded(WorldOp::Children, [&] { return doDescendants(model); });
+}
+
+void CollisionWorld::raycast(ModelHandle model, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) {
+  validate(r, "ray");
+  validateRayOptions(options);
+  guarded(WorldOp::ModelRay, [&] { doRaycast(model, r, hits, options); });
+}
+
+bool CollisionWorld::intersects(ModelHandle model, const Segment& s) {
+  validate(s, "segment");
+  return guarded(WorldOp::ModelSegment, [&] { return doIntersects(model, s); });
+}
+
+bool CollisionWorld::overlaps(ModelHandle model, const Sphere& s) {
+  validate(s, "sphere");
+  return guarded(WorldOp::ModelSphere, [&] { return doOverlaps(model, s); });
+}
+
+bool CollisionWorld::overlaps(ModelHandle model, const Aabb& b) {
+  validate(b, "aabb");
+  return guarded(WorldOp::ModelAabb, [&] { return doOverlaps(model, b); });
+}
+
+bool CollisionWorld::overlaps(ModelHandle model, const Obb& b) {
+  validate(b, "obb");
+  return guarded(WorldOp::ModelObb, [&] { return doOverlaps(model, b); });
+}
+
+bool CollisionWorld::overlaps(ModelHandle model, const Plane& p) {
+  validate(p, "plane");
+  return guarded(WorldOp::ModelPlane, [&] { return doOverlaps(model, p); });
+}
+
+bool CollisionWorld::overlaps(ModelHandle model, const Triangle& t) {
+  validate(t, "triangle");
+  return guarded(WorldOp::ModelTriangle, [&] { return doOverlaps(model, t); });
+}
+
+// ---- scene ----------------------------------------------------------------------------------------
+
+void CollisionWorld::sceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) {
+  validate(r, "ray");
+  validateRayOptions(options);
+  guarded(WorldOp::SceneRay, [&] { doSceneRaycast(r, hits, options); });
+}
+
+std::vector<std::string> CollisionWorld::sceneQuery(const SceneQueryShape& shape, bool boundsOnly) {
+  if (const auto* s = std::get_if<Sphere>(&shape)) validate(*s, "sphere");
+  if (const auto* b = std::get_if<Aabb>(&shape)) validate(*b, "aabb");
+  if (const auto* b = std::get_if<Obb>(&shape)) validate(*b, "obb");
+  return guarded(WorldOp::SceneQuery, [&] { return doSceneQuery(shape, boundsOnly); });
+}
+
+std::vector<std::pair<std::string, std::string>> CollisionWorld::scenePairs() {
+  return guarded(WorldOp::ScenePairs, [&] { return doScenePairs(); });
+}
+
+// ---- default hooks: unsupported -------------------------------------------------------------------
+
+Vec3d CollisionWorld::doClosestPoint(const Triangle&, const Vec3&) { unsupported(WorldOp::ClosestPointTriangle); }
+bool CollisionWorld::doOverlaps(const Triangle&, const Sphere&) { unsupported(WorldOp::TriangleSphere); }
+bool CollisionWorld::doOverlaps(const Triangle&, const Aabb&) { unsupported(WorldOp::TriangleAabb); }
+bool CollisionWorld::doOverlaps(const Triangle&, const Obb&) { unsupported(WorldOp::TriangleObb); }
+bool CollisionWorld::doOverlaps(const Triangle&, const Plane&) { unsupported(WorldOp::TrianglePlane); }
+bool CollisionWorld::doOverlaps(const Triangle&, const Triangle&) { unsupported(WorldOp::TriangleTriangle); }
+std::optional<WorldRayHit> CollisionWorld::doRaycast(const Ray&, const Triangle&) { unsupported(WorldOp::RayTriangle); }
+bool CollisionWorld::doIntersects(const Segment&, const Triangle&) { unsupported(WorldOp::SegmentTriangle); }
+
+void CollisionWorld::doRaycast(MeshHandle, const Ray&, RayHitCollector&, const RayQueryOptions&) {
+  unsupported(WorldOp::MeshRay);
+}
+bool CollisionWorld::doIntersects(MeshHandle, const Segment&) { unsupported(WorldOp::MeshSegment); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Sphere&) { unsupported(WorldOp::MeshSphere); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Aabb&) { unsupported(WorldOp::MeshAabb); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Obb&) { unsupported(WorldOp::MeshObb); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Plane&) { unsupported(WorldOp::MeshPlane); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Triangle&) { unsupported(WorldOp::MeshTriangle); }
+bool CollisionWorld::doOverlaps(MeshHandle, const Transform&, MeshHandle, const Transform&) {
+  unsupported(WorldOp::MeshMesh);
+}
+
+ModelHandle CollisionWorld::doAddModel(const std::string&, MeshHandle, const Transform&, std::optional<ModelHandle>) {
+  unsupported(WorldOp::AddModel);
+}
+void CollisionWorld::doRemoveModel(ModelHandle) { unsupported(WorldOp::RemoveModel); }
+void CollisionWorld::doSetTransform(ModelHandle, const Transform&) { unsupported(WorldOp::SetTransform); }
+void CollisionWorld::doSetParent(ModelHandle, std::optional<ModelHandle>) { unsupported(WorldOp::SetParent); }
+std::optional<ModelHandle> CollisionWorld::doFindModel(std::string_view) { unsupported(WorldOp::AddModel); }
+std::vector<std::string> CollisionWorld::doDescendants(ModelHandle) { unsupported(WorldOp::Children); }
+void CollisionWorld::doRaycast(ModelHandle, const Ray&, RayHitCollector&, const RayQueryOptions&) {
+  unsupported(WorldOp::ModelRay);
+}
+bool CollisionWorld::doIntersects(ModelHandle, const Segment&) { unsupported(WorldOp::ModelSegment); }
+bool CollisionWorld::doOverlaps(ModelHandle, const Sphere&) { unsupported(WorldOp::ModelSphere); }
+bool CollisionWorld::doOverlaps(ModelHandle, const Aabb&) { unsupported(WorldOp::ModelAabb); }
+bool CollisionWorld::doOverlaps(ModelHandle, const Obb&) { unsupported(WorldOp::ModelObb); }
+bool CollisionWorld::doOverlaps(ModelHandle, const Plane&) { unsupported(WorldOp::ModelPlane); }
+bool CollisionWorld::doOverlaps(ModelHandle, const Triangle&) { unsupported(WorldOp::ModelTriangle); }
+
+void CollisionWorld::doSceneRaycast(const Ray&, RayHitCollector&, const RayQueryOptions&) {
+  unsupported(WorldOp::SceneRay);
+}
+std::vector<std::string> CollisionWorld::doSceneQuery(const SceneQueryShape&, bool) { unsupported(WorldOp::SceneQuery); }
+std::vector<std::pair<std::string, std::string>> CollisionWorld::doScenePairs() { unsupported(WorldOp::ScenePairs); }
+
+}  // namespace crux
