@@ -1,0 +1,130 @@
+#include "embree_peer.hpp"
+
+#include <embree3/rtcore.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace crux::bench {
+
+namespace {
+
+// Embree calls this from inside its API functions; record the first error, check it after.
+void recordError(void* user, RTCError code, const char* message) {
+  auto& first = *static_cast<std::string*>(user);
+  if (first.empty()) first = "embree error " + std::to_string(int(code)) + ": " + (message ? message : "");
+}
+
+bool countBytes(void* user, ssize_t bytes, bool /*post*/) {
+  static_cast<std::atomic<long long>*>(user)->fetch_add(bytes, std::memory_order_relaxed);
+  return true;
+}
+
+}  // namespace
+
+std::string EmbreeConfig::label() const {
+  std::string s = robust ? "robust" : "default";
+  s += highQuality ? ",high" : ",medium";
+  if (threads != 1) s += threads == 0 ? ",all threads" : "," + std::to_string(threads) + " threads";
+  return s;
+}
+
+struct EmbreePeer::Impl {
+  const MeshArrays* mesh = nullptr;
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::atomic<long long> deviceBytes{0};
+  std::string error;
+  long long sceneBytes = 0;
+};
+
+EmbreePeer::EmbreePeer(const MeshArrays& mesh, const EmbreeConfig& config)
+    : impl_(std::make_unique<Impl>()), config_(config) {
+  impl_->mesh = &mesh;
+  const std::string cfg = config.threads > 0 ? "threads=" + std::to_string(config.threads) : std::string();
+  impl_->device = rtcNewDevice(cfg.empty() ? nullptr : cfg.c_str());
+  if (!impl_->device) throw std::runtime_error("embree: rtcNewDevice failed");
+  rtcSetDeviceErrorFunction(impl_->device, recordError, &impl_->error);
+  rtcSetDeviceMemoryMonitorFunction(impl_->device, countBytes, &impl_->deviceBytes);
+  rebuild();
+}
+
+EmbreePeer::~EmbreePeer() {
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  if (impl_->device) rtcReleaseDevice(impl_->device);
+}
+
+Seconds EmbreePeer::rebuild() {
+  if (impl_->scene) rtcReleaseScene(impl_->scene);
+  impl_->scene = nullptr;
+  const long long before = impl_->deviceBytes.load();
+  const MeshArrays& m = *impl_->mesh;
+  const RTCBuildQuality quality = config_.highQuality ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
+
+  const Stopwatch watch;
+  RTCScene scene = rtcNewScene(impl_->device);
+  rtcSetSceneFlags(scene, config_.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+  rtcSetSceneBuildQuality(scene, quality);
+  RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(geom, quality);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m.positions.data(), 0,
+                             3 * sizeof(float), m.vertexCount());
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m.indices.data(), 0,
+                             3 * sizeof(std::uint32_t), m.triangleCount());
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+  const Seconds elapsed = watch.elapsed();
+
+  impl_->scene = scene;
+  if (!impl_->error.empty()) throw std::runtime_error(impl_->error);
+  impl_->sceneBytes = impl_->deviceBytes.load() - before;
+  return elapsed;
+}
+
+void EmbreePeer::closestHits(const RayQuery* rays, std::size_t n, RayAnswer* out) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  for (std::size_t i = 0; i < n; ++i) {
+    const RayQuery& q = rays[i];
+    RTCRayHit rh;
+    rh.ray.org_x = q.origin[0];
+    rh.ray.org_y = q.origin[1];
+    rh.ray.org_z = q.origin[2];
+    rh.ray.tnear = 0.0f;
+    rh.ray.dir_x = q.dir[0];
+    rh.ray.dir_y = q.dir[1];
+    rh.ray.dir_z = q.dir[2];
+    rh.ray.time = 0.0f;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      // Embree's tfar is in units of |dir|; the bench's dirs are unit up to float rounding.
+      const double len = std::sqrt(double(q.dir[0]) * q.dir[0] + double(q.dir[1]) * q.dir[1] +
+                                   double(q.dir[2]) * q.dir[2]);
+      out[i] = {float(rh.ray.tfar * len), rh.hit.primID, 1};
+    } else {
+      out[i] = {0.0f, kNoTriangle, 0};
+    }
+  }
+}
+
+std::size_t EmbreePeer::sceneBytes() const {
+  return impl_->sceneBytes > 0 ? std::size_t(impl_->sceneBytes) : 0;
+}
+
+bool EmbreePeer::backfaceCulling() const {
+  return rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_BACKFACE_CULLING_ENABLED) != 0;
+}
+
+std::string embreeVersion() { return RTC_VERSION_STRING; }
+
+}  // namespace crux::bench
