@@ -767,10 +767,11 @@ TEST(TriangleObb, CollinearTriangleAgainstRotatedBoxes) {
   std::uniform_real_distribution<double> u(-1, 1);
   int hits = 0, cases = 0;
   for (int i = 0; i < 20000; ++i) {
-    const Vec3 a(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+    const Vec3 a(Real(std::ldexp(std::round(u(rng) * 1024), -10)), Real(std::ldexp(std::round(u(rng) * 1024), -10)),
+                 Real(std::ldexp(std::round(u(rng) * 1024), -10)));
     const Vec3 d(Real(std::ldexp(std::round(u(rng) * 64), -6)), Real(std::ldexp(std::round(u(rng) * 64), -6)),
                  Real(std::ldexp(std::round(u(rng) * 64), -6)));
-    const Triangle t{a, Vec3(a + d), Vec3(a + 2 * d)};  // small dyadic steps: exactly collinear
+    const Triangle t{a, Vec3(a + d), Vec3(a + 2 * d)};  // dyadic corners and steps: exactly collinear
     if (crux::predicates::classify(t).kind == crux::predicates::TriangleKind::Triangle) continue;
     Obb b;
     b.center = Vec3(a + d + Vec3(Real(0.6 * u(rng)), Real(0.6 * u(rng)), Real(0.6 * u(rng))));
