@@ -3,6 +3,7 @@
 #include "cli/json_codec.hpp"
 #include "cli/mesh_ops.hpp"
 #include "cli/primitive_ops.hpp"
+#include "cli/scene_ops.hpp"
 
 #include <crux/error.hpp>
 
@@ -147,6 +148,7 @@ OpTable buildTable(Backend backend) {
   if (backend == Backend::Native) {
     addPrimitiveOps(table);
     addMeshOps(table);
+    addSceneOps(table);
   }
   return table;
 }

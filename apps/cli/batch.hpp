@@ -7,6 +7,7 @@
 /// protocol names but the backend's table lacks answers "unsupported: <op> on <backend>".
 
 #include <crux/mesh/mesh.hpp>
+#include <crux/scene/scene.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -45,7 +46,7 @@ struct BatchOptions {
   int threads = 1;
 };
 
-/// State that lives for a whole batch (later also models and the scene, by name).
+/// State that lives for a whole batch: meshes and models by name, and the scene.
 struct BatchState {
   explicit BatchState(BatchOptions opts = {}) : options(opts) {}
   BatchOptions options;
@@ -53,6 +54,11 @@ struct BatchState {
   /// redefining a name replaces the entry for later requests, while anything already holding
   /// the old pointer keeps the old mesh. A failed definition leaves the entry unchanged.
   std::map<std::string, std::shared_ptr<const Mesh>, std::less<>> meshes;
+  /// The models of `add_model` (one scene per batch, dynamic AABB tree broad phase).
+  Scene scene;
+  /// Model names -> ids in `scene`, and back (modelNames[id]; empty for unused ids).
+  std::map<std::string, ModelId, std::less<>> models;
+  std::vector<std::string> modelNames;
 };
 
 /// Answers one request: reads the fields it needs from `request` and adds the answer fields

@@ -450,7 +450,7 @@ TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThree) {
 
 TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   const OpTable& native = opTable(Backend::Native);
-  EXPECT_EQ(native.size(), 18u);  // 8 primitive ops, mesh, load_mesh and 8 mesh queries
+  EXPECT_EQ(native.size(), 33u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
   for (const char* name : {"mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb",
                            "mesh_plane", "mesh_triangle", "mesh_mesh"})
     EXPECT_EQ(native.count(name), 1u) << name;
@@ -519,7 +519,7 @@ TEST(BatchRun, RunContinuesAfterErrorsAndAnswersEveryLineInOrder) {
   EXPECT_EQ(answers[0]["id"], "1");
   EXPECT_TRUE(answers[0]["hit"].get<bool>());
   EXPECT_EQ(answers[3]["id"], "4");
-  EXPECT_EQ(answers[4]["error"], "unsupported: add_model on native");
+  EXPECT_EQ(answers[4]["error"], "mesh: missing field");
   EXPECT_EQ(answers[6]["id"], "7");
   EXPECT_TRUE(answers[6]["hit"].get<bool>());
   EXPECT_EQ(answers[8]["id"], "9");
