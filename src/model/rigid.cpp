@@ -129,12 +129,14 @@ void validate(const Transform& transform, const std::string& name) {
     throw InvalidInput(name + ".translation has a non-finite coordinate: [" + str(t.x()) + ", " + str(t.y()) + ", " +
                        str(t.z()) + "]");
   const Quat& q = transform.rotation;
-  const std::string value =
-      "(w, x, y, z) = (" + str(q.w()) + ", " + str(q.x()) + ", " + str(q.y()) + ", " + str(q.z()) + ")";
-  if (!q.coeffs().allFinite()) throw InvalidInput(name + ".rotation has a non-finite component: " + value);
+  // The message is formatted only on failure: validate runs on every setLocal (a hot path).
+  const auto value = [&q] {
+    return "(w, x, y, z) = (" + str(q.w()) + ", " + str(q.x()) + ", " + str(q.y()) + ", " + str(q.z()) + ")";
+  };
+  if (!q.coeffs().allFinite()) throw InvalidInput(name + ".rotation has a non-finite component: " + value());
   const Wide norm = q.coeffs().cast<Wide>().norm();
   if (!(std::fabs(norm - 1) <= Wide(kUnitQuaternionTolerance)))
-    throw InvalidInput(name + ".rotation is not a unit quaternion: |q| = " + str(norm) + " for " + value +
+    throw InvalidInput(name + ".rotation is not a unit quaternion: |q| = " + str(norm) + " for " + value() +
                        " (tolerance " + str(kUnitQuaternionTolerance) + ")");
 }
 
