@@ -41,8 +41,10 @@ bool overlaps(const Plane& a, const Plane& b);
 /// using orientation predicates" (JGT 2003), with exact orientation signs; coplanar pairs by
 /// 2-D edge tests in the dominant projection; degenerate triangles as segments/points.
 bool overlaps(const Triangle& a, const Triangle& b);
-/// Triangle–sphere: squared distance from the centre to the triangle <= r², evaluated
-/// division-free per Voronoi region (RTCD 5.2.7 with 5.1.5).
+/// Triangle–sphere: squared distance from the centre to the triangle <= r², division-free:
+/// plane distance when the centre projects inside (exact orientation signs), else the three
+/// edges as segments (RTCD 5.2.7; no region classification by products of dot products, which
+/// cancels on slivers). Sliver triangles (sin² of a corner angle < 1e-24) are measured by edges.
 bool overlaps(const Triangle& t, const Sphere& s);
 /// Triangle–AABB: 13-axis separating-axis test with the box centred at the origin
 /// (Akenine-Möller 2001, RTCD 5.2.9).
