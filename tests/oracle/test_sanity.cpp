@@ -124,6 +124,7 @@ struct Answer {
   std::optional<double> t;      ///< ray distance
   std::optional<Vec3d> normal;  ///< ray hit normal
   std::vector<double> allT;     ///< every hit distance (All rays)
+  std::vector<std::string> names;  ///< model names (children, scene_query, scene_pairs as "a|b", ray hit model)
 };
 
 struct Case {
@@ -526,6 +527,7 @@ void runCases(std::vector<std::unique_ptr<CollisionWorld>>& worlds, const Frame&
         EXPECT_TRUE(close(*got.normal, *want.normal, 2 * tol / frame.scale))
             << where << ": normal " << str(*got.normal) << ", want " << str(*want.normal);
       }
+      EXPECT_EQ(got.names, want.names) << where;
       EXPECT_EQ(got.allT.size(), want.allT.size()) << where;
       for (std::size_t i = 0; i < std::min(got.allT.size(), want.allT.size()); ++i)
         EXPECT_NEAR(got.allT[i], want.allT[i], tol) << where << ": hit " << i;
@@ -658,6 +660,251 @@ TEST_F(OracleSanity, UnsupportedOpsSaySo) {
     std::printf("%-7s answers %zu of %zu ops\n", std::string(w->backend()).c_str(), kWorldOpCount - unsupported,
                 kWorldOpCount);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Models and the scene. Shapes are in world space; each stage's cases are designed from the world
+// poses stated next to them (cube0 = [-1,1]³ and small0 = [-0.3,0.3]³ about the model's origin).
+
+/// A transform: rotation, then translation by the frame point (x, y, z) (roots) or by the frame
+/// vector (children: relative to the parent, so the frame's offset must not be added twice).
+Transform at(const Frame& f, double x, double y, double z, const Quat& q = Quat::Identity(), bool root = true) {
+  Transform t;
+  t.rotation = q;
+  t.translation = root ? f.p(x, y, z) : f.v(x, y, z);
+  return t;
+}
+
+/// The name of the model a hit names, or "?".
+std::string modelName(CollisionWorld& w, ModelHandle h, const std::vector<std::string>& names) {
+  for (const std::string& n : names)
+    if (const auto m = w.findModel(n); m && *m == h) return n;
+  return "?";
+}
+
+Answer namesAnswer(std::vector<std::string> names) {
+  Answer a;
+  a.hit = !names.empty();
+  a.names = std::move(names);
+  return a;
+}
+
+/// Single-model cases (model_*) and children; `stage` selects the hierarchy's state:
+/// 0: base = cube0 at (3,0,0) turned 90° about z; arm = cube0, child of base at local (0,4,0),
+///    so at world (-1,0,0); tip = small0, child of arm at local (0,0,3), so at world (-1,0,3).
+/// 1: after set_transform(base, (0,5,0), no rotation): arm at (0,9,0), tip at (0,9,3).
+/// 2: after remove_model(base) and set_parent(tip, none): poses as in stage 1; arm has no children.
+std::vector<Case> modelCases(const Frame& f, int stage) {
+  std::vector<Case> cs;
+  auto boolean = [&](const std::string& name, WorldOp op, bool expect, std::function<bool(CollisionWorld&, ModelHandle)> q,
+                     std::string model, double gap = 0.05) {
+    cs.push_back({name + " (" + model + ")", op,
+                  [q, model](CollisionWorld& w) {
+                    const auto h = w.findModel(model);
+                    if (!h) throw std::runtime_error("no model " + model);
+                    return hitAnswer(q(w, *h));
+                  },
+                  hitAnswer(expect), gap});
+  };
+  auto sphere = [&](const std::string& name, const std::string& model, Vec3 c, double r, bool expect, double gap) {
+    const Sphere s{c, f.len(r)};
+    boolean(name, WorldOp::ModelSphere, expect, [s](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, s); },
+            model, gap);
+  };
+  auto segment = [&](const std::string& name, const std::string& model, Vec3 a, Vec3 b, bool expect) {
+    const Segment s{a, b};
+    boolean(name, WorldOp::ModelSegment, expect, [s](CollisionWorld& w, ModelHandle h) { return w.intersects(h, s); },
+            model);
+  };
+  auto children = [&](const std::string& model, std::vector<std::string> want) {
+    Answer a = namesAnswer(want);
+    a.hit = true;
+    cs.push_back({"children of " + model, WorldOp::Children,
+                  [model](CollisionWorld& w) {
+                    Answer got;
+                    got.hit = true;
+                    got.names = w.descendants(*w.findModel(model));
+                    return got;
+                  },
+                  a});
+  };
+  if (stage == 0) {
+    sphere("sphere 0.1 deep in the arm's top face", "arm", f.p(-1, 0, 1.5), 0.6, true, 0.1);
+    sphere("sphere 0.1 above the arm's top face", "arm", f.p(-1, 0, 1.7), 0.6, false, 0.1);
+    sphere("sphere 0.5 deep in the base's +x face", "base", f.p(4.5, 0, 0), 1, true, 0.5);
+    sphere("sphere at the arm, far from the base", "base", f.p(-1, 0, 1.5), 0.6, false, 0.5);
+    const Aabb across{f.p(-1.1, -0.1, 3.2), f.p(-0.9, 0.1, 3.5)}, above{f.p(-1.1, -0.1, 3.4), f.p(-0.9, 0.1, 3.6)};
+    boolean("box across the tip's top face", WorldOp::ModelAabb, true,
+            [across](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, across); }, "tip", 0.1);
+    boolean("box 0.1 above the tip", WorldOp::ModelAabb, false,
+            [above](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, above); }, "tip", 0.1);
+    // A unit box turned 45° about z reaches 0.707 from its centre along x; the arm spans x in [-2, 0].
+    const Quat z45 = rotationAbout(Vec3d::UnitZ(), 45);
+    const Obb deep = obb(f.p(0.2, 0, 0), f.v(0.5, 0.5, 0.5), z45), apart = obb(f.p(0.9, 0, 0), f.v(0.5, 0.5, 0.5), z45);
+    boolean("turned box 0.5 deep in the arm", WorldOp::ModelObb, true,
+            [deep](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, deep); }, "arm", 0.19);
+    boolean("turned box 0.19 from the arm", WorldOp::ModelObb, false,
+            [apart](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, apart); }, "arm", 0.19);
+    // Planes x = 3 (through the base, which spans x in [2, 4]) and x = 4.5.
+    const Plane through{Vec3(1, 0, 0), Real(f.scale * 3 + f.offset.x())},
+        beside{Vec3(1, 0, 0), Real(f.scale * 4.5 + f.offset.x())};
+    boolean("plane x = 3 through the base", WorldOp::ModelPlane, true,
+            [through](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, through); }, "base", 0.5);
+    boolean("plane x = 4.5 beside the base", WorldOp::ModelPlane, false,
+            [beside](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, beside); }, "base", 0.5);
+    const Triangle crossing{f.p(-1, -0.5, 0.5), f.p(-1, 0.5, 0.5), f.p(-1, 0, 2)},
+        over{f.p(-1, -0.5, 1.5), f.p(-1, 0.5, 1.5), f.p(-1, 0, 2)};
+    boolean("triangle through the arm's top face", WorldOp::ModelTriangle, true,
+            [crossing](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, crossing); }, "arm", 0.5);
+    boolean("triangle 0.5 above the arm", WorldOp::ModelTriangle, false,
+            [over](CollisionWorld& w, ModelHandle h) { return w.overlaps(h, over); }, "arm", 0.5);
+    segment("segment through the tip", "tip", f.p(-1, 0, 2), f.p(-1, 0, 4), true);
+    segment("segment 0.7 beside the tip", "tip", f.p(0, 0, 2), f.p(0, 0, 4), false);
+    // Rays down from (-1, 0, 5): the arm's top face z = 1 at t = 4; the base is elsewhere.
+    const Ray down{f.p(-1, 0.2, 5), f.v(0, 0, -1)};
+    Answer top;
+    top.hit = true;
+    top.t = 4 * f.scale;
+    top.point = f.expectP(-1, 0.2, 1);
+    top.normal = Vec3d(0, 0, 1);
+    cs.push_back({"ray down onto the arm", WorldOp::ModelRay,
+                  [down](CollisionWorld& w) {
+                    RayHitCollector hits;
+                    w.raycast(*w.findModel("arm"), down, hits);
+                    return rayAnswer(hits.hit());
+                  },
+                  top});
+    cs.push_back({"ray down beside the base", WorldOp::ModelRay,
+                  [down](CollisionWorld& w) {
+                    RayHitCollector hits;
+                    w.raycast(*w.findModel("base"), down, hits);
+                    return rayAnswer(hits.hit());
+                  },
+                  hitAnswer(false)});
+    children("base", {"arm", "tip"});
+    children("arm", {"tip"});
+  } else {
+    sphere("sphere where the arm was", "arm", f.p(-1, 0, 1.5), 0.6, false, 0.1);
+    sphere("sphere 0.1 deep in the moved arm's top face", "arm", f.p(0, 9, 1.5), 0.6, true, 0.1);
+    segment("segment through the moved tip", "tip", f.p(0, 9, 2), f.p(0, 9, 4), true);
+    segment("segment where the tip was", "tip", f.p(-1, 0, 2), f.p(-1, 0, 4), false);
+    children("arm", stage == 1 ? std::vector<std::string>{"tip"} : std::vector<std::string>{});
+  }
+  return cs;
+}
+
+void addModels(CollisionWorld& w, const Frame& f) {
+  const ModelHandle base = w.addModel("base", w.meshHandle("cube0"), at(f, 3, 0, 0, rotationAbout(Vec3d::UnitZ(), 90)));
+  const ModelHandle arm = w.addModel("arm", w.meshHandle("cube0"), at(f, 0, 4, 0, Quat::Identity(), false), base);
+  w.addModel("tip", w.meshHandle("small0"), at(f, 0, 0, 3, Quat::Identity(), false), arm);
+}
+
+TEST_F(OracleSanity, ModelOpsAnswerAsDesigned) {
+  std::map<std::string, int> answered;
+  for (const Frame& f : frames()) {
+    std::vector<std::unique_ptr<CollisionWorld>> worlds;
+    for (const std::string_view name : builtBackends()) {
+      auto w = makeWorld(name);
+      if (!w->supports(WorldOp::AddModel)) continue;
+      addMeshes(*w, f);
+      addModels(*w, f);
+      worlds.push_back(std::move(w));
+    }
+    runCases(worlds, f, modelCases(f, 0), answered);
+    for (auto& w : worlds)
+      if (w->supports(WorldOp::SetTransform)) w->setTransform(*w->findModel("base"), at(f, 0, 5, 0));
+    runCases(worlds, f, modelCases(f, 1), answered);
+    for (auto& w : worlds) {
+      if (!w->supports(WorldOp::RemoveModel) || !w->supports(WorldOp::SetParent)) continue;
+      w->removeModel(*w->findModel("base"));
+      EXPECT_FALSE(w->findModel("base")) << w->backend();
+      w->setParent(*w->findModel("tip"), std::nullopt);
+    }
+    runCases(worlds, f, modelCases(f, 2), answered);
+  }
+  for (const auto& [backend, n] : answered) std::printf("  %-7s answered %d model cases\n", backend.c_str(), n);
+}
+
+/// Scene: a = cube0 at (0,0,0); b = cube0 at (1.5,0.3,0.2) (0.5 into a); c = small0 at (10,0,0);
+/// d = cube0 at (0,0,2.5) turned 45° about z (its bottom z = 1.5 is 0.3 above b's top, 0.5 above a's).
+std::vector<Case> sceneCases(const Frame& f) {
+  std::vector<Case> cs;
+  auto query = [&](const std::string& name, SceneQueryShape shape, bool boundsOnly, std::vector<std::string> want,
+                   double gap = 0.05) {
+    cs.push_back({name, WorldOp::SceneQuery,
+                  [shape, boundsOnly](CollisionWorld& w) { return namesAnswer(w.sceneQuery(shape, boundsOnly)); },
+                  namesAnswer(want), gap});
+  };
+  query("sphere 0.25 into a's -x face", Sphere{f.p(-1.5, 0, 0), f.len(0.75)}, false, {"a"}, 0.25);
+  query("sphere 0.1 into c's top", Sphere{f.p(10, 0, 0.6), f.len(0.4)}, false, {"c"}, 0.1);
+  query("sphere in empty space", Sphere{f.p(5, 5, 5), f.len(1)}, false, {}, 1);
+  query("box across a's -x face", Aabb{f.p(-1.2, -0.1, -0.1), f.p(-0.8, 0.1, 0.1)}, false, {"a"}, 0.2);
+  query("turned box across c's +x face", obb(f.p(10.35, 0, 0), f.v(0.1, 0.1, 0.1), rotationAbout(Vec3d(1, 2, 3), 40)),
+        false, {"c"}, 0.05);
+  query("bounds: sphere in empty space", Sphere{f.p(5, 5, 5), f.len(1)}, true, {}, 1);
+  query("bounds: sphere 0.25 into a's box", Sphere{f.p(-1.5, 0, 0), f.len(0.75)}, true, {"a"}, 0.25);
+  cs.push_back({"pairs", WorldOp::ScenePairs,
+                [](CollisionWorld& w) {
+                  std::vector<std::string> names;
+                  for (const auto& [a, b] : w.scenePairs()) names.push_back(a + "|" + b);
+                  return namesAnswer(names);
+                },
+                namesAnswer({"a|b"}), 0.3});
+  // A ray along +x at y = 0.5, z = 0.3: a's faces x = -1 and 1 (t = 4, 6), b's x = 0.5 and 2.5 (t = 5.5, 7.5).
+  const Ray r{f.p(-5, 0.5, 0.3), f.v(1, 0, 0)};
+  const std::vector<std::string> all = {"a", "b", "c", "d"};
+  Answer first;
+  first.hit = true;
+  first.t = 4 * f.scale;
+  first.point = f.expectP(-1, 0.5, 0.3);
+  first.normal = Vec3d(-1, 0, 0);
+  first.names = {"a"};
+  cs.push_back({"closest ray hit", WorldOp::SceneRay,
+                [r, all](CollisionWorld& w) {
+                  RayHitCollector hits;
+                  w.sceneRaycast(r, hits);
+                  Answer a = rayAnswer(hits.hit());
+                  if (hits.hit()) a.names = {modelName(w, hits.hit()->model, all)};
+                  return a;
+                },
+                first, 0.5});
+  Answer every;
+  every.hit = true;
+  every.allT = {4 * f.scale, 5.5 * f.scale, 6 * f.scale, 7.5 * f.scale};
+  every.names = {"a", "b", "a", "b"};
+  cs.push_back({"every ray hit", WorldOp::SceneRay,
+                [r, all](CollisionWorld& w) {
+                  RayHitCollector hits(RayCollect::All);
+                  w.sceneRaycast(r, hits);
+                  Answer a;
+                  a.hit = hits.hasHit();
+                  for (const WorldRayHit& h : hits.hits()) {
+                    a.allT.push_back(h.t);
+                    a.names.push_back(modelName(w, h.model, all));
+                  }
+                  return a;
+                },
+                every, 0.5});
+  return cs;
+}
+
+TEST_F(OracleSanity, SceneOpsAnswerAsDesigned) {
+  std::map<std::string, int> answered;
+  for (const Frame& f : frames()) {
+    std::vector<std::unique_ptr<CollisionWorld>> worlds;
+    for (const std::string_view name : builtBackends()) {
+      auto w = makeWorld(name);
+      if (!w->supports(WorldOp::AddModel)) continue;
+      addMeshes(*w, f);
+      w->addModel("a", w->meshHandle("cube0"), at(f, 0, 0, 0));
+      w->addModel("b", w->meshHandle("cube0"), at(f, 1.5, 0.3, 0.2));
+      w->addModel("c", w->meshHandle("small0"), at(f, 10, 0, 0));
+      w->addModel("d", w->meshHandle("cube0"), at(f, 0, 0, 2.5, rotationAbout(Vec3d::UnitZ(), 45)));
+      worlds.push_back(std::move(w));
+    }
+    runCases(worlds, f, sceneCases(f), answered);
+  }
+  for (const auto& [backend, n] : answered) std::printf("  %-7s answered %d scene cases\n", backend.c_str(), n);
 }
 
 // ---------------------------------------------------------------------------------------------
