@@ -4,6 +4,8 @@
 
 #include "bullet/bullet_world.hpp"
 
+#include "common/model_table.hpp"
+
 #include <btBulletCollisionCommon.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
@@ -12,8 +14,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace crux::bullet_oracle {
@@ -74,18 +79,30 @@ struct BulletMesh {
     return *gimpact;
   }
 
-  /// Length of a ray from o that certainly passes every point of the mesh: twice the distance
-  /// to the farthest corner of the bounds (1 when the mesh is the single point o).
-  double rayLength(const Vec3d& o) const {
-    double far2 = 0;
-    for (int k = 0; k < 8; ++k) {
-      const Vec3d c((k & 1) ? boundsMax.x() : boundsMin.x(), (k & 2) ? boundsMax.y() : boundsMin.y(),
-                    (k & 4) ? boundsMax.z() : boundsMin.z());
-      far2 = std::max(far2, (c - o).squaredNorm());
-    }
-    return far2 > 0 ? 2 * std::sqrt(far2) : 1.0;
-  }
+  double rayLength(const Vec3d& o) const;
 };
+
+/// Length of a ray from o that certainly passes every point of the box [lo, hi]: twice the
+/// distance to its farthest corner (1 when the box is the single point o).
+double rayLength(const Vec3d& o, const Vec3d& lo, const Vec3d& hi) {
+  double far2 = 0;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3d c((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z());
+    far2 = std::max(far2, (c - o).squaredNorm());
+  }
+  return far2 > 0 ? 2 * std::sqrt(far2) : 1.0;
+}
+
+/// Length of a ray from o that certainly passes every point of the mesh (at the identity).
+double BulletMesh::rayLength(const Vec3d& o) const { return bullet_oracle::rayLength(o, boundsMin, boundsMax); }
+
+/// An object's world AABB as its shape computes it (btCollisionShape::getAabb at the object's
+/// pose: the local box under |R|, plus the shape's margin, here 0), in double.
+std::pair<Vec3d, Vec3d> worldAabb(const btCollisionObject& o) {
+  btVector3 lo, hi;
+  o.getCollisionShape()->getAabb(o.getWorldTransform(), lo, hi);
+  return {toD(lo), toD(hi)};
+}
 
 std::unique_ptr<BulletMesh> oneTriangleMesh(const Triangle& t) {
   return std::make_unique<BulletMesh>(std::vector<Vec3>{t.a, t.b, t.c}, std::vector<TriangleIndices>{{0, 1, 2}});
@@ -111,16 +128,21 @@ struct CollectingRay : btCollisionWorld::RayResultCallback {
   CollectingRay(const Vec3d& origin, const Vec3d& unitDir, double length, RayHitCollector* hits)
       : origin(origin), dir(unitDir), length(length), hits(hits) {}
 
-  btScalar addSingleResult(btCollisionWorld::LocalRayResult& r, bool) override {
-    // The mesh object sits at the identity, so local normals are world normals.
+  btScalar addSingleResult(btCollisionWorld::LocalRayResult& r, bool normalInWorldSpace) override {
     anyHit = true;
     if (hits) {
       WorldRayHit hit;
       hit.t = double(r.m_hitFraction) * length;
       hit.point = origin + hit.t * dir;
-      const Vec3d n = toD(r.m_hitNormalLocal);
+      // Bullet's concave-shape ray test hands the normal over in world space already (mesh
+      // objects sit at the identity, models at their world pose); rotate it otherwise.
+      const btVector3 nb = normalInWorldSpace ? r.m_hitNormalLocal
+                                              : r.m_collisionObject->getWorldTransform().getBasis() * r.m_hitNormalLocal;
+      const Vec3d n = toD(nb);
       hit.normal = n.norm() > 0 ? Vec3d(n / n.norm()) : Vec3d(-dir);
       hit.triangle = r.m_localShapeInfo ? std::uint32_t(r.m_localShapeInfo->m_triangleIndex) : 0;
+      if (r.m_collisionObject && r.m_collisionObject->getUserIndex() >= 0)
+        hit.model = ModelHandle{std::uint32_t(r.m_collisionObject->getUserIndex())};
       hits->add(hit);
       if (hits->mode() == RayCollect::Closest) m_closestHitFraction = r.m_hitFraction;
       if (hits->mode() == RayCollect::Any) m_closestHitFraction = 0;
@@ -136,13 +158,68 @@ struct CollectingRay : btCollisionWorld::RayResultCallback {
   bool anyHit = false;
 };
 
+/// A btCollisionWorld with its own dispatcher (GImpact's algorithms registered) and a
+/// btDbvtBroadphase, over a collision configuration (algorithm factories and memory pools)
+/// shared by the world's spaces: building a btDefaultCollisionConfiguration fills pools of a
+/// few MB, which dominated creating a world when each space had its own.
+struct CollisionSpace {
+  btCollisionDispatcher dispatcher;
+  btDbvtBroadphase broadphase;
+  btCollisionWorld world;
+  explicit CollisionSpace(btCollisionConfiguration& configuration)
+      : dispatcher(&configuration), world(&dispatcher, &broadphase, &configuration) {
+    btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher);
+  }
+};
+
+/// A model in Bullet: two btCollisionObjects at the model's world pose over its mesh's shared
+/// shapes (the model keeps the BulletMesh alive if the mesh is removed later). `object` holds
+/// the btBvhTriangleMeshShape and lives in the scene world (rays, contact tests against
+/// convex query shapes: the same Bullet paths as the mesh ops); `pairObject` holds the
+/// btGImpactMeshShape and lives in the pairs world, since Bullet has no algorithm for two
+/// btBvhTriangleMeshShapes. Both carry the model handle as user index.
+struct BulletModel {
+  std::shared_ptr<BulletMesh> mesh;
+  btCollisionObject object;
+  btCollisionObject pairObject;
+};
+
+/// Smallest contact distance per object of a contactTest (the query touches an object when
+/// one of its contacts has distance <= 0, as for contactPairTest).
+struct PerObjectDistance : btCollisionWorld::ContactResultCallback {
+  std::map<int, btScalar> minDistance;  ///< by user index (model handle)
+  btScalar addSingleResult(btManifoldPoint& cp, const btCollisionObjectWrapper* a, int, int,
+                           const btCollisionObjectWrapper* b, int, int) override {
+    for (const btCollisionObjectWrapper* w : {a, b}) {
+      const int id = w->getCollisionObject()->getUserIndex();
+      if (id < 0) continue;  // the query object
+      auto [it, fresh] = minDistance.emplace(id, cp.getDistance());
+      if (!fresh) it->second = std::min(it->second, cp.getDistance());
+    }
+    return 0;
+  }
+};
+
+/// The objects whose broad-phase proxies overlap a box (btDbvtBroadphase::aabbTest).
+struct ProxyCollector : btBroadphaseAabbCallback {
+  std::vector<const btCollisionObject*> objects;
+  bool process(const btBroadphaseProxy* proxy) override {
+    objects.push_back(static_cast<const btCollisionObject*>(proxy->m_clientObject));
+    return true;
+  }
+};
+
 class BulletWorld final : public CollisionWorld {
  public:
-  BulletWorld() {
-    btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher_);
-    query_.getWorldTransform().setIdentity();
+  BulletWorld() { query_.getWorldTransform().setIdentity(); }
+  ~BulletWorld() override {
+    query_.setCollisionShape(nullptr);
+    // btCollisionWorld's destructor walks its objects: take the models out first.
+    for (auto& [id, m] : models_) {
+      scene_.world.removeCollisionObject(&m->object);
+      pairs_.world.removeCollisionObject(&m->pairObject);
+    }
   }
-  ~BulletWorld() override { query_.setCollisionShape(nullptr); }
 
   std::string_view backend() const override { return "bullet"; }
   std::string description() const override {
@@ -151,14 +228,14 @@ class BulletWorld final : public CollisionWorld {
            " (btBvhTriangleMeshShape, GImpact, margins 0), " + (sizeof(btScalar) == sizeof(double) ? "double" : "float");
   }
   bool supports(WorldOp op) const override {
-    if (op == WorldOp::MeshPlane) return false;
-    return op <= WorldOp::MeshMesh;
+    // No Bullet algorithm for a static plane against a static mesh: mesh_plane, model_plane.
+    return op != WorldOp::MeshPlane && op != WorldOp::ModelPlane;
   }
   WorldTolerance tolerance() const override { return kBulletTolerance; }
 
  protected:
   void onMeshAdded(MeshHandle h, const Mesh& mesh) override {
-    meshes_[h.index] = std::make_unique<BulletMesh>(mesh.vertices(), mesh.triangles());
+    meshes_[h.index] = std::make_shared<BulletMesh>(mesh.vertices(), mesh.triangles());
   }
   void onMeshRemoved(MeshHandle h) override { meshes_.erase(h.index); }
 
@@ -169,9 +246,9 @@ class BulletWorld final : public CollisionWorld {
     solver.closestPtPointTriangle(toBt(p), toBt(t.a), toBt(t.b), toBt(t.c), result);
     return toD(result.m_closestPointOnSimplex);
   }
-  bool doOverlaps(const Triangle& t, const Sphere& s) override { return meshSphere(*oneTriangleMesh(t), s); }
-  bool doOverlaps(const Triangle& t, const Aabb& b) override { return meshAabb(*oneTriangleMesh(t), b); }
-  bool doOverlaps(const Triangle& t, const Obb& b) override { return meshObb(*oneTriangleMesh(t), b); }
+  bool doOverlaps(const Triangle& t, const Sphere& s) override { return shapeTouches(s, oneTriangleMesh(t)->object); }
+  bool doOverlaps(const Triangle& t, const Aabb& b) override { return shapeTouches(b, oneTriangleMesh(t)->object); }
+  bool doOverlaps(const Triangle& t, const Obb& b) override { return shapeTouches(b, oneTriangleMesh(t)->object); }
   bool doOverlaps(const Triangle& t, const Plane& p) override {
     btTriangleShape tri(toBt(t.a), toBt(t.b), toBt(t.c));
     tri.setMargin(0);
@@ -195,9 +272,9 @@ class BulletWorld final : public CollisionWorld {
     castRay(mesh(m), r, hits, options);
   }
   bool doIntersects(MeshHandle m, const Segment& s) override { return segmentHits(mesh(m), s); }
-  bool doOverlaps(MeshHandle m, const Sphere& s) override { return meshSphere(mesh(m), s); }
-  bool doOverlaps(MeshHandle m, const Aabb& b) override { return meshAabb(mesh(m), b); }
-  bool doOverlaps(MeshHandle m, const Obb& b) override { return meshObb(mesh(m), b); }
+  bool doOverlaps(MeshHandle m, const Sphere& s) override { return shapeTouches(s, mesh(m).object); }
+  bool doOverlaps(MeshHandle m, const Aabb& b) override { return shapeTouches(b, mesh(m).object); }
+  bool doOverlaps(MeshHandle m, const Obb& b) override { return shapeTouches(b, mesh(m).object); }
   bool doOverlaps(MeshHandle m, const Triangle& t) override { return meshTriangle(mesh(m), t); }
   bool doOverlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) override {
     btCollisionObject oa, ob;
@@ -205,35 +282,189 @@ class BulletWorld final : public CollisionWorld {
     ob.setCollisionShape(&mesh(b).gimpactShape());
     oa.setWorldTransform(toBt(ta));
     ob.setWorldTransform(toBt(tb));
-    world_.addCollisionObject(&oa);
-    world_.addCollisionObject(&ob);
+    meshMesh_.world.addCollisionObject(&oa);
+    meshMesh_.world.addCollisionObject(&ob);
     bool touching = false;
     try {
-      world_.performDiscreteCollisionDetection();
-      for (int i = 0; i < dispatcher_.getNumManifolds() && !touching; ++i) {
-        const btPersistentManifold* manifold = dispatcher_.getManifoldByIndexInternal(i);
+      meshMesh_.world.performDiscreteCollisionDetection();
+      for (int i = 0; i < meshMesh_.dispatcher.getNumManifolds() && !touching; ++i) {
+        const btPersistentManifold* manifold = meshMesh_.dispatcher.getManifoldByIndexInternal(i);
         for (int j = 0; j < manifold->getNumContacts(); ++j)
           if (manifold->getContactPoint(j).getDistance() <= 0) touching = true;
       }
     } catch (...) {
-      world_.removeCollisionObject(&ob);
-      world_.removeCollisionObject(&oa);
+      meshMesh_.world.removeCollisionObject(&ob);
+      meshMesh_.world.removeCollisionObject(&oa);
       throw;
     }
-    world_.removeCollisionObject(&ob);
-    world_.removeCollisionObject(&oa);
+    meshMesh_.world.removeCollisionObject(&ob);
+    meshMesh_.world.removeCollisionObject(&oa);
     return touching;
+  }
+
+  // ---- models and the scene ----------------------------------------------------------------
+
+  ModelHandle doAddModel(const std::string& name, MeshHandle mesh, const Transform& local,
+                         std::optional<ModelHandle> parent) override {
+    const ModelHandle h = table_.add(name, mesh, sharedMesh(mesh), local, parent);
+    try {
+      auto m = std::make_unique<BulletModel>();
+      m->mesh = meshes_.at(mesh.index);
+      m->object.setCollisionShape(m->mesh->shape.get());
+      m->pairObject.setCollisionShape(&m->mesh->gimpactShape());
+      m->object.setUserIndex(int(h.index));
+      m->pairObject.setUserIndex(int(h.index));
+      const btTransform pose = toBt(table_.world(h));
+      m->object.setWorldTransform(pose);
+      m->pairObject.setWorldTransform(pose);
+      scene_.world.addCollisionObject(&m->object);
+      pairs_.world.addCollisionObject(&m->pairObject);
+      models_[h.index] = std::move(m);
+    } catch (...) {
+      table_.remove(h);
+      throw;
+    }
+    return h;
+  }
+  void doRemoveModel(ModelHandle h) override {
+    BulletModel& m = model(h);
+    table_.remove(h);  // the children keep their world poses
+    scene_.world.removeCollisionObject(&m.object);
+    pairs_.world.removeCollisionObject(&m.pairObject);
+    models_.erase(h.index);
+  }
+  void doSetTransform(ModelHandle h, const Transform& local) override { place(table_.setLocal(h, local)); }
+  void doSetParent(ModelHandle h, std::optional<ModelHandle> parent) override {
+    table_.setParent(h, parent);
+    // World poses are kept; placing the subtree again keeps Bullet in step with the table.
+    std::vector<ModelHandle> subtree = table_.descendants(h);
+    subtree.push_back(h);
+    place(subtree);
+  }
+  std::optional<ModelHandle> doFindModel(std::string_view name) override { return table_.find(name); }
+  std::vector<std::string> doDescendants(ModelHandle h) override { return table_.descendantNames(h); }
+
+  void doRaycast(ModelHandle h, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
+    btCollisionObject& o = model(h).object;
+    const auto [lo, hi] = worldAabb(o);
+    castRayWith(lo, hi, r, hits, options, [&](const btVector3& from, const btVector3& to, CollectingRay& cb) {
+      rayTestObject(o, from, to, cb);
+    });
+  }
+  bool doIntersects(ModelHandle h, const Segment& s) override {
+    btCollisionObject& o = model(h).object;
+    CollectingRay cb(Vec3d::Zero(), Vec3d::Zero(), 0, nullptr);
+    rayTestObject(o, toBt(s.start), toBt(s.end), cb);
+    return cb.anyHit;
+  }
+  bool doOverlaps(ModelHandle h, const Sphere& s) override { return shapeTouches(s, model(h).object); }
+  bool doOverlaps(ModelHandle h, const Aabb& b) override { return shapeTouches(b, model(h).object); }
+  bool doOverlaps(ModelHandle h, const Obb& b) override { return shapeTouches(b, model(h).object); }
+  bool doOverlaps(ModelHandle h, const Triangle& t) override { return triangleTouches(model(h).object, t); }
+
+  /// scene_ray: btCollisionWorld::rayTest over the scene world (broad phase: the Dbvt's ray
+  /// walk) to a point past every model's bounds.
+  void doSceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
+    if (models_.empty()) return;
+    Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const auto& [id, m] : models_) {
+      const auto [a, b] = worldAabb(m->object);
+      lo = lo.cwiseMin(a);
+      hi = hi.cwiseMax(b);
+    }
+    castRayWith(lo, hi, r, hits, options, [&](const btVector3& from, const btVector3& to, CollectingRay& cb) {
+      scene_.world.rayTest(from, to, cb);
+    });
+  }
+  /// scene_query: contactTest of the query shape against the scene world (its Dbvt finds the
+  /// candidates); a model is found when one of its contacts has distance <= 0. boundsOnly: the
+  /// Dbvt's candidates (aabbTest with the shape's box), each kept when the shape touches the
+  /// model's own AABB (btCollisionShape::getAabb at its pose, without the broad phase's
+  /// contact-threshold padding) as a btBoxShape, by contactPairTest.
+  std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly) override {
+    std::vector<std::string> names;
+    std::visit(
+        [&](const auto& s) {
+          withShape(s, [&](btCollisionShape& query, const btTransform& pose) {
+            if (boundsOnly) {
+              btVector3 qlo, qhi;
+              query.getAabb(pose, qlo, qhi);
+              ProxyCollector candidates;
+              scene_.world.getBroadphase()->aabbTest(qlo, qhi, candidates);
+              for (const btCollisionObject* o : candidates.objects) {
+                const auto [lo, hi] = worldAabb(*o);
+                btBoxShape box(toBt(Vec3d(0.5 * (hi - lo))));
+                box.setMargin(0);
+                btCollisionObject boxObject;
+                boxObject.setCollisionShape(&box);
+                boxObject.setWorldTransform(btTransform(btQuaternion::getIdentity(), toBt(Vec3d(0.5 * (lo + hi)))));
+                if (touches(query, pose, boxObject)) names.push_back(table_.name(ModelHandle{std::uint32_t(o->getUserIndex())}));
+              }
+              return false;
+            }
+            query_.setCollisionShape(&query);
+            query_.setWorldTransform(pose);
+            PerObjectDistance cb;
+            scene_.world.contactTest(&query_, cb);
+            query_.setCollisionShape(nullptr);
+            for (const auto& [id, d] : cb.minDistance)
+              if (d <= 0) names.push_back(table_.name(ModelHandle{std::uint32_t(id)}));
+            return false;
+          });
+        },
+        shape);
+    std::sort(names.begin(), names.end());
+    names.erase(std::unique(names.begin(), names.end()), names.end());
+    return names;
+  }
+  /// scene_pairs: performDiscreteCollisionDetection on the pairs world (GImpact objects, Dbvt
+  /// broad phase); a pair counts when its manifolds hold a contact of distance <= 0 (as
+  /// mesh_mesh does). GImpact clears a pair's manifold at every pass, so no stale contact is read.
+  std::vector<std::pair<std::string, std::string>> doScenePairs() override {
+    pairs_.world.performDiscreteCollisionDetection();
+    std::set<std::pair<std::string, std::string>> found;
+    for (int i = 0; i < pairs_.dispatcher.getNumManifolds(); ++i) {
+      const btPersistentManifold* manifold = pairs_.dispatcher.getManifoldByIndexInternal(i);
+      bool touching = false;
+      for (int j = 0; j < manifold->getNumContacts() && !touching; ++j)
+        touching = manifold->getContactPoint(j).getDistance() <= 0;
+      if (!touching) continue;
+      const int a = manifold->getBody0()->getUserIndex(), b = manifold->getBody1()->getUserIndex();
+      if (a < 0 || b < 0 || a == b) continue;
+      std::string na = table_.name(ModelHandle{std::uint32_t(a)}), nb = table_.name(ModelHandle{std::uint32_t(b)});
+      if (nb < na) std::swap(na, nb);
+      found.emplace(std::move(na), std::move(nb));
+    }
+    return {found.begin(), found.end()};
   }
 
  private:
   BulletMesh& mesh(MeshHandle h) const { return *meshes_.at(h.index); }
+  /// A model's objects; InvalidInput naming the field for an unknown handle.
+  BulletModel& model(ModelHandle h) const {
+    if (!table_.contains(h)) throw InvalidInput("model: unknown model handle " + std::to_string(h.index));
+    return *models_.at(h.index);
+  }
+
+  /// Moves models' objects to their world poses (table_.world) and refreshes their
+  /// broad-phase boxes in both worlds.
+  void place(const std::vector<ModelHandle>& moved) {
+    for (const ModelHandle h : moved) {
+      BulletModel& m = model(h);
+      const btTransform pose = toBt(table_.world(h));
+      m.object.setWorldTransform(pose);
+      m.pairObject.setWorldTransform(pose);
+      scene_.world.updateSingleAabb(&m.object);
+      pairs_.world.updateSingleAabb(&m.pairObject);
+    }
+  }
 
   /// contactPairTest of a convex shape at `pose` against an object.
   bool touches(btCollisionShape& shape, const btTransform& pose, btCollisionObject& other) {
     query_.setCollisionShape(&shape);
     query_.setWorldTransform(pose);
     MinDistance cb;
-    world_.contactPairTest(&query_, &other, cb);
+    meshMesh_.world.contactPairTest(&query_, &other, cb);
     query_.setCollisionShape(nullptr);
     return cb.touching();
   }
@@ -244,42 +475,61 @@ class BulletWorld final : public CollisionWorld {
     return touches(a, pose, other);
   }
 
-  bool meshSphere(BulletMesh& m, const Sphere& s) {
-    btSphereShape sphere(btScalar(s.radius));  // the whole sphere is its margin
-    return touches(sphere, btTransform(btQuaternion::getIdentity(), toBt(s.center)), m.object);
+  /// Calls f(shape, pose) with the query shape as Bullet sees it: a btSphereShape (all margin),
+  /// or a btBoxShape with margin 0 (keeping its full half extents) at the box's centre, turned
+  /// by the OBB's axes (btMatrix3x3 takes rows; column i is box axis i). Left-handed axes (the
+  /// same box) get their third axis negated: Bullet's transforms are meant to be rotations.
+  template <class F>
+  static bool withShape(const Sphere& s, F&& f) {
+    btSphereShape sphere(btScalar(s.radius));
+    return f(sphere, btTransform(btQuaternion::getIdentity(), toBt(s.center)));
   }
-  bool meshAabb(BulletMesh& m, const Aabb& b) {
+  template <class F>
+  static bool withShape(const Aabb& b, F&& f) {
     btBoxShape box(toBt(b.half()));
-    box.setMargin(0);  // keeps the full half extents
-    return touches(box, btTransform(btQuaternion::getIdentity(), toBt(b.center())), m.object);
+    box.setMargin(0);
+    return f(box, btTransform(btQuaternion::getIdentity(), toBt(b.center())));
   }
-  bool meshObb(BulletMesh& m, const Obb& b) {
+  template <class F>
+  static bool withShape(const Obb& b, F&& f) {
     btBoxShape box(toBt(b.half));
     box.setMargin(0);
-    // btMatrix3x3 takes rows; column i is box axis i. Left-handed axes (the same box) get their
-    // third axis negated: Bullet's transforms are meant to be rotations.
     Mat3 a = b.axes;
     if (a.cast<double>().determinant() < 0) a.col(2) = -a.col(2);
     const btMatrix3x3 basis(btScalar(a(0, 0)), btScalar(a(0, 1)), btScalar(a(0, 2)), btScalar(a(1, 0)),
                             btScalar(a(1, 1)), btScalar(a(1, 2)), btScalar(a(2, 0)), btScalar(a(2, 1)),
                             btScalar(a(2, 2)));
-    return touches(box, btTransform(basis, toBt(b.center)), m.object);
+    return f(box, btTransform(basis, toBt(b.center)));
   }
-  bool meshTriangle(BulletMesh& m, const Triangle& t) {
+  /// contactPairTest of a sphere or box against an object (a mesh at the identity or a model).
+  template <class Shape>
+  bool shapeTouches(const Shape& s, btCollisionObject& object) {
+    return withShape(s, [&](btCollisionShape& shape, const btTransform& pose) { return touches(shape, pose, object); });
+  }
+  bool meshTriangle(BulletMesh& m, const Triangle& t) { return triangleTouches(m.object, t); }
+  bool triangleTouches(btCollisionObject& object, const Triangle& t) {
     btTriangleShape tri(toBt(t.a), toBt(t.b), toBt(t.c));
     tri.setMargin(0);
-    return touches(tri, btTransform::getIdentity(), m.object);
+    return touches(tri, btTransform::getIdentity(), object);
   }
 
   /// rayTestSingle from the origin over min(maxDistance, a length past the mesh).
   void castRay(BulletMesh& m, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) {
+    castRayWith(m.boundsMin, m.boundsMax, r, hits, options,
+                [&](const btVector3& from, const btVector3& to, CollectingRay& cb) { rayTest(m, from, to, cb); });
+  }
+  /// Casts from the origin over min(maxDistance, a length past the box [lo, hi]) with
+  /// test(from, to, callback): rayTestSingle on one object, or the scene world's rayTest.
+  template <class Test>
+  static void castRayWith(const Vec3d& lo, const Vec3d& hi, const Ray& r, RayHitCollector& hits,
+                      const RayQueryOptions& options, Test&& test) {
     const Vec3d o = r.origin.cast<double>();
     const Vec3d u = r.dir.cast<double>().normalized();
-    const double length = std::min(double(options.maxDistance), m.rayLength(o));
+    const double length = std::min(double(options.maxDistance), rayLength(o, lo, hi));
     const btVector3 from = toBt(o), to = toBt(Vec3d(o + length * u));
     CollectingRay cb(o, u, toD(to - from).norm(), &hits);
     if (options.cullBackFaces) cb.m_flags |= btTriangleRaycastCallback::kF_FilterBackfaces;
-    rayTest(m, from, to, cb);
+    test(from, to, cb);
   }
   bool segmentHits(BulletMesh& m, const Segment& s) {
     const btVector3 from = toBt(s.start), to = toBt(s.end);
@@ -288,16 +538,23 @@ class BulletWorld final : public CollisionWorld {
     return cb.anyHit;
   }
   static void rayTest(BulletMesh& m, const btVector3& from, const btVector3& to, CollectingRay& cb) {
+    rayTestObject(m.object, from, to, cb);
+  }
+  /// btCollisionWorld::rayTestSingle on one object at its world pose.
+  static void rayTestObject(btCollisionObject& o, const btVector3& from, const btVector3& to,
+                            CollectingRay& cb) {
     const btTransform a(btQuaternion::getIdentity(), from), b(btQuaternion::getIdentity(), to);
-    btCollisionWorld::rayTestSingle(a, b, &m.object, m.shape.get(), m.object.getWorldTransform(), cb);
+    btCollisionWorld::rayTestSingle(a, b, &o, o.getCollisionShape(), o.getWorldTransform(), cb);
   }
 
   btDefaultCollisionConfiguration configuration_;
-  btCollisionDispatcher dispatcher_{&configuration_};
-  btDbvtBroadphase broadphase_;
-  btCollisionWorld world_{&dispatcher_, &broadphase_, &configuration_};
+  CollisionSpace meshMesh_{configuration_};  ///< mesh_mesh's private world, and contactPairTest's dispatcher
+  CollisionSpace scene_{configuration_};     ///< models' btBvhTriangleMeshShape objects: rays, contact tests
+  CollisionSpace pairs_{configuration_};     ///< models' btGImpactMeshShape objects: scene_pairs
   btCollisionObject query_;
-  std::map<std::uint32_t, std::unique_ptr<BulletMesh>> meshes_;
+  std::map<std::uint32_t, std::shared_ptr<BulletMesh>> meshes_;  ///< by mesh handle
+  oracle::ModelTable table_;
+  std::map<std::uint32_t, std::unique_ptr<BulletModel>> models_;  ///< by model handle
 };
 
 }  // namespace

@@ -26,8 +26,14 @@ namespace crux::bullet_oracle {
 ///    btDbvtBroadphase, found by performDiscreteCollisionDetection (contactPairTest reports
 ///    nothing for GImpact pairs).
 ///  - closest_point_triangle: btVoronoiSimplexSolver::closestPtPointTriangle.
-/// Model and scene ops: Unsupported. Coordinates are rounded to float on the way in. Known
-/// disagreements (plane endpoints of rays, fattened edges, float rounding) in oracle/README.md.
+///  - Models (hierarchy and poses from oracle::ModelTable): each has a btCollisionObject over the
+///    mesh's btBvhTriangleMeshShape in a scene btCollisionWorld (btDbvtBroadphase) — model_ray /
+///    model_segment by rayTestSingle, model_sphere / aabb / obb / triangle by contactPairTest,
+///    scene_ray by rayTest, scene_query by contactTest (bounds-only: the Dbvt's candidates, the
+///    query against each model's getAabb box) — and one over its btGImpactMeshShape in a pairs
+///    world, for scene_pairs by performDiscreteCollisionDetection (contacts of distance <= 0).
+///    model_plane: Unsupported, as mesh_plane.
+/// Coordinates are rounded to float on the way in. Known disagreements (plane endpoints of rays, fattened edges, float rounding) in oracle/README.md.
 std::unique_ptr<CollisionWorld> makeBulletWorld();
 
 /// CollisionWorld::tolerance of the bullet backend. Relative: float arithmetic through GJK/EPA

@@ -3,6 +3,9 @@
 
 #include "fcl/fcl_world.hpp"
 
+#include "common/model_table.hpp"
+
+#include <fcl/broadphase/broadphase_dynamic_AABB_tree.h>
 #include <fcl/config.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
@@ -12,6 +15,7 @@
 #include <fcl/narrowphase/collision.h>
 #include <fcl/narrowphase/distance.h>
 
+#include <algorithm>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -102,6 +106,60 @@ const fcl::Transform3d& identity() {
   return id;
 }
 
+/// A model in FCL: a CollisionObjectd over its mesh's shared BVHModel at the model's world pose,
+/// registered in the scene's broad phase. The object's user data points back here.
+struct FclModel {
+  ModelHandle handle;
+  std::unique_ptr<fcl::CollisionObjectd> object;
+};
+
+const FclModel* modelOf(const fcl::CollisionObjectd* o) { return static_cast<const FclModel*>(o->getUserData()); }
+
+/// Collides two placed objects with the same request as the mesh ops (one contact, no details).
+bool collide(const fcl::CollisionObjectd* a, const fcl::CollisionObjectd* b) {
+  const fcl::CollisionRequestd request(1, false);
+  fcl::CollisionResultd result;
+  fcl::collide(a, b, request, result);
+  return result.isCollision();
+}
+
+/// scene_query's state through DynamicAABBTreeCollisionManager::collide(query, ...): every
+/// model whose FCL AABB overlaps the query object's AABB reaches the callback.
+struct SceneQueryData {
+  bool boundsOnly = false;
+  std::vector<ModelHandle> found;
+};
+
+/// scene_query callback: narrow phase fcl::collide(model, query); with boundsOnly, the query
+/// shape against the model's FCL AABB as a Boxd instead.
+bool sceneQueryCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
+  auto& d = *static_cast<SceneQueryData*>(data);
+  const bool aIsModel = modelOf(a) != nullptr;
+  const fcl::CollisionObjectd* model = aIsModel ? a : b;
+  const fcl::CollisionObjectd* query = aIsModel ? b : a;
+  bool hit = false;
+  if (d.boundsOnly) {
+    const fcl::AABBd& box = model->getAABB();
+    const fcl::Boxd shape(box.max_ - box.min_);
+    fcl::Transform3d pose = fcl::Transform3d::Identity();
+    pose.translation() = box.center();
+    hit = collide(shape, pose, *query->collisionGeometry(), query->getTransform());
+  } else {
+    hit = collide(model, query);
+  }
+  if (hit) d.found.push_back(modelOf(model)->handle);
+  return false;  // never stop early: every model is wanted
+}
+
+/// scene_pairs callback (DynamicAABBTreeCollisionManager::collide(data, ...) hands over every
+/// pair of models whose AABBs overlap): narrow phase fcl::collide on the two BVHModels.
+bool scenePairsCallback(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
+  if (collide(a, b))
+    static_cast<std::vector<std::pair<ModelHandle, ModelHandle>>*>(data)->emplace_back(modelOf(a)->handle,
+                                                                                       modelOf(b)->handle);
+  return false;
+}
+
 class FclWorld final : public CollisionWorld {
  public:
   std::string_view backend() const override { return "fcl"; }
@@ -124,6 +182,18 @@ class FclWorld final : public CollisionWorld {
       case WorldOp::MeshPlane:
       case WorldOp::MeshTriangle:
       case WorldOp::MeshMesh:
+      case WorldOp::AddModel:
+      case WorldOp::SetTransform:
+      case WorldOp::SetParent:
+      case WorldOp::RemoveModel:
+      case WorldOp::Children:
+      case WorldOp::ModelSphere:
+      case WorldOp::ModelAabb:
+      case WorldOp::ModelObb:
+      case WorldOp::ModelPlane:
+      case WorldOp::ModelTriangle:
+      case WorldOp::SceneQuery:
+      case WorldOp::ScenePairs:
         return true;
       default:
         return false;
@@ -186,10 +256,130 @@ class FclWorld final : public CollisionWorld {
     return collide({model(a), toFcl(ta)}, {model(b), toFcl(tb)});
   }
 
+  // ---- models and the scene ----------------------------------------------------------------
+
+  ModelHandle doAddModel(const std::string& name, MeshHandle mesh, const Transform& local,
+                         std::optional<ModelHandle> parent) override {
+    const ModelHandle h = table_.add(name, mesh, sharedMesh(mesh), local, parent);
+    try {
+      auto entry = std::make_unique<FclModel>();
+      entry->handle = h;
+      // The model keeps the mesh's BVHModel alive (shared_ptr) if the mesh is removed later.
+      entry->object = std::make_unique<fcl::CollisionObjectd>(models_.at(mesh.index), toFcl(table_.world(h)));
+      entry->object->setUserData(entry.get());
+      manager_.registerObject(entry->object.get());
+      objects_[h.index] = std::move(entry);
+    } catch (...) {
+      table_.remove(h);
+      throw;
+    }
+    return h;
+  }
+  void doRemoveModel(ModelHandle m) override {
+    table_.remove(m);  // validates m; the children keep their world poses, so no FCL update
+    manager_.unregisterObject(objects_.at(m.index)->object.get());  // m is known: table_.remove passed
+    objects_.erase(m.index);
+  }
+  void doSetTransform(ModelHandle m, const Transform& local) override { place(table_.setLocal(m, local)); }
+  void doSetParent(ModelHandle m, std::optional<ModelHandle> parent) override {
+    table_.setParent(m, parent);
+    // World poses are kept; placing the subtree again keeps FCL in step with the table anyway.
+    std::vector<ModelHandle> subtree = table_.descendants(m);
+    subtree.push_back(m);
+    place(subtree);
+  }
+  std::optional<ModelHandle> doFindModel(std::string_view name) override { return table_.find(name); }
+  std::vector<std::string> doDescendants(ModelHandle m) override { return table_.descendantNames(m); }
+
+  bool doOverlaps(ModelHandle m, const Sphere& s) override {
+    const fcl::Sphered sphere(double(s.radius));
+    return collide(placed(m), {sphere, translation(s.center)});
+  }
+  bool doOverlaps(ModelHandle m, const Aabb& b) override {
+    const fcl::Boxd shape = box(b);
+    return collide(placed(m), {shape, translation(b.center())});
+  }
+  bool doOverlaps(ModelHandle m, const Obb& b) override {
+    const fcl::Boxd shape = box(b);
+    return collide(placed(m), {shape, pose(b)});
+  }
+  bool doOverlaps(ModelHandle m, const Plane& p) override {
+    const fcl::Planed shape = plane(p);
+    return collide(placed(m), {shape, identity()});
+  }
+  bool doOverlaps(ModelHandle m, const Triangle& t) override {
+    return collide(placed(m), {*buildModel(t), identity()});
+  }
+
+  std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly) override {
+    std::shared_ptr<fcl::CollisionGeometryd> geometry;
+    fcl::Transform3d where = identity();
+    if (const auto* s = std::get_if<Sphere>(&shape)) {
+      geometry = std::make_shared<fcl::Sphered>(double(s->radius));
+      where = translation(s->center);
+    } else if (const auto* b = std::get_if<Aabb>(&shape)) {
+      geometry = std::make_shared<fcl::Boxd>(box(*b));
+      where = translation(b->center());
+    } else {
+      const Obb& o = std::get<Obb>(shape);
+      geometry = std::make_shared<fcl::Boxd>(box(o));
+      where = pose(o);
+    }
+    fcl::CollisionObjectd query(geometry, where);  // user data null: not a model
+    SceneQueryData data;
+    data.boundsOnly = boundsOnly;
+    manager_.collide(&query, &data, sceneQueryCallback);
+    std::vector<std::string> names;
+    for (const ModelHandle h : data.found) names.push_back(table_.name(h));
+    std::sort(names.begin(), names.end());
+    names.erase(std::unique(names.begin(), names.end()), names.end());
+    return names;
+  }
+  std::vector<std::pair<std::string, std::string>> doScenePairs() override {
+    std::vector<std::pair<ModelHandle, ModelHandle>> found;
+    manager_.collide(&found, scenePairsCallback);
+    std::vector<std::pair<std::string, std::string>> pairs;
+    for (const auto& [a, b] : found) {
+      std::string na = table_.name(a), nb = table_.name(b);
+      if (nb < na) std::swap(na, nb);
+      pairs.emplace_back(std::move(na), std::move(nb));
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    return pairs;
+  }
+
  private:
   const Model& model(MeshHandle h) const { return *models_.at(h.index); }
 
-  std::map<std::uint32_t, std::shared_ptr<Model>> models_;
+  /// The model's FCL object; InvalidInput naming the field for an unknown handle.
+  fcl::CollisionObjectd& object(ModelHandle m) const {
+    if (!table_.contains(m)) throw InvalidInput("model: unknown model handle " + std::to_string(m.index));
+    return *objects_.at(m.index)->object;
+  }
+  /// The model's geometry at its world pose.
+  Placed placed(ModelHandle m) const {
+    const fcl::CollisionObjectd& o = object(m);
+    return {*o.collisionGeometry(), o.getTransform()};
+  }
+  /// Moves models' FCL objects to their world poses (table_.world, rotation normalised in
+  /// double), recomputes their AABBs and updates the broad phase once.
+  void place(const std::vector<ModelHandle>& moved) {
+    std::vector<fcl::CollisionObjectd*> objects;
+    objects.reserve(moved.size());
+    for (const ModelHandle h : moved) {
+      fcl::CollisionObjectd* o = &object(h);
+      o->setTransform(toFcl(table_.world(h)));
+      o->computeAABB();
+      objects.push_back(o);
+    }
+    manager_.update(objects);
+  }
+
+  std::map<std::uint32_t, std::shared_ptr<Model>> models_;  ///< by mesh handle
+  oracle::ModelTable table_;
+  std::map<std::uint32_t, std::unique_ptr<FclModel>> objects_;  ///< by model handle
+  fcl::DynamicAABBTreeCollisionManagerd manager_;
 };
 
 }  // namespace

@@ -17,9 +17,17 @@ namespace crux::fcl_oracle {
 /// the double-normalised quaternion). closest_point_triangle is fcl::distance to a Sphered of
 /// radius 0 with nearest points enabled.
 ///
-/// FCL has no ray or segment query: ray_triangle, segment_triangle, mesh_ray, mesh_segment
-/// throw Unsupported, as do model and scene ops. FCL's mesh tests are surface-only (triangle
-/// against shape), like crux's. See oracle/README.md for its known disagreements.
+/// Models: each an fcl::CollisionObjectd over its mesh's shared BVHModel at its world pose
+/// (hierarchy and poses from oracle::ModelTable), all registered in one
+/// fcl::DynamicAABBTreeCollisionManagerd (registerObject / update / unregisterObject).
+/// model_sphere / aabb / obb / plane / triangle: fcl::collide of the placed object as above.
+/// scene_query: manager.collide(query object) with fcl::collide as narrow phase (bounds-only:
+/// the query shape against FCL's own AABB of each candidate, as a Boxd); scene_pairs:
+/// manager.collide (self) with fcl::collide on each pair of overlapping AABBs.
+///
+/// FCL has no ray or segment query: ray_triangle, segment_triangle, mesh_ray, mesh_segment,
+/// model_ray, model_segment and scene_ray throw Unsupported. FCL's mesh tests are surface-only
+/// (triangle against shape), like crux's. See oracle/README.md for its known disagreements.
 std::unique_ptr<CollisionWorld> makeFclWorld();
 
 /// CollisionWorld::tolerance of the fcl backend: double arithmetic (relative 1e-12) plus
