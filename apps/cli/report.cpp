@@ -1,0 +1,467 @@
+#include "cli/report.hpp"
+
+#include <crux/config.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+#include <thread>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/utsname.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
+
+// Baked in by apps/CMakeLists.txt; the fallbacks keep the file compiling elsewhere.
+#ifndef CRUX_REPORT_COMPILER
+#define CRUX_REPORT_COMPILER "unknown"
+#endif
+#ifndef CRUX_REPORT_CXX_FLAGS
+#define CRUX_REPORT_CXX_FLAGS "unknown"
+#endif
+#ifndef CRUX_REPORT_SOURCE_DIR
+#define CRUX_REPORT_SOURCE_DIR "."
+#endif
+#ifndef CRUX_REPORT_BUILD_TYPE
+#define CRUX_REPORT_BUILD_TYPE "unknown"
+#endif
+
+namespace crux::cli {
+namespace {
+
+using Json = nlohmann::json;
+
+// ---- files and processes ----------------------------------------------------------------------
+
+bool isExecutable(const std::string& path) { return access(path.c_str(), X_OK) == 0; }
+
+bool makeDirectory(const std::string& path) {
+  if (mkdir(path.c_str(), 0755) == 0) return true;
+  struct stat st {};
+  return stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+std::string directoryOfSelf() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (n <= 0) return ".";
+  const std::string path(self, std::size_t(n));
+  return path.substr(0, path.rfind('/'));
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  return bool(out);
+}
+
+/// A finished subprocess.
+struct RunResult {
+  int status = -1;  ///< exit status; 128 + signal when killed; -1 when it could not start
+  double seconds = 0;
+};
+
+/// Runs argv[0] (a path) with stdout and stderr appended to `logPath`; waits for it.
+RunResult runProcess(const std::vector<std::string>& argv, const std::string& logPath) {
+  RunResult r;
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, logPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  const auto start = std::chrono::steady_clock::now();
+  pid_t pid = 0;
+  const int err = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (err != 0) return r;
+  int wstatus = 0;
+  while (waitpid(pid, &wstatus, 0) < 0) {
+  }
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus);
+  return r;
+}
+
+std::string commandLine(const std::vector<std::string>& argv) {
+  std::string s;
+  for (const std::string& a : argv) s += (s.empty() ? "" : " ") + a;
+  return s;
+}
+
+/// Parses a JSON file; null when absent or malformed.
+Json readJson(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return nullptr;
+  Json j = Json::parse(in, nullptr, false);
+  return j.is_discarded() ? Json(nullptr) : j;
+}
+
+// ---- machine description ---------------------------------------------------------------------
+
+std::string cpuinfoField(const std::string& field) {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(field, 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) return line.substr(std::min(line.size(), colon + 2));
+    }
+  }
+  return "";
+}
+
+std::string firstWordAfter(const std::string& path, const std::string& prefix) {
+  std::ifstream in(path);
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(prefix, 0) == 0) return line.substr(prefix.size());
+  return "";
+}
+
+std::string trim(std::string s) {
+  const auto b = s.find_first_not_of(" \t\n");
+  const auto e = s.find_last_not_of(" \t\n");
+  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
+}
+
+/// Version of an installed Debian package, "" when dpkg does not know it.
+std::string debianVersion(const std::string& package, const std::string& logPath) {
+  const std::string out = logPath + ".tmp";
+  std::remove(out.c_str());
+  const RunResult r = runProcess({"/usr/bin/dpkg-query", "-W", "-f=${Version}", package}, out);
+  const std::string v = r.status == 0 ? trim(readText(out)) : "";
+  std::remove(out.c_str());
+  return v;
+}
+
+std::string loadAverage() { return trim(readText("/proc/loadavg")); }
+
+Json machineDescription(const std::string& scratch) {
+  Json m = Json::object();
+  m["cpu"] = cpuinfoField("model name");
+  m["hardware_threads"] = std::thread::hardware_concurrency();
+  int processors = 0;
+  {
+    std::ifstream in("/proc/cpuinfo");
+    for (std::string line; std::getline(in, line);) processors += line.rfind("processor", 0) == 0;
+  }
+  m["processors"] = processors;
+  m["memory"] = trim(firstWordAfter("/proc/meminfo", "MemTotal:"));
+  utsname u{};
+  if (uname(&u) == 0) m["os"] = std::string(u.sysname) + " " + u.release + " " + u.machine;
+  m["compiler"] = CRUX_REPORT_COMPILER;
+  m["cxx_flags"] = trim(CRUX_REPORT_CXX_FLAGS);
+  m["build_type"] = CRUX_REPORT_BUILD_TYPE;
+  m["crux_version"] = CRUX_VERSION_STRING;
+  m["crux_real"] = CRUX_DOUBLE_PRECISION_ENABLED ? "double" : "float";
+  Json libs = Json::object();
+  libs["eigen (headers compiled in)"] = std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) +
+                                        "." + std::to_string(EIGEN_MINOR_VERSION);
+  // Installed package versions (the benches add the versions their headers report).
+  for (const char* package : {"libfcl-dev", "libbullet-dev", "libembree-dev", "libcgal-dev", "libeigen3-dev",
+                              "libtbb-dev", "libccd-dev", "libassimp-dev"}) {
+    const std::string v = debianVersion(package, scratch);
+    libs[package] = v.empty() ? "not installed (or not a Debian system)" : v;
+  }
+  m["libraries"] = libs;
+  m["load_average_start"] = loadAverage();
+  return m;
+}
+
+std::string utcNow() {
+  const std::time_t t = std::time(nullptr);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+// ---- steps ----------------------------------------------------------------------------------
+
+/// Shared state of one run: where things go and how progress is shown.
+struct Context {
+  ReportOptions options;
+  std::string rawDir;
+  std::ostream* progress = nullptr;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  int failures = 0;
+  std::string clock;  ///< "wall" or "cpu", resolved from options.clock
+
+  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
+  void say(const std::string& line) const {
+    *progress << "crux report [" << std::fixed << std::setprecision(1) << elapsed() << " s] " << line << std::endl;
+    progress->unsetf(std::ios::floatfield);
+  }
+  std::string bin(const std::string& name) const { return options.binDir + "/" + name; }
+};
+
+Json unavailable(const std::string& reason) { return Json{{"available", false}, {"reason", reason}}; }
+
+/// Runs one step's command, logging to raw/<name>.log; reads raw/<name>.json if `json`.
+Json runStep(Context& c, const std::string& name, const std::vector<std::string>& argv, bool json) {
+  const std::string log = c.rawDir + "/" + name + ".log";
+  const std::string jsonPath = c.rawDir + "/" + name + ".json";
+  std::remove(log.c_str());
+  std::remove(jsonPath.c_str());
+  c.say("running " + commandLine(argv));
+  const RunResult r = runProcess(argv, log);
+  Json step = Json::object();
+  step["available"] = true;
+  step["command"] = commandLine(argv);
+  step["exit_status"] = r.status;
+  step["seconds"] = r.seconds;
+  step["log"] = "raw/" + name + ".log";
+  if (json) {
+    step["data"] = readJson(jsonPath);
+    if (step["data"].is_null()) step["error"] = "no JSON output (" + jsonPath + ")";
+  }
+  std::ostringstream done;
+  done << name << ": exit " << r.status << " after " << std::fixed << std::setprecision(1) << r.seconds << " s";
+  c.say(done.str());
+  return step;
+}
+
+Json sanitySuite(Context& c) {
+  const std::string exe = c.bin("test_sanity");
+  if (!isExecutable(exe)) return unavailable("test_sanity is not built (CRUX_BUILD_TESTS=OFF or oracle absent)");
+  const std::string jsonPath = c.rawDir + "/sanity.json";
+  Json step = runStep(c, "sanity", {exe, "--gtest_brief=1", "--gtest_output=json:" + jsonPath}, true);
+  const Json& d = step["data"];
+  if (d.is_object()) {
+    step["tests"] = d.value("tests", 0);
+    step["failures"] = d.value("failures", 0);
+    Json cases = Json::array();
+    for (const Json& suite : d.value("testsuites", Json::array()))
+      for (const Json& t : suite.value("testsuite", Json::array()))
+        cases.push_back({{"name", suite.value("name", "") + "." + t.value("name", "")},
+                         {"passed", !t.contains("failures")}});
+    step["cases"] = cases;
+  }
+  if (step["exit_status"] != 0) ++c.failures;
+  return step;
+}
+
+Json diffRun(Context& c) {
+  const std::string self = c.bin("crux");
+  const std::string probeLog = c.rawDir + "/diff-probe.log";
+  std::remove(probeLog.c_str());
+  if (!isExecutable(self) || runProcess({self, "diff", "--help"}, probeLog).status != 0)
+    return unavailable("not available in this build: `crux diff` is not a subcommand of this crux");
+  const char* seconds = c.options.budget == ReportBudget::Tiny ? "2" : c.options.budget == ReportBudget::Quick ? "30" : "300";
+  std::vector<std::string> argv = {self, "diff", "--seconds", seconds, "--json", c.rawDir + "/diff.json",
+                                   "--out", c.rawDir + "/diff-cases", "--quiet"};
+  const std::string meshes = std::string(CRUX_REPORT_SOURCE_DIR) + "/data/meshes";
+  if (access(meshes.c_str(), R_OK) == 0) {
+    argv.push_back("--meshes");
+    argv.push_back(meshes);
+  }
+  Json step = runStep(c, "diff", argv, true);
+  // Exit 1 means crux answered wrong somewhere: a result the report shows, and a failure.
+  if (step["exit_status"] != 0) ++c.failures;
+  return step;
+}
+
+/// The bench steps and their arguments per budget.
+struct BenchPlan {
+  std::string name;
+  std::vector<std::string> tiny, quick, full;
+  bool optional = false;  ///< built by other work; absent is not an error
+};
+
+std::vector<BenchPlan> benchPlans() {
+  return {
+      {"bench_mesh",
+       {"--quick", "--runs", "1", "--seconds", "0.001"},
+       {"--runs", "3", "--seconds", "0.05"},
+       {"--runs", "5", "--seconds", "0.2"}},
+      {"bench_scene",
+       {"--quick", "--sizes", "300", "--runs", "1"},
+       {"--quick", "--sizes", "1000,10000", "--runs", "1"},
+       {"--sizes", "1000,10000,100000", "--runs", "3"}},
+      {"bench_scaling",
+       {"--sizes", "1000,4000", "--rays", "200", "--runs", "1", "--seconds", "0.001"},
+       {"--quick"},
+       {}},
+      {"bench_parallel", {"--quick"}, {"--quick"}, {}, true},
+      {"bench_contact", {"--quick"}, {"--quick"}, {}, true},
+  };
+}
+
+Json benches(Context& c) {
+  Json all = Json::object();
+  for (const BenchPlan& plan : benchPlans()) {
+    const std::string exe = c.bin(plan.name);
+    if (!isExecutable(exe)) {
+      all[plan.name] = unavailable(plan.name + " is not built (CRUX_BUILD_BENCH=OFF, or not in this version)");
+      c.say(plan.name + ": not available in this build");
+      if (!plan.optional) ++c.failures;
+      continue;
+    }
+    std::vector<std::string> argv = {exe};
+    const auto& extra = c.options.budget == ReportBudget::Tiny    ? plan.tiny
+                        : c.options.budget == ReportBudget::Quick ? plan.quick
+                                                                  : plan.full;
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    const std::string smallMesh = std::string(CRUX_REPORT_SOURCE_DIR) + "/data/meshes/cow.off";  // 5,804 triangles
+    if (plan.name == "bench_mesh" && c.options.budget == ReportBudget::Tiny && access(smallMesh.c_str(), R_OK) == 0) {
+      argv.push_back("--mesh");
+      argv.push_back(smallMesh);
+    }
+    if (plan.name == "bench_mesh" || plan.name == "bench_scene" || plan.name == "bench_scaling") {
+      argv.push_back("--clock");
+      argv.push_back(c.clock);
+    }
+    argv.push_back("--json");
+    argv.push_back(c.rawDir + "/" + plan.name + ".json");
+    Json step = runStep(c, plan.name, argv, true);
+    if (plan.optional && step["exit_status"] == 0 && step["data"].is_null()) {
+      // A bench without --json (its options are ignored): keep its printed tables.
+      step.erase("error");
+      step["text"] = readText(c.rawDir + "/" + plan.name + ".log");
+    } else if (step["exit_status"] != 0 || step["data"].is_null()) {
+      ++c.failures;
+    }
+    all[plan.name] = step;
+  }
+  return all;
+}
+
+/// Instruction counts (callgrind, inclusive) of each backend's closest-hit ray function on
+/// bench_scaling's 10k-triangle torus, 2000 rays, 1 thread.
+Json callgrind(Context& c) {
+  const std::string valgrind = "/usr/bin/valgrind";
+  const std::string exe = c.bin("bench_scaling");
+  if (!isExecutable(valgrind)) return unavailable("valgrind is not installed");
+  if (!isExecutable(exe)) return unavailable("bench_scaling is not built");
+  Json out = Json::object();
+  out["available"] = true;
+  out["workload"] = "bench_scaling closest-hit rays, 10k-triangle torus, 2000 rays, 1 thread: instructions (callgrind "
+                    "Ir, inclusive) of the backend's ray function over all its passes, divided by passes x rays";
+  Json counts = Json::object();
+  const std::vector<std::pair<std::string, std::string>> functions = {
+      {"crux", "*cruxRays*"}, {"embree", "crux::bench::EmbreePeer::closestHits*"},
+      {"bullet", "crux::bench::BulletPeer::closestHits*"}};
+  for (const auto& [backend, pattern] : functions) {
+    const std::string outFile = c.rawDir + "/callgrind." + backend + ".out";
+    std::remove(outFile.c_str());
+    const Json step = runStep(c, "callgrind-" + backend,
+                              {valgrind, "--tool=callgrind", "--callgrind-out-file=" + outFile,
+                               "--toggle-collect=" + pattern, exe, "--sizes", "10000", "--rays", "2000", "--runs", "1",
+                               "--seconds", "0.0001", "--threads", "1"},
+                              false);
+    // Summary line: "summary: <Ir>"; calls: the crux function runs 4 times (reference,
+    // check, warm-up, timed run), the peers 3 times.
+    double ir = -1;
+    std::ifstream in(outFile);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("summary:", 0) == 0 || line.rfind("totals:", 0) == 0) ir = std::atof(line.substr(line.find(':') + 1).c_str());
+    const double passes = backend == "crux" ? 4 : 3;
+    if (ir < 0 || step["exit_status"] != 0) {
+      counts[backend] = nullptr;
+      continue;
+    }
+    counts[backend] = {{"instructions_total", ir}, {"passes", passes}, {"instructions_per_ray", ir / passes / 2000}};
+  }
+  out["backends"] = counts;
+  return out;
+}
+
+}  // namespace
+
+const char* budgetName(ReportBudget budget) {
+  switch (budget) {
+    case ReportBudget::Tiny: return "tiny";
+    case ReportBudget::Quick: return "quick";
+    case ReportBudget::Full: return "full";
+  }
+  return "?";
+}
+
+int runReport(const ReportOptions& options, std::ostream& progress) {
+  Context c;
+  c.options = options;
+  if (c.options.binDir.empty()) c.options.binDir = directoryOfSelf();
+  c.progress = &progress;
+  c.rawDir = options.outDir + "/raw";
+  if (!makeDirectory(options.outDir) || !makeDirectory(c.rawDir)) {
+    progress << "crux report: cannot create the output directory " << options.outDir << '\n';
+    return 2;
+  }
+  if (options.clock == "auto") {
+    const double load = std::atof(loadAverage().c_str());
+    c.clock = load > 0.5 * std::max(1u, std::thread::hardware_concurrency()) ? "cpu" : "wall";
+  } else {
+    c.clock = options.clock == "cpu" ? "cpu" : "wall";
+  }
+  c.say(std::string("budget ") + budgetName(options.budget) + ", output in " + options.outDir + ", bench clock " +
+        c.clock + " (load average " + loadAverage() + ")");
+
+  Json results = Json::object();
+  results["report"] = {{"date", utcNow()}, {"budget", budgetName(options.budget)}, {"callgrind", options.callgrind}, {"bench_clock", c.clock},
+                       {"bin_dir", c.options.binDir}};
+  c.say("machine description");
+  results["machine"] = machineDescription(c.rawDir + "/dpkg");
+
+  c.say("cross-validation: oracle sanity suite");
+  Json cross = Json::object();
+  cross["sanity"] = sanitySuite(c);
+  c.say("cross-validation: crux diff");
+  cross["diff"] = diffRun(c);
+  if (!cross["diff"].value("available", false)) c.say("crux diff: " + cross["diff"]["reason"].get<std::string>());
+  results["cross_validation"] = cross;
+
+  c.say("performance: benches");
+  results["benches"] = benches(c);
+  if (options.callgrind) {
+    c.say("callgrind: instruction counts per backend");
+    results["callgrind"] = callgrind(c);
+  }
+  results["series"] = chartSeries(results);
+
+  // Every workload and backend measured, for readers and the test.
+  Json workloads = Json::array(), backends = Json::array();
+  for (const auto& [id, s] : results["series"].items()) {
+    const std::string w = s.value("workload", "");
+    if (!w.empty() && std::find(workloads.begin(), workloads.end(), w) == workloads.end()) workloads.push_back(w);
+    for (const Json& b : s.value("backends", Json::array()))
+      if (std::find(backends.begin(), backends.end(), b) == backends.end()) backends.push_back(b);
+  }
+  results["workloads"] = workloads;
+  results["backends"] = backends;
+  results["machine"]["load_average_end"] = loadAverage();
+  results["report"]["seconds"] = c.elapsed();
+  results["report"]["failed_steps"] = c.failures;
+
+  c.say("writing results.json, summary.md, index.html");
+  bool ok = writeText(options.outDir + "/results.json", results.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
+  ok = writeText(options.outDir + "/summary.md", renderSummary(results)) && ok;
+  ok = writeText(options.outDir + "/index.html", renderHtml(results)) && ok;
+  if (!ok) {
+    progress << "crux report: cannot write the outputs in " << options.outDir << '\n';
+    return 2;
+  }
+  c.say("done: " + options.outDir + "/index.html, summary.md, results.json" +
+        (c.failures ? " (" + std::to_string(c.failures) + " step(s) failed: see results.json)" : ""));
+  return c.failures ? 1 : 0;
+}
+
+}  // namespace crux::cli
