@@ -1,4 +1,10 @@
-/// @file bvh.cpp  Binned-SAH BVH construction and bottom-up refit.
+/// @file bvh.cpp  Binned-SAH BVH construction (serial or parallel with oneTBB) and bottom-up refit.
+///
+/// Parallel build: when the calling task arena has more than one thread, the top of the tree
+/// (nodes of at least kParallelSubtreeMin primitives) is split with the two children built as
+/// parallel tasks (tbb::parallel_invoke) and the largest nodes are binned in parallel chunks;
+/// the result is the serial build's array bit for bit (see Builder). A one-thread arena (e.g.
+/// tbb::task_arena(1)) gives the plain serial build.
 ///
 /// Layout: the builder appends both children of a node at the end of the node array when it
 /// splits that node, so siblings are adjacent and every child has a larger index than its
@@ -13,9 +19,15 @@
 #include <crux/error.hpp>
 #include <crux/mesh/bvh.hpp>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 
 namespace crux {
@@ -40,7 +52,9 @@ struct LaneBox {
     max = max.max(hi);
   }
   void grow(const LaneBox& b) { grow(b.min, b.max); }
-  Aabb aabb() const { return {vec(min), vec(max)}; }
+  /// As an Aabb, with -0 coordinates made +0 (x + 0): min/max of +0 and -0 depend on operand
+  /// order, and the parallel build merges bins in a different order than the serial one.
+  Aabb aabb() const { return {vec(min + Lanes::Zero()), vec(max + Lanes::Zero())}; }
 };
 
 /// A primitive as the builder moves it around: its bounds in lanes, partitioned in place
@@ -75,10 +89,36 @@ Wide costMeasure(const LaneBox& b, bool useLength) {
   return 2 * (x * y + y * z + z * x);
 }
 
+/// Primitive counts from which the builder works in parallel (when the current task arena has
+/// more than one thread): nodes with at least kParallelSubtreeMin primitives are split on the
+/// calling task and their two children built as parallel tasks (smaller nodes are built whole,
+/// serially, by one task); nodes with at least kParallelBinMin primitives are also binned in
+/// parallel chunks of kParallelBinGrain.
+constexpr std::uint32_t kParallelSubtreeMin = 4096;
+constexpr std::uint32_t kParallelBinMin = 32768;
+constexpr std::uint32_t kParallelBinGrain = 8192;
+
+/// Per-task scratch of the builder, reused by every node the task splits.
+struct Scratch {
+  explicit Scratch(std::uint32_t bins) : bins(3 * std::size_t(bins)), rightCost(bins) {}
+  std::vector<Bin> bins;        // 3 × options.bins
+  std::vector<Wide> rightCost;  // options.bins
+  std::vector<std::uint32_t> order, ids;  // median splits only
+  std::vector<BuildPrim> prims;           // median splits only
+};
+
+/// The builder. Serial order (what `nodes` looks like): a node's two children are appended as a
+/// pair when it is split, and the left child's whole subtree is split before the right child's
+/// (a depth-first work stack). The parallel build reproduces that array exactly: it builds
+/// subtrees independently (each into its own array, laid out by the same rule), then places
+/// every subtree's pairs at the offset the serial build would have given them. Every split
+/// decision depends only on the node's primitive range (binning is order-independent: min/max
+/// and integer counts are exact in any order), and the in-place partitions of disjoint ranges
+/// are the serial ones, so nodes and primIndices are identical bit for bit.
 class Builder {
  public:
   Builder(const std::vector<Aabb>& prims, const BvhBuildOptions& options, Bvh& out)
-      : options_(options), bvh_(out), bins_(3 * std::size_t(options.bins)), rightCost_(options.bins) {
+      : options_(options), bvh_(out), parallel_(tbb::this_task_arena::max_concurrency() > 1) {
     const auto n = static_cast<std::uint32_t>(prims.size());
     prims_.resize(n);
     bvh_.primIndices.resize(n);
@@ -92,7 +132,6 @@ class Builder {
 
   void run() {
     const auto n = static_cast<std::uint32_t>(prims_.size());
-    bvh_.nodes.reserve(2 * std::size_t(n) - 1);
     LaneBox bounds, centroids;
     for (const BuildPrim& p : prims_) {
       bounds.grow(p.min, p.max);
@@ -103,17 +142,18 @@ class Builder {
     root.bounds = bounds.aabb();
     root.first = 0;
     root.count = n;
-    bvh_.nodes.push_back(root);
-
-    std::vector<Work> work;
-    work.reserve(2 * kBvhMaxDepth + 2);
-    work.push_back({0, 0, centroids});
-    while (!work.empty()) {
-      const Work w = work.back();
-      work.pop_back();
-      process(w, work);
+    if (!parallel_ || n < kParallelSubtreeMin) {
+      Scratch scratch(options_.bins);
+      bvh_.nodes.reserve(2 * std::size_t(n) - 1);
+      buildSerial(root, 0, centroids, bvh_.nodes, scratch);
+      bvh_.nodes.shrink_to_fit();
+      return;
     }
-    bvh_.nodes.shrink_to_fit();
+    Subtree top;
+    top.root = root;
+    expand(top, 0, centroids);
+    bvh_.nodes.resize(1 + 2 * top.pairs);
+    place(top, 0, 1);
   }
 
  private:
@@ -130,44 +170,124 @@ class Builder {
     LaneBox left, right, leftCentroids, rightCentroids;
   };
 
-  /// Splits node w.node if worthwhile, appending both children as a pair (left at index k,
-  /// right at k + 1, both after the parent) and queueing them.
-  void process(const Work& w, std::vector<Work>& work) {
-    const std::uint32_t first = bvh_.nodes[w.node].first;
-    const std::uint32_t count = bvh_.nodes[w.node].count;
-    if (count <= 1) return;
+  /// A subtree of the parallel build: either split by the parallel stage (left/right set) or
+  /// built serially into `local` (local[0] is `root`, children indices local).
+  struct Subtree {
+    BvhNode root;
+    std::unique_ptr<Subtree> left, right;
+    std::vector<BvhNode> local;
+    std::size_t pairs = 0;  // child pairs in the subtree
+  };
 
-    Split split;
-    const bool forceBalanced = w.depth + ceilLog2(count) > kBvhMaxDepth - 2;
-    if (!forceBalanced) split = sahSplit(first, count, bvh_.nodes[w.node].bounds, w.centroids);
-    if (split.leftCount == 0) {
-      if (count <= options_.maxLeafSize) return;
-      split = medianSplit(first, count, w.centroids);
+  /// The serial build of the subtree under `root` into `nodes` (cleared; nodes[0] = root).
+  void buildSerial(const BvhNode& root, int depth, const LaneBox& centroids, std::vector<BvhNode>& nodes,
+                   Scratch& scratch) {
+    nodes.clear();
+    nodes.push_back(root);
+    std::vector<Work> work;
+    work.reserve(2 * kBvhMaxDepth + 2);
+    work.push_back({0, depth, centroids});
+    while (!work.empty()) {
+      const Work w = work.back();
+      work.pop_back();
+      process(w, nodes, work, scratch);
     }
+  }
 
-    const auto child = static_cast<std::uint32_t>(bvh_.nodes.size());
-    BvhNode left, right;
+  /// The split of a node as the serial build decides it (leftCount 0: the node is a leaf).
+  /// Partitions the node's primitive range in place.
+  Split chooseSplit(const BvhNode& node, int depth, const LaneBox& centroids, Scratch& scratch, bool parallelBins) {
+    const std::uint32_t first = node.first, count = node.count;
+    if (count <= 1) return {};
+    Split split;
+    const bool forceBalanced = depth + ceilLog2(count) > kBvhMaxDepth - 2;
+    if (!forceBalanced) split = sahSplit(first, count, node.bounds, centroids, scratch, parallelBins);
+    if (split.leftCount == 0) {
+      if (count <= options_.maxLeafSize) return {};
+      split = medianSplit(first, count, centroids, scratch);
+    }
+    return split;
+  }
+
+  static void children(const BvhNode& parent, const Split& split, BvhNode& left, BvhNode& right) {
     left.bounds = split.left.aabb();
-    left.first = first;
+    left.first = parent.first;
     left.count = split.leftCount;
     right.bounds = split.right.aabb();
-    right.first = first + split.leftCount;
-    right.count = count - split.leftCount;
-    bvh_.nodes.push_back(left);
-    bvh_.nodes.push_back(right);
-    BvhNode& parent = bvh_.nodes[w.node];
+    right.first = parent.first + split.leftCount;
+    right.count = parent.count - split.leftCount;
+  }
+
+  /// Splits nodes[w.node] if worthwhile, appending both children as a pair (left at index k,
+  /// right at k + 1, both after the parent) and queueing them.
+  void process(const Work& w, std::vector<BvhNode>& nodes, std::vector<Work>& work, Scratch& scratch) {
+    const Split split = chooseSplit(nodes[w.node], w.depth, w.centroids, scratch, false);
+    if (split.leftCount == 0) return;
+    const auto child = static_cast<std::uint32_t>(nodes.size());
+    BvhNode left, right;
+    children(nodes[w.node], split, left, right);
+    nodes.push_back(left);
+    nodes.push_back(right);
+    BvhNode& parent = nodes[w.node];
     parent.first = child;
     parent.count = 0;
     work.push_back({child + 1, w.depth + 1, split.rightCentroids});
     work.push_back({child, w.depth + 1, split.leftCentroids});
   }
 
+  /// The parallel stage: splits large nodes here and builds both children as parallel tasks;
+  /// hands nodes below kParallelSubtreeMin to buildSerial.
+  void expand(Subtree& t, int depth, const LaneBox& centroids) {
+    Scratch scratch(options_.bins);
+    if (t.root.count < kParallelSubtreeMin) {
+      buildSerial(t.root, depth, centroids, t.local, scratch);
+      t.pairs = (t.local.size() - 1) / 2;
+      return;
+    }
+    const Split split = chooseSplit(t.root, depth, centroids, scratch, t.root.count >= kParallelBinMin);
+    if (split.leftCount == 0) {
+      t.local.assign(1, t.root);
+      return;
+    }
+    t.left = std::make_unique<Subtree>();
+    t.right = std::make_unique<Subtree>();
+    children(t.root, split, t.left->root, t.right->root);
+    tbb::parallel_invoke([&] { expand(*t.left, depth + 1, split.leftCentroids); },
+                         [&] { expand(*t.right, depth + 1, split.rightCentroids); });
+    t.pairs = 1 + t.left->pairs + t.right->pairs;
+  }
+
+  /// Writes subtree t with its root at bvh_.nodes[at] and its child pairs from `base` on, where
+  /// the serial build puts them: the root's pair first, then the left subtree's pairs, then
+  /// the right's.
+  void place(const Subtree& t, std::size_t at, std::size_t base) {
+    BvhNode* out = bvh_.nodes.data();
+    if (t.left) {
+      BvhNode n = t.root;
+      n.first = static_cast<std::uint32_t>(base);
+      n.count = 0;
+      out[at] = n;
+      tbb::parallel_invoke([&] { place(*t.left, base, base + 2); },
+                           [&] { place(*t.right, base + 1, base + 2 + 2 * t.left->pairs); });
+      return;
+    }
+    // Local index c >= 1 goes to base + c - 1.
+    auto relocate = [&](BvhNode n) {
+      if (!n.isLeaf()) n.first = static_cast<std::uint32_t>(base + n.first - 1);
+      return n;
+    };
+    out[at] = relocate(t.local[0]);
+    for (std::size_t c = 1; c < t.local.size(); ++c) out[base + c - 1] = relocate(t.local[c]);
+  }
+
   /// Binned SAH over all three axes (Wald 2007) with min(bins, count) bins per axis. Partitions
   /// the range in place; leftCount 0 when no split beats a leaf (only allowed within the leaf
-  /// cap) or the centroids cannot be binned (all equal).
-  Split sahSplit(std::uint32_t first, std::uint32_t count, const Aabb& nodeBounds, const LaneBox& centroidBounds) {
+  /// cap) or the centroids cannot be binned (all equal). With parallelBins the binning pass runs
+  /// in parallel chunks whose bins are merged (exact: min, max and integer sums).
+  Split sahSplit(std::uint32_t first, std::uint32_t count, const Aabb& nodeBounds, const LaneBox& centroidBounds,
+                 Scratch& scratch, bool parallelBins) {
     const std::uint32_t bins = std::min(options_.bins, std::max(count, 2u));
-    Bin* bin[3] = {bins_.data(), bins_.data() + bins, bins_.data() + 2 * bins};
+    Bin* bin[3] = {scratch.bins.data(), scratch.bins.data() + bins, scratch.bins.data() + 2 * bins};
     Lanes scale = Lanes::Zero();
     bool any = false;
     for (int a = 0; a < 3; ++a) {
@@ -191,14 +311,39 @@ class Builder {
       return static_cast<std::uint32_t>(std::min((c - cmin[a]) * scale[a], lastBin));
     };
     BuildPrim* prims = prims_.data() + first;
-    for (std::uint32_t i = 0; i < count; ++i) {
-      const BuildPrim& p = prims[i];
-      const LaneIndex b = binOf(p);
-      for (int a = 0; a < 3; ++a) {
-        Bin& target = bin[a][b[a]];
-        target.bounds.grow(p.min, p.max);
-        ++target.count;
+    auto binRange = [&](std::uint32_t begin, std::uint32_t end, Bin* const* into) {
+      for (std::uint32_t i = begin; i < end; ++i) {
+        const BuildPrim& p = prims[i];
+        const LaneIndex b = binOf(p);
+        for (int a = 0; a < 3; ++a) {
+          Bin& target = into[a][b[a]];
+          target.bounds.grow(p.min, p.max);
+          ++target.count;
+        }
       }
+    };
+    if (parallelBins) {
+      // One set of 3 × bins per chunk, merged in chunk order.
+      const std::uint32_t chunks = (count + kParallelBinGrain - 1) / kParallelBinGrain;
+      std::vector<Bin> partial(std::size_t(chunks) * 3 * bins);
+      tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, chunks, 1), [&](const tbb::blocked_range<std::uint32_t>& r) {
+        for (std::uint32_t c = r.begin(); c < r.end(); ++c) {
+          Bin* base = partial.data() + std::size_t(c) * 3 * bins;
+          Bin* into[3] = {base, base + bins, base + 2 * bins};
+          binRange(c * kParallelBinGrain, std::min(count, (c + 1) * kParallelBinGrain), into);
+        }
+      });
+      for (std::uint32_t c = 0; c < chunks; ++c) {
+        const Bin* base = partial.data() + std::size_t(c) * 3 * bins;
+        for (int a = 0; a < 3; ++a)
+          for (std::uint32_t b = 0; b < bins; ++b) {
+            const Bin& from = base[a * bins + b];
+            bin[a][b].bounds.grow(from.bounds);
+            bin[a][b].count += from.count;
+          }
+      }
+    } else {
+      binRange(0, count, bin);
     }
 
     LaneBox parent;
@@ -207,7 +352,7 @@ class Builder {
     Wide bestCost = std::numeric_limits<Wide>::infinity();
     int bestAxis = -1;
     std::uint32_t bestSplit = 0;
-    Wide* rightCost = rightCost_.data();
+    Wide* rightCost = scratch.rightCost.data();
     for (int a = 0; a < 3; ++a) {
       if (scale[a] == 0) continue;
       // rightCost[s] = measure(bins s..end) * count(bins s..end)
@@ -276,7 +421,7 @@ class Builder {
 
   /// Balanced split by count: the median centroid along the widest centroid axis (or simply the
   /// halves when every centroid is equal).
-  Split medianSplit(std::uint32_t first, std::uint32_t count, const LaneBox& centroidBounds) {
+  Split medianSplit(std::uint32_t first, std::uint32_t count, const LaneBox& centroidBounds, Scratch& scratch) {
     Split split;
     split.leftCount = count / 2;
     const Lanes extent = centroidBounds.max - centroidBounds.min;
@@ -287,18 +432,19 @@ class Builder {
     std::uint32_t* ids = bvh_.primIndices.data() + first;
     if (extent[axis] > 0) {
       // Sort a permutation so the primitives and their indices move together.
-      order_.resize(count);
-      for (std::uint32_t k = 0; k < count; ++k) order_[k] = k;
-      std::nth_element(order_.begin(), order_.begin() + split.leftCount, order_.end(),
+      std::vector<std::uint32_t>& order = scratch.order;
+      order.resize(count);
+      for (std::uint32_t k = 0; k < count; ++k) order[k] = k;
+      std::nth_element(order.begin(), order.begin() + split.leftCount, order.end(),
                        [&](std::uint32_t p, std::uint32_t q) { return prims[p].centroid()[axis] < prims[q].centroid()[axis]; });
-      scratchPrims_.resize(count);
-      scratchIds_.resize(count);
+      scratch.prims.resize(count);
+      scratch.ids.resize(count);
       for (std::uint32_t k = 0; k < count; ++k) {
-        scratchPrims_[k] = prims[order_[k]];
-        scratchIds_[k] = ids[order_[k]];
+        scratch.prims[k] = prims[order[k]];
+        scratch.ids[k] = ids[order[k]];
       }
-      std::copy(scratchPrims_.begin(), scratchPrims_.end(), prims);
-      std::copy(scratchIds_.begin(), scratchIds_.end(), ids);
+      std::copy(scratch.prims.begin(), scratch.prims.end(), prims);
+      std::copy(scratch.ids.begin(), scratch.ids.end(), ids);
     }
     for (std::uint32_t k = 0; k < count; ++k) {
       const BuildPrim& p = prims[k];
@@ -312,11 +458,8 @@ class Builder {
 
   const BvhBuildOptions& options_;
   Bvh& bvh_;
+  const bool parallel_;  // the current task arena has more than one thread
   std::vector<BuildPrim> prims_;
-  std::vector<Bin> bins_;        // 3 × options.bins, reused by every node
-  std::vector<Wide> rightCost_;  // options.bins, reused by every node
-  std::vector<std::uint32_t> order_, scratchIds_;  // median splits only
-  std::vector<BuildPrim> scratchPrims_;
 };
 
 bool validBounds(const Aabb& b) {

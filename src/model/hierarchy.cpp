@@ -1,5 +1,6 @@
-/// @file hierarchy.cpp  ModelHierarchy: flat arrays, free list, intrusive sibling lists, a lazily
-/// refreshed world cache and the moved set, all walked with loops (no recursion).
+/// @file hierarchy.cpp  ModelHierarchy: flat arrays, free list, intrusive sibling lists, world
+/// transforms updated eagerly on mutation (so const members never write and are thread-safe) and
+/// the moved set, all walked with loops (no recursion).
 ///
 /// Subtree walks are pre-order traversals that follow first-child / next-sibling links and
 /// climb back through parent links, so they need no stack at any depth.
@@ -86,7 +87,6 @@ ModelId ModelHierarchy::add(std::shared_ptr<const Mesh> mesh, const Transform& l
     firstChild_.push_back(kNoModel);
     nextSibling_.push_back(kNoModel);
     prevSibling_.push_back(kNoModel);
-    dirty_.push_back(1);
     moved_.push_back(0);
     alive_.push_back(0);
     generation_.push_back(0);
@@ -97,10 +97,7 @@ ModelId ModelHierarchy::add(std::shared_ptr<const Mesh> mesh, const Transform& l
   link(id, parent);
   alive_[id] = 1;
   moved_[id] = 0;
-  // The world transform is computed now (it cleans the parent's chain), so a new leaf never
-  // sits clean-less under a dirty-and-moved parent (see the invariant of moved_).
-  world_[id] = parent == kNoModel ? local_[id] : model_detail::compose(world(parent), local_[id]);
-  dirty_[id] = 0;
+  world_[id] = parent == kNoModel ? local_[id] : model_detail::compose(world_[parent], local_[id]);
   ++size_;
   return id;
 }
@@ -108,35 +105,31 @@ ModelId ModelHierarchy::add(std::shared_ptr<const Mesh> mesh, const Transform& l
 void ModelHierarchy::remove(ModelId id) {
   require(id, "remove");
   const ModelId p = parent_[id];
-  const Transform* parentWorld = p == kNoModel ? nullptr : &world(p);
-  // Re-parent the children, keeping their world transforms (cached values kept as they are).
+  const Transform* parentWorld = p == kNoModel ? nullptr : &world_[p];
+  // Re-parent the children, keeping their world transforms (the stored values, unchanged).
   while (firstChild_[id] != kNoModel) {
     const ModelId c = firstChild_[id];
-    const Transform w = world(c);
     unlink(c);
     link(c, p);
-    local_[c] = parentWorld ? model_detail::relative(*parentWorld, w) : w;
-    world_[c] = w;
-    dirty_[c] = 0;
+    local_[c] = parentWorld ? model_detail::relative(*parentWorld, world_[c]) : world_[c];
   }
   unlink(id);
   mesh_[id].reset();
   alive_[id] = 0;
   moved_[id] = 0;
-  dirty_[id] = 1;
   ++generation_[id];
   free_.push_back(id);
   --size_;
 }
 
-void ModelHierarchy::markMoved(ModelId root) {
+void ModelHierarchy::markMovedAndUpdateWorld(ModelId root) {
+  // Pre-order: a parent's world transform is recomputed before its children's.
   walkSubtree(
       root, [&](ModelId i) { return firstChild_[i]; }, [&](ModelId i) { return nextSibling_[i]; },
       [&](ModelId i) { return parent_[i]; },
       [&](ModelId i) {
-        // Already dirty and moved: by the invariant, so is the whole subtree.
-        if (i != root && dirty_[i] && moved_[i]) return false;
-        dirty_[i] = 1;
+        const ModelId p = parent_[i];
+        world_[i] = p == kNoModel ? local_[i] : model_detail::compose(world_[p], local_[i]);
         if (!moved_[i]) {
           moved_[i] = 1;
           movedList_.push_back(i);
@@ -149,7 +142,7 @@ void ModelHierarchy::setLocal(ModelId id, const Transform& local) {
   require(id, "setLocal");
   validate(local, "setLocal: local");
   local_[id] = {model_detail::canonicalRotation(local.rotation), local.translation};
-  markMoved(id);
+  markMovedAndUpdateWorld(id);
 }
 
 void ModelHierarchy::setParent(ModelId id, ModelId parent) {
@@ -161,13 +154,10 @@ void ModelHierarchy::setParent(ModelId id, ModelId parent) {
                          idText(id) + ": making it the parent would create a cycle");
   }
   if (parent_[id] == parent) return;
-  const Transform w = world(id);
-  const Transform* parentWorld = parent == kNoModel ? nullptr : &world(parent);
   unlink(id);
   link(id, parent);
-  local_[id] = parentWorld ? model_detail::relative(*parentWorld, w) : w;
-  world_[id] = w;
-  dirty_[id] = 0;
+  // The world transform (and the descendants') stays as stored; only the local one changes.
+  local_[id] = parent == kNoModel ? world_[id] : model_detail::relative(world_[parent], world_[id]);
 }
 
 const Transform& ModelHierarchy::local(ModelId id) const {
@@ -192,28 +182,12 @@ std::uint32_t ModelHierarchy::generation(ModelId id) const {
 
 const Transform& ModelHierarchy::world(ModelId id) const {
   require(id, "world");
-  if (!dirty_[id]) return world_[id];
-  // Collect the stale chain up to the first clean ancestor (clean ⇒ clean ancestors), then
-  // recompute it top-down.
-  chain_.clear();
-  for (ModelId a = id; a != kNoModel && dirty_[a]; a = parent_[a]) chain_.push_back(a);
-  for (std::size_t k = chain_.size(); k-- > 0;) {
-    const ModelId i = chain_[k];
-    const ModelId p = parent_[i];
-    world_[i] = p == kNoModel ? local_[i] : model_detail::compose(world_[p], local_[i]);
-    dirty_[i] = 0;
-  }
   return world_[id];
-}
-
-void ModelHierarchy::refreshWorld() {
-  for (ModelId id = 0; id < alive_.size(); ++id)
-    if (alive_[id] && dirty_[id]) world(id);
 }
 
 PlacedMesh ModelHierarchy::placed(ModelId id) const {
   require(id, "placed");
-  return {mesh_[id].get(), world(id)};
+  return {mesh_[id].get(), world_[id]};
 }
 
 std::vector<ModelId> ModelHierarchy::descendants(ModelId id) const {

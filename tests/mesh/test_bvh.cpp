@@ -1,17 +1,20 @@
 // Tests of src/mesh/bvh.cpp: structure invariants of the binned-SAH build (every primitive
 // once, leaf cap, fitted bounds, child-after-parent layout), the depth bound on adversarial
-// inputs, and refit after motion.
+// inputs, refit after motion, and the parallel build (oneTBB) equal to the serial one bit for bit.
 
 #include <crux/error.hpp>
 #include <crux/mesh/bvh.hpp>
 #include <crux/mesh/mesh.hpp>
 
 #include <gtest/gtest.h>
+#include <tbb/info.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -331,6 +334,86 @@ TEST(Bvh, BunnyBuildIsFastAndCompact) {
   if (sizeof(Real) == 4) {
     EXPECT_LE(double(mesh.memoryBytes()) / prims.size(), 64.0);
   }
+}
+
+// ---- parallel build ---------------------------------------------------------------------------
+
+/// Builds in a task arena of `threads` threads (1: the serial build; more: the parallel one).
+Bvh buildWithThreads(const std::vector<Aabb>& prims, const BvhBuildOptions& options, int threads) {
+  tbb::task_arena arena(threads);
+  Bvh bvh;
+  arena.execute([&] { bvh = buildBvh(prims, options); });
+  return bvh;
+}
+
+std::string str(const Aabb& b) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "[(%.17g %.17g %.17g) (%.17g %.17g %.17g)]", double(b.min.x()), double(b.min.y()),
+                double(b.min.z()), double(b.max.x()), double(b.max.y()), double(b.max.z()));
+  return buf;
+}
+
+/// Asserts two BVHs are identical bit for bit (node bounds compared as bytes: -0 != +0).
+void expectIdentical(const Bvh& serial, const Bvh& parallel) {
+  ASSERT_EQ(serial.nodes.size(), parallel.nodes.size());
+  ASSERT_EQ(serial.primIndices, parallel.primIndices);
+  for (std::size_t i = 0; i < serial.nodes.size(); ++i) {
+    const BvhNode &a = serial.nodes[i], &b = parallel.nodes[i];
+    ASSERT_EQ(a.first, b.first) << "node " << i;
+    ASSERT_EQ(a.count, b.count) << "node " << i;
+    const Real sa[6] = {a.bounds.min.x(), a.bounds.min.y(), a.bounds.min.z(),
+                        a.bounds.max.x(), a.bounds.max.y(), a.bounds.max.z()};
+    const Real sb[6] = {b.bounds.min.x(), b.bounds.min.y(), b.bounds.min.z(),
+                        b.bounds.max.x(), b.bounds.max.y(), b.bounds.max.z()};
+    ASSERT_EQ(std::memcmp(sa, sb, sizeof sa), 0) << "node " << i << ": " << str(a.bounds) << " vs " << str(b.bounds);
+  }
+}
+
+TEST(BvhParallel, ParallelBuildEqualsSerialBitForBit) {
+  std::mt19937_64 rng(0xB1D);
+  struct Case {
+    const char* name;
+    std::vector<Aabb> prims;
+    BvhBuildOptions options;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"random boxes", randomBoxes(150000, rng), {}});
+  // Signed zeros: min/max of -0 and +0 depend on operand order, the parallel binning merges in
+  // another order than the serial loop.
+  std::vector<Aabb> zeros = randomBoxes(60000, rng);
+  for (std::size_t i = 0; i < zeros.size(); i += 3) zeros[i].min.x() = i % 2 ? Real(-0.0) : Real(0.0);
+  for (std::size_t i = 0; i < zeros.size(); i += 3) zeros[i].max.x() = std::max(zeros[i].max.x(), Real(0));
+  cases.push_back({"signed zeros", zeros, {}});
+  cases.push_back({"identical boxes", std::vector<Aabb>(50000, Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}), {}});
+  BvhBuildOptions twoBins;
+  twoBins.bins = 2;
+  cases.push_back({"exponential clusters, 2 bins", exponentialClusters(60000, 120), twoBins});
+  BvhBuildOptions bigLeaves;
+  bigLeaves.maxLeafSize = 5000;  // leaves above the parallel subtree cut-off
+  bigLeaves.traversalCost = 1e6;
+  cases.push_back({"leaves larger than the parallel cut-off", randomBoxes(40000, rng), bigLeaves});
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const Bvh serial = buildWithThreads(c.prims, c.options, 1);
+    // 2 threads, and every core when there are more (results must not depend on the count).
+    for (const int threads : {2, std::max(2, tbb::info::default_concurrency())}) {
+      SCOPED_TRACE("threads " + std::to_string(threads));
+      const Bvh parallel = buildWithThreads(c.prims, c.options, threads);
+      expectIdentical(serial, parallel);
+    }
+    checkBvh(serial, c.prims, c.options);
+  }
+}
+
+TEST(BvhParallel, BunnyParallelBuildEqualsSerial) {
+  const std::string path = std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off";
+  std::FILE* f = std::fopen(path.c_str(), "r");
+  if (!f) GTEST_SKIP() << "missing " << path << " (run scripts/setup)";
+  std::fclose(f);
+  const Mesh mesh = loadMesh(path);
+  std::vector<Aabb> prims;
+  for (std::uint32_t i = 0; i < mesh.triangleCount(); ++i) prims.push_back(bounds(mesh.triangle(i)));
+  expectIdentical(buildWithThreads(prims, {}, 1), buildWithThreads(prims, {}, 3));
 }
 
 }  // namespace

@@ -2,8 +2,8 @@
 // src/model/rigid.cpp (validate(Transform), quatFromEulerDegrees): world = parent ∘ local
 // against an independent double-precision composition, cycle rejection, re-parenting on remove
 // and setParent keeping world poses, descendants at every level, a 10,000-deep chain, the
-// moved set, id reuse, input validation, and a long random operation sequence against a
-// reference forest.
+// moved set, id reuse, input validation, a long random operation sequence against a reference
+// forest, and world transforms kept current by setLocal itself (eager; reads never write).
 
 #include <crux/model/hierarchy.hpp>
 
@@ -159,6 +159,35 @@ TEST(Hierarchy, WorldCacheFollowsEveryAncestorMove) {
 
 // ---------------------------------------------------------------------------------------------
 // Parents, cycles, removal.
+
+TEST(Hierarchy, SetLocalUpdatesEveryDescendantEagerly) {
+  // World transforms are recomputed by setLocal itself (const reads never write, so they are
+  // thread-safe). After random moves in a random forest, every world transform must match the
+  // double-precision composition of the current locals, and a copy taken before reading must
+  // hold the very same values (nothing was left to refresh).
+  std::mt19937_64 rng(0xEA6E);
+  ModelHierarchy h;
+  std::vector<ModelId> ids;
+  for (int i = 0; i < 300; ++i) {
+    std::uniform_int_distribution<int> pick(-1, int(ids.size()) - 1);
+    const int p = ids.empty() ? -1 : pick(rng);
+    ids.push_back(h.add(triangleMesh(), randomTransform(rng, 3), p < 0 ? kNoModel : ids[std::size_t(p)]));
+  }
+  std::uniform_int_distribution<std::size_t> any(0, ids.size() - 1);
+  for (int round = 0; round < 20; ++round) {
+    for (int k = 0; k < 10; ++k) h.setLocal(ids[any(rng)], randomTransform(rng, 3));
+    const ModelHierarchy before = h;
+    for (const ModelId id : ids) {
+      int depth = 0;
+      for (ModelId a = h.parent(id); a != kNoModel; a = h.parent(a)) ++depth;
+      const Transform &w = h.world(id), &b = before.world(id);
+      ASSERT_LE(mismatch(w, referenceWorld(h, id)), chainTolerance(depth + 1, 3 * (depth + 1)))
+          << "round " << round << " model " << id << " depth " << depth << " " << str(w);
+      ASSERT_EQ(w.translation, b.translation) << "round " << round << " model " << id;
+      ASSERT_EQ(w.rotation.coeffs(), b.rotation.coeffs()) << "round " << round << " model " << id;
+    }
+  }
+}
 
 TEST(Hierarchy, SetParentRejectsCyclesThroughSelfChildAndGrandchild) {
   ModelHierarchy h;

@@ -2,18 +2,20 @@
 /// @file hierarchy.hpp  A forest of models: shared meshes, local transforms, parents.
 ///
 /// Flat arrays indexed by ModelId with a free list; children as intrusive doubly linked sibling
-/// lists (first child / next / previous sibling). World transforms are cached and invalidated
-/// when a model or any ancestor moves (world = parent_world ∘ local). Setting a parent that
-/// would make a cycle throws InvalidInput; removing a model re-parents its children to its
-/// parent keeping their world pose. Nothing recurses (every walk is an explicit loop), so
+/// lists (first child / next / previous sibling). World transforms are kept up to date eagerly:
+/// setLocal recomputes the world transforms of the model and its descendants (world =
+/// parent_world ∘ local, pre-order) before it returns, so reading never writes. Setting a
+/// parent that would make a cycle throws InvalidInput; removing a model re-parents its children
+/// to its parent keeping their world pose. Nothing recurses (every walk is an explicit loop), so
 /// chains 10,000 deep are fine.
 ///
 /// Composition keeps axis-aligned rotations exact (see model_query.hpp): a parent rotated by a
 /// quarter turn maps its children's integer translations to integers, and chains of such
 /// rotations do not drift.
 ///
-/// Const accessors may refresh the world cache (it is `mutable`): a ModelHierarchy is not safe
-/// to read from several threads at once unless refreshWorld() was called after the last change.
+/// Threads (docs/threads.md): every const member only reads (no `mutable` state), so any number
+/// of threads may call const members at once. Mutation (add, remove, setLocal, setParent,
+/// takeMoved, refreshWorld) is exclusive: no other thread may use the hierarchy meanwhile.
 
 #include <crux/model/model_query.hpp>
 
@@ -40,9 +42,9 @@ class ModelHierarchy {
   /// cached world transforms are kept as they are; their local transforms are recomputed).
   /// Throws InvalidInput for an unknown id.
   void remove(ModelId id);
-  /// Sets the local transform (relative to the parent); the model and all its descendants
-  /// are reported by the next takeMoved. Throws InvalidInput for an unknown id or an invalid
-  /// transform.
+  /// Sets the local transform (relative to the parent) and recomputes the world transforms of
+  /// the model and all its descendants (O(subtree)); they are reported by the next takeMoved.
+  /// Throws InvalidInput for an unknown id or an invalid transform.
   void setLocal(ModelId id, const Transform& local);
   /// Re-parents a model keeping its world pose (its local transform is recomputed; its cached
   /// world transform and those of its descendants stay as they were, so nothing is reported
@@ -61,8 +63,8 @@ class ModelHierarchy {
   /// How many times `id` has been freed: (id, generation) names one model for its lifetime,
   /// so holders of ids can detect reuse.
   std::uint32_t generation(ModelId id) const;
-  /// World transform (cached; recomputed along the stale part of the ancestor chain, without
-  /// recursion). The reference stays valid until the next add().
+  /// World transform (kept up to date by every mutation; reading it never writes). The
+  /// reference stays valid until the next add().
   const Transform& world(ModelId id) const;
   /// The model's mesh placed in the world.
   PlacedMesh placed(ModelId id) const;
@@ -78,35 +80,31 @@ class ModelHierarchy {
   /// ancestor), deduplicated, ascending; clears the set. Removed models are not reported. The
   /// scene uses it to update its broad phase.
   std::vector<ModelId> takeMoved();
-  /// Recomputes every stale world transform (O(models), parents before children), after which
-  /// const accessors do not write until the next change.
-  void refreshWorld();
+  /// Kept for callers that prepared a hierarchy for concurrent reads: world transforms are now
+  /// always current, so there is nothing to do (O(1)); const members are thread-safe without it.
+  void refreshWorld() {}
 
  private:
   void require(ModelId id, const char* what) const;
   void link(ModelId id, ModelId parent);
   void unlink(ModelId id);
-  void markMoved(ModelId root);
+  void markMovedAndUpdateWorld(ModelId root);
   bool isAncestorOrSelf(ModelId ancestor, ModelId id) const;
 
   // One slot per id; slots of removed models are on free_ (alive_ == 0).
   std::vector<std::shared_ptr<const Mesh>> mesh_;
   std::vector<Transform> local_;
-  mutable std::vector<Transform> world_;  ///< valid where dirty_ == 0
+  std::vector<Transform> world_;  ///< current world transform of every live model
   std::vector<ModelId> parent_;
   std::vector<ModelId> firstChild_;
   std::vector<ModelId> nextSibling_;
   std::vector<ModelId> prevSibling_;
-  /// world_ is stale. Invariant: a clean model has clean ancestors.
-  mutable std::vector<std::uint8_t> dirty_;
-  /// Reported by the next takeMoved. Invariant: dirty and moved ⇒ every descendant dirty and
-  /// moved (lets markMoved skip subtrees already marked).
+  /// Reported by the next takeMoved.
   std::vector<std::uint8_t> moved_;
   std::vector<std::uint8_t> alive_;
   std::vector<std::uint32_t> generation_;
   std::vector<ModelId> free_;       ///< freed ids, most recent last
   std::vector<ModelId> movedList_;  ///< ids whose moved_ flag was set (may repeat or be stale)
-  mutable std::vector<ModelId> chain_;  ///< scratch for world(): the stale ancestor chain
   std::size_t size_ = 0;
 };
 

@@ -9,6 +9,14 @@
 /// the reference the tests compare with, which also recomputes each model's bounds from
 /// scratch); both give identical answers.
 ///
+/// Threads (docs/threads.md): const members (raycast, query, placed, bounds, models, ...) only
+/// read — the hierarchy keeps world transforms current on every mutation and the broad phases'
+/// const queries use stack storage — so any number of threads may run them at once, with no
+/// preparation call (scene_batch.hpp runs batches of them on all cores). Mutations (add, remove,
+/// setTransform(s), setParent) and the non-const pair queries (overlappingPairs, boundsPairs:
+/// the broad phase updates its pair cache) are exclusive: nothing else may use the scene
+/// meanwhile.
+///
 /// Errata fixed: the book's scene raycast took t = -1 ("no hit") as the closest hit; its region
 /// queries tested bounding boxes only without saying so. Here rays report the closest real hit
 /// and region queries test triangles unless RegionTest::Bounds is asked for.
