@@ -7,6 +7,7 @@
 #include <crux/geometry/shapes.hpp>
 
 #include <array>
+#include <optional>
 #include <variant>
 
 namespace crux::exact::detail {
@@ -30,10 +31,9 @@ inline Vector toVector(const Vec3& v) { return Vector(double(v.x()), double(v.y(
 /// A (possibly degenerate) triangle as the exact object it is.
 using Simplex = std::variant<Point, Segment3, Triangle3>;
 
-/// Classifies a triangle exactly: a proper triangle, the segment its collinear corners span,
-/// or a point.
-inline Simplex toSimplex(const Triangle& t) {
-  const Point a = toPoint(t.a), b = toPoint(t.b), c = toPoint(t.c);
+/// The point / segment / triangle three exact points span: a proper triangle, the longest
+/// side of collinear corners, or the point they coincide in.
+inline Simplex simplexOf(const Point& a, const Point& b, const Point& c) {
   if (!CGAL::collinear(a, b, c)) return Triangle3(a, b, c);
   if (a == b && b == c) return a;
   const FT ab = CGAL::squared_distance(a, b), bc = CGAL::squared_distance(b, c),
@@ -42,6 +42,31 @@ inline Simplex toSimplex(const Triangle& t) {
   if (bc >= ca) return Segment3(b, c);
   return Segment3(c, a);
 }
+
+/// Classifies a triangle exactly: a proper triangle, the segment its collinear corners span,
+/// or a point.
+inline Simplex toSimplex(const Triangle& t) { return simplexOf(toPoint(t.a), toPoint(t.b), toPoint(t.c)); }
+
+// ---- the exact predicates on simplices with exact corners ------------------------------------
+// The public functions of exact.hpp are these applied to toSimplex(triangle); the exact world
+// applies them to mesh triangles placed by exact (rational) transforms, whose corners are in
+// general not floating-point numbers.
+
+/// Does the simplex meet the closed ball / box / parallelepiped / plane / other simplex?
+bool overlapsSimplex(const Simplex& s, const Sphere& sphere);  // exact_triangle.cpp
+bool overlapsSimplex(const Simplex& s, const Aabb& box);
+bool overlapsSimplex(const Simplex& s, const Obb& box);
+bool overlapsSimplex(const Simplex& s, const Plane& plane);
+bool overlapsSimplex(const Simplex& a, const Simplex& b);
+/// Does the closed box meet the OBB's parallelepiped (exact_triangle.cpp)?
+bool overlapsCuboid(const Cuboid& box, const Obb& obb);
+/// Does the segment (a point when start == end) meet the simplex? (exact_raycast.cpp)
+bool intersectsSimplex(const Segment& seg, const Simplex& s);
+/// First hit of the ray on the simplex: the exact ray parameter s (point = o + s·dir), or
+/// nothing (exact_raycast.cpp).
+std::optional<FT> rayParamSimplex(const Ray& r, const Simplex& s);
+/// World distance s·|dir| of a ray parameter, in double within a few ulps (exact_raycast.cpp).
+double rayDistance(const Ray& r, const FT& s);
 
 /// The 8 corners of an OBB computed exactly: corner k has s_i = ((k >> i) & 1) ? +1 : -1.
 inline std::array<Point, 8> corners(const Obb& b) {

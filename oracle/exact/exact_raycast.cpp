@@ -97,17 +97,6 @@ std::variant<Point, Segment3> toSegmentOrPoint(const Segment& s) {
   return Segment3(a, b);
 }
 
-/// The point / segment / triangle spanned by three exact points.
-Simplex simplexOf(const Point& a, const Point& b, const Point& c) {
-  if (!CGAL::collinear(a, b, c)) return Triangle3(a, b, c);
-  if (a == b && b == c) return a;
-  const FT ab = CGAL::squared_distance(a, b), bc = CGAL::squared_distance(b, c),
-           ca = CGAL::squared_distance(c, a);
-  if (ab >= bc && ab >= ca) return Segment3(a, b);
-  if (bc >= ca) return Segment3(b, c);
-  return Segment3(c, a);
-}
-
 /// Does the segment-or-point meet the point / segment / triangle?
 bool meets(const std::variant<Point, Segment3>& q, const Simplex& s) {
   if (const Point* p = std::get_if<Point>(&q)) {
@@ -174,6 +163,16 @@ std::optional<double> worldDistance(const ExactRay& r, const std::optional<FT>& 
 
 }  // namespace
 
+namespace detail {
+
+std::optional<FT> rayParamSimplex(const Ray& r, const Simplex& s) { return firstParamSimplex(toExactRay(r), s); }
+
+double rayDistance(const Ray& r, const FT& s) { return toDouble(s) * std::sqrt(toDouble(toExactRay(r).dd)); }
+
+bool intersectsSimplex(const Segment& seg, const Simplex& s) { return meets(toSegmentOrPoint(seg), s); }
+
+}  // namespace detail
+
 std::optional<double> raycast(const Ray& r, const Triangle& t) {
   const ExactRay er = toExactRay(r);
   return worldDistance(er, firstParamSimplex(er, toSimplex(t)));
@@ -219,7 +218,7 @@ std::optional<double> raycast(const Ray& r, const Plane& p) {
   return worldDistance(er, firstParamWith(er, plane));
 }
 
-bool intersects(const Segment& s, const Triangle& t) { return meets(toSegmentOrPoint(s), toSimplex(t)); }
+bool intersects(const Segment& s, const Triangle& t) { return intersectsSimplex(s, toSimplex(t)); }
 
 bool intersects(const Segment& s, const Sphere& sp) {
   const Point c = toPoint(sp.center);

@@ -62,27 +62,26 @@ Parallelepiped decompose(const Obb& b) {
 
 }  // namespace
 
-bool overlaps(const Triangle& a, const Triangle& b) {
-  return std::visit([](const auto& x, const auto& y) { return CGAL::do_intersect(x, y); },
-                    toSimplex(a), toSimplex(b));
+namespace detail {
+
+bool overlapsSimplex(const Simplex& a, const Simplex& b) {
+  return std::visit([](const auto& x, const auto& y) { return CGAL::do_intersect(x, y); }, a, b);
 }
 
-bool overlaps(const Triangle& t, const Sphere& s) {
-  const Point center = toPoint(s.center);
-  const FT r(double(s.radius));
-  return std::visit([&](const auto& x) { return CGAL::squared_distance(x, center) <= r * r; },
-                    toSimplex(t));
+bool overlapsSimplex(const Simplex& s, const Sphere& sphere) {
+  const Point center = toPoint(sphere.center);
+  const FT r(double(sphere.radius));
+  return std::visit([&](const auto& x) { return CGAL::squared_distance(x, center) <= r * r; }, s);
 }
 
-bool overlaps(const Triangle& t, const Aabb& b) {
+bool overlapsSimplex(const Simplex& s, const Aabb& b) {
   // Iso_cuboid_3 accepts zero extents; its tests with points, segments and triangles are
   // separating-axis / slab tests that stay exact for flat boxes (cross-checked in the tests
   // against the OBB decomposition below).
-  return simplexIntersects(toSimplex(t), Cuboid(toPoint(b.min), toPoint(b.max)));
+  return simplexIntersects(s, Cuboid(toPoint(b.min), toPoint(b.max)));
 }
 
-bool overlaps(const Triangle& t, const Obb& b) {
-  const Simplex s = toSimplex(t);
+bool overlapsSimplex(const Simplex& s, const Obb& b) {
   const Parallelepiped box = decompose(b);
   for (int i = 0; i < box.tetraCount; ++i) {
     if (simplexIntersects(s, box.tetras[i])) return true;
@@ -95,10 +94,32 @@ bool overlaps(const Triangle& t, const Obb& b) {
   return false;
 }
 
-bool overlaps(const Triangle& t, const Plane& p) {
+bool overlapsSimplex(const Simplex& s, const Plane& p) {
   const Plane3 plane(FT(double(p.normal.x())), FT(double(p.normal.y())), FT(double(p.normal.z())),
                      -FT(double(p.d)));
-  return simplexIntersects(toSimplex(t), plane);
+  return simplexIntersects(s, plane);
 }
+
+bool overlapsCuboid(const Cuboid& c, const Obb& b) {
+  // The same decomposition of the parallelepiped; CGAL decides each piece against the box.
+  const Parallelepiped box = decompose(b);
+  for (int i = 0; i < box.tetraCount; ++i) {
+    if (CGAL::do_intersect(c, box.tetras[i])) return true;
+  }
+  for (int i = 0; i < box.triangleCount; ++i) {
+    if (CGAL::do_intersect(c, box.triangles[i])) return true;
+  }
+  if (const auto* seg = std::get_if<Segment3>(&box.lower)) return CGAL::do_intersect(c, *seg);
+  if (const auto* pt = std::get_if<Point>(&box.lower)) return CGAL::do_intersect(c, *pt);
+  return false;
+}
+
+}  // namespace detail
+
+bool overlaps(const Triangle& a, const Triangle& b) { return overlapsSimplex(toSimplex(a), toSimplex(b)); }
+bool overlaps(const Triangle& t, const Sphere& s) { return overlapsSimplex(toSimplex(t), s); }
+bool overlaps(const Triangle& t, const Aabb& b) { return overlapsSimplex(toSimplex(t), b); }
+bool overlaps(const Triangle& t, const Obb& b) { return overlapsSimplex(toSimplex(t), b); }
+bool overlaps(const Triangle& t, const Plane& p) { return overlapsSimplex(toSimplex(t), p); }
 
 }  // namespace crux::exact

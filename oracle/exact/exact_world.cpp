@@ -5,12 +5,19 @@
 
 #include "exact/exact.hpp"
 #include "exact/exact_kernel.hpp"
+#include "exact/exact_rigid.hpp"
+
+#include "common/model_table.hpp"
 
 #include <CGAL/Bbox_3.h>
 #include <CGAL/intersections.h>
 #include <CGAL/version_macros.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
+#include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -19,58 +26,27 @@ namespace {
 
 using namespace detail;
 
-/// The point / segment / triangle three exact points span (cf. detail::toSimplex, which takes
-/// floating-point corners).
-Simplex simplexOf(const Point& a, const Point& b, const Point& c) {
-  if (!CGAL::collinear(a, b, c)) return Triangle3(a, b, c);
-  if (a == b && b == c) return a;
-  const FT ab = CGAL::squared_distance(a, b), bc = CGAL::squared_distance(b, c),
-           ca = CGAL::squared_distance(c, a);
-  if (ab >= bc && ab >= ca) return Segment3(a, b);
-  if (bc >= ca) return Segment3(b, c);
-  return Segment3(c, a);
-}
-
-/// A rigid transform with exact coefficients: x -> R x + t, R the rotation matrix of q/|q|,
-/// (w²+x²-y²-z², 2(xy-wz), ...)/|q|², which is exactly orthogonal for any non-zero q.
-struct ExactTransform {
-  FT r[3][3];
-  FT t[3];
-
-  explicit ExactTransform(const Transform& tf) {
-    const FT w(double(tf.rotation.w())), x(double(tf.rotation.x())), y(double(tf.rotation.y())),
-        z(double(tf.rotation.z()));
-    const FT n = w * w + x * x + y * y + z * z;
-    r[0][0] = (w * w + x * x - y * y - z * z) / n;
-    r[0][1] = 2 * (x * y - w * z) / n;
-    r[0][2] = 2 * (x * z + w * y) / n;
-    r[1][0] = 2 * (x * y + w * z) / n;
-    r[1][1] = (w * w - x * x + y * y - z * z) / n;
-    r[1][2] = 2 * (y * z - w * x) / n;
-    r[2][0] = 2 * (x * z - w * y) / n;
-    r[2][1] = 2 * (y * z + w * x) / n;
-    r[2][2] = (w * w - x * x - y * y + z * z) / n;
-    for (int i = 0; i < 3; ++i) t[i] = FT(double(tf.translation[i]));
-  }
-
-  Point apply(const Vec3& v) const {
-    const FT p[3] = {FT(double(v.x())), FT(double(v.y())), FT(double(v.z()))};
-    FT out[3];
-    for (int i = 0; i < 3; ++i) out[i] = r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i];
-    return Point(out[0], out[1], out[2]);
-  }
-};
-
 /// A mesh's triangles placed in the world exactly, with conservative boxes for the filter.
 struct PlacedSimplices {
   std::vector<Simplex> simplices;
   std::vector<CGAL::Bbox_3> boxes;
 
-  PlacedSimplices(const Mesh& mesh, const Transform& tf) {
-    const ExactTransform xf(tf);
+  CGAL::Bbox_3 bbox;  ///< encloses every vertex (interval boxes)
+  Cuboid bounds;      ///< the exact axis-aligned box of every vertex
+
+  PlacedSimplices(const Mesh& mesh, const ExactRigid& xf) {
     std::vector<Point> points;
     points.reserve(mesh.vertexCount());
     for (const Vec3& v : mesh.vertices()) points.push_back(xf.apply(v));
+    FT lo[3] = {points[0].x(), points[0].y(), points[0].z()}, hi[3] = {lo[0], lo[1], lo[2]};
+    for (const Point& p : points) {
+      bbox += p.bbox();
+      for (int i = 0; i < 3; ++i) {
+        if (p[i] < lo[i]) lo[i] = p[i];
+        if (hi[i] < p[i]) hi[i] = p[i];
+      }
+    }
+    bounds = Cuboid(Point(lo[0], lo[1], lo[2]), Point(hi[0], hi[1], hi[2]), 0);
     simplices.reserve(mesh.triangleCount());
     boxes.reserve(mesh.triangleCount());
     for (const TriangleIndices& t : mesh.triangles()) {
@@ -81,31 +57,59 @@ struct PlacedSimplices {
   }
 };
 
-/// Exact back-face test of RayQueryOptions::cullBackFaces: ((b-a)×(c-a))·dir > 0.
-bool backFacing(const Triangle& t, const Vec3& dir) {
-  const Point a = toPoint(t.a);
-  return CGAL::cross_product(toPoint(t.b) - a, toPoint(t.c) - a) * toVector(dir) > 0;
+/// The face normal (b-a)×(c-a) of a simplex's triangle; the null vector for a degenerate one.
+Vector faceNormal(const Simplex& s) {
+  const Triangle3* t = std::get_if<Triangle3>(&s);
+  if (!t) return CGAL::NULL_VECTOR;
+  return CGAL::cross_product((*t)[1] - (*t)[0], (*t)[2] - (*t)[0]);
 }
 
-/// The hit at world distance t on triangle `tri`: point o + t·d/|d| and the normal facing the
-/// origin (in-plane ray: the plane normal; degenerate triangle: -d/|d|), evaluated in double.
-WorldRayHit makeHit(const Ray& r, const Triangle& tri, double t, std::uint32_t index) {
+/// Exact back-face test of RayQueryOptions::cullBackFaces: normal·dir > 0 (never for a
+/// degenerate triangle, whose normal is null).
+bool backFacing(const Vector& normal, const Vec3& dir) { return normal * toVector(dir) > 0; }
+
+/// The hit at world distance t on a triangle with face normal n: point o + t·d/|d| and the
+/// unit normal facing the origin (in-plane ray: the plane normal; degenerate triangle:
+/// -d/|d|), evaluated in double.
+WorldRayHit makeHit(const Ray& r, const Vector& n, double t, std::uint32_t index) {
   const Vec3d o = r.origin.cast<double>(), d = r.dir.cast<double>();
   const Vec3d u = d / d.norm();
   WorldRayHit hit;
   hit.t = t;
   hit.point = o + t * u;
   hit.triangle = index;
-  const Point a = toPoint(tri.a);
-  const Vector n = CGAL::cross_product(toPoint(tri.b) - a, toPoint(tri.c) - a);
   if (n == CGAL::NULL_VECTOR) {
     hit.normal = -u;
     return hit;
   }
   const Vec3d nd(CGAL::to_double(n.x()), CGAL::to_double(n.y()), CGAL::to_double(n.z()));
   hit.normal = nd / nd.norm();
-  if (n * toVector(r.dir) > 0) hit.normal = -hit.normal;
+  if (backFacing(n, r.dir)) hit.normal = -hit.normal;
   return hit;
+}
+
+/// The face normal of a crux triangle, exactly.
+Vector faceNormal(const Triangle& t) {
+  const Point a = toPoint(t.a);
+  return CGAL::cross_product(toPoint(t.b) - a, toPoint(t.c) - a);
+}
+
+/// A conservative double box around a shape, for filtering triangle tests.
+CGAL::Bbox_3 boxOf(const Sphere& s) {
+  const Point c = toPoint(s.center);
+  const double r = double(s.radius);
+  const CGAL::Bbox_3 b = c.bbox();
+  // Outward rounding: one ulp of slack per bound is plenty (the filter only has to be safe).
+  const auto down = [](double x) { return std::nextafter(x, -HUGE_VAL); };
+  const auto up = [](double x) { return std::nextafter(x, HUGE_VAL); };
+  return CGAL::Bbox_3(down(b.xmin() - r), down(b.ymin() - r), down(b.zmin() - r), up(b.xmax() + r),
+                      up(b.ymax() + r), up(b.zmax() + r));
+}
+CGAL::Bbox_3 boxOf(const Aabb& b) { return toPoint(b.min).bbox() + toPoint(b.max).bbox(); }
+CGAL::Bbox_3 boxOf(const Obb& b) {
+  CGAL::Bbox_3 out;
+  for (const Point& c : corners(b)) out += c.bbox();  // interval boxes of the exact corners
+  return out;
 }
 
 class ExactWorld final : public CollisionWorld {
@@ -114,7 +118,7 @@ class ExactWorld final : public CollisionWorld {
   std::string description() const override {
     return "CGAL " CGAL_VERSION_STR " Epeck (exact rationals), brute force over triangles";
   }
-  bool supports(WorldOp op) const override { return op <= WorldOp::MeshMesh; }
+  bool supports(WorldOp op) const override { return op <= WorldOp::ScenePairs; }
   WorldTolerance tolerance() const override { return kExactTolerance; }
 
  protected:
@@ -130,7 +134,7 @@ class ExactWorld final : public CollisionWorld {
   std::optional<WorldRayHit> doRaycast(const Ray& r, const Triangle& t) override {
     const std::optional<double> d = exact::raycast(r, t);
     if (!d) return std::nullopt;
-    return makeHit(r, t, *d, 0);
+    return makeHit(r, faceNormal(t), *d, 0);
   }
   bool doIntersects(const Segment& s, const Triangle& t) override { return exact::intersects(s, t); }
 
@@ -138,9 +142,10 @@ class ExactWorld final : public CollisionWorld {
     const Mesh& mesh = this->mesh(m);
     for (std::uint32_t i = 0; i < mesh.triangleCount() && !hits.done(); ++i) {
       const Triangle tri = mesh.triangle(i);
-      if (options.cullBackFaces && backFacing(tri, r.dir)) continue;
+      const Vector n = faceNormal(tri);
+      if (options.cullBackFaces && backFacing(n, r.dir)) continue;
       const std::optional<double> t = exact::raycast(r, tri);
-      if (t && *t <= double(options.maxDistance)) hits.add(makeHit(r, tri, *t, i));
+      if (t && *t <= double(options.maxDistance)) hits.add(makeHit(r, n, *t, i));
     }
   }
   bool doIntersects(MeshHandle m, const Segment& s) override {
@@ -162,19 +167,207 @@ class ExactWorld final : public CollisionWorld {
     return anyTriangle(m, [&](const Triangle& t) { return exact::overlaps(t, q); });
   }
   bool doOverlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) override {
-    const PlacedSimplices pa(mesh(a), ta), pb(mesh(b), tb);
+    const PlacedSimplices pa(mesh(a), ExactRigid(ta, ExactRigid::Rotation::AsGiven)),
+        pb(mesh(b), ExactRigid(tb, ExactRigid::Rotation::AsGiven));
     for (std::size_t i = 0; i < pa.simplices.size(); ++i) {
       for (std::size_t j = 0; j < pb.simplices.size(); ++j) {
         if (!CGAL::do_overlap(pa.boxes[i], pb.boxes[j])) continue;
-        const bool hit = std::visit([](const auto& x, const auto& y) { return CGAL::do_intersect(x, y); },
-                                    pa.simplices[i], pb.simplices[j]);
-        if (hit) return true;
+        if (overlapsSimplex(pa.simplices[i], pb.simplices[j])) return true;
       }
     }
     return false;
   }
 
+  // ---- models ------------------------------------------------------------------------------
+
+  ModelHandle doAddModel(const std::string& name, MeshHandle mesh, const Transform& local,
+                         std::optional<ModelHandle> parent) override {
+    const ModelHandle h = models_.add(name, mesh, sharedMesh(mesh), local, parent);
+    forget(h);  // handles are reused after removal
+    return h;
+  }
+  void doRemoveModel(ModelHandle m) override {
+    const std::vector<ModelHandle> below = models_.descendants(m);  // validates m
+    models_.remove(m);
+    forget(m);
+    // The children's locals were recomputed (in Real) to keep their world pose: recompose.
+    for (const ModelHandle d : below) forget(d);
+  }
+  void doSetTransform(ModelHandle m, const Transform& local) override {
+    for (const ModelHandle moved : models_.setLocal(m, local)) forget(moved);
+  }
+  void doSetParent(ModelHandle m, std::optional<ModelHandle> parent) override {
+    const std::vector<ModelHandle> below = models_.descendants(m);  // validates m
+    models_.setParent(m, parent);
+    forget(m);
+    for (const ModelHandle d : below) forget(d);
+  }
+  std::optional<ModelHandle> doFindModel(std::string_view name) override { return models_.find(name); }
+  std::vector<std::string> doDescendants(ModelHandle m) override { return models_.descendantNames(m); }
+
+  void doRaycast(ModelHandle m, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
+    raycastModel(m, r, hits, options);
+  }
+  bool doIntersects(ModelHandle m, const Segment& s) override {
+    const CGAL::Bbox_3 box = toPoint(s.start).bbox() + toPoint(s.end).bbox();
+    return anySimplex(m, &box, [&](const Simplex& x) { return intersectsSimplex(s, x); });
+  }
+  bool doOverlaps(ModelHandle m, const Sphere& s) override { return touches(m, s); }
+  bool doOverlaps(ModelHandle m, const Aabb& b) override { return touches(m, b); }
+  bool doOverlaps(ModelHandle m, const Obb& b) override { return touches(m, b); }
+  bool doOverlaps(ModelHandle m, const Plane& p) override {
+    return anySimplex(m, nullptr, [&](const Simplex& x) { return overlapsSimplex(x, p); });
+  }
+  bool doOverlaps(ModelHandle m, const Triangle& t) override {
+    const Simplex q = toSimplex(t);
+    const CGAL::Bbox_3 box = toPoint(t.a).bbox() + toPoint(t.b).bbox() + toPoint(t.c).bbox();
+    return anySimplex(m, &box, [&](const Simplex& x) { return overlapsSimplex(x, q); });
+  }
+
+  // ---- the scene ---------------------------------------------------------------------------
+
+  void doSceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
+    for (const ModelHandle m : models_.models()) {
+      if (hits.done()) break;
+      raycastModel(m, r, hits, options);
+    }
+  }
+  std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly) override {
+    std::vector<std::string> names;
+    for (const ModelHandle m : models_.models()) {
+      const bool hit = std::visit(
+          [&](const auto& s) { return boundsOnly ? boundsTouch(placed(m).bounds, s) : touches(m, s); }, shape);
+      if (hit) names.push_back(models_.name(m));
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  std::vector<std::pair<std::string, std::string>> doScenePairs() override {
+    const std::vector<ModelHandle> all = models_.models();
+    std::vector<const PlacedSimplices*> placedAll;
+    for (const ModelHandle m : all) placedAll.push_back(&placed(m));
+    std::vector<std::pair<std::string, std::string>> pairs;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      for (std::size_t j = i + 1; j < all.size(); ++j) {
+        const PlacedSimplices &a = *placedAll[i], &b = *placedAll[j];
+        if (!CGAL::do_overlap(a.bbox, b.bbox) || !CGAL::do_intersect(a.bounds, b.bounds)) continue;
+        if (!surfacesTouch(a, b)) continue;
+        std::string na = models_.name(all[i]), nb = models_.name(all[j]);
+        if (nb < na) std::swap(na, nb);
+        pairs.emplace_back(std::move(na), std::move(nb));
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  }
+
  private:
+  /// Per model: its exact world transform and its mesh placed by it, built on demand and
+  /// forgotten when the model or an ancestor moves.
+  struct ModelCache {
+    std::unique_ptr<ExactRigid> world;
+    std::unique_ptr<PlacedSimplices> placed;
+  };
+
+  ModelCache& slot(ModelHandle m) {
+    if (m.index >= cache_.size()) cache_.resize(std::size_t(m.index) + 1);
+    return cache_[m.index];
+  }
+  void forget(ModelHandle m) {
+    if (m.index < cache_.size()) cache_[m.index] = ModelCache{};
+  }
+
+  /// World = parent_world ∘ local, composed exactly from the table's local transforms (never
+  /// its Real world transforms), up the chain to the first ancestor already composed.
+  const ExactRigid& worldOf(ModelHandle m) {
+    std::vector<ModelHandle> chain;
+    for (ModelHandle cur = m;;) {
+      if (slot(cur).world) break;
+      chain.push_back(cur);
+      const std::optional<ModelHandle> p = models_.parent(cur);
+      if (!p) break;
+      cur = *p;
+    }
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      const ExactRigid local(models_.local(*it));
+      const std::optional<ModelHandle> p = models_.parent(*it);
+      slot(*it).world = std::make_unique<ExactRigid>(p ? ExactRigid::compose(*slot(*p).world, local) : local);
+    }
+    return *slot(m).world;
+  }
+
+  const PlacedSimplices& placed(ModelHandle m) {
+    const Mesh& mesh = *models_.meshData(m);  // validates m before any slot is made for it
+    if (!slot(m).placed) {
+      const ExactRigid& world = worldOf(m);
+      slot(m).placed = std::make_unique<PlacedSimplices>(mesh, world);
+    }
+    return *slot(m).placed;
+  }
+
+  /// Does any placed triangle of the model pass the test? Triangles whose interval box misses
+  /// `filter` (when given) are skipped.
+  template <class Test>
+  bool anySimplex(ModelHandle m, const CGAL::Bbox_3* filter, const Test& test) {
+    const PlacedSimplices& p = placed(m);
+    if (filter && !CGAL::do_overlap(p.bbox, *filter)) return false;
+    for (std::size_t i = 0; i < p.simplices.size(); ++i) {
+      if (filter && !CGAL::do_overlap(p.boxes[i], *filter)) continue;
+      if (test(p.simplices[i])) return true;
+    }
+    return false;
+  }
+
+  template <class Shape>
+  bool touches(ModelHandle m, const Shape& shape) {
+    const CGAL::Bbox_3 box = boxOf(shape);
+    return anySimplex(m, &box, [&](const Simplex& x) { return overlapsSimplex(x, shape); });
+  }
+
+  /// Model ray: every placed triangle, hits reported with the model's handle.
+  void raycastModel(ModelHandle m, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) {
+    const PlacedSimplices& p = placed(m);
+    for (std::uint32_t i = 0; i < p.simplices.size() && !hits.done(); ++i) {
+      const Vector n = faceNormal(p.simplices[i]);
+      if (options.cullBackFaces && backFacing(n, r.dir)) continue;
+      const std::optional<FT> s = rayParamSimplex(r, p.simplices[i]);
+      if (!s) continue;
+      const double t = rayDistance(r, *s);
+      if (!(t <= double(options.maxDistance))) continue;
+      WorldRayHit hit = makeHit(r, n, t, i);
+      hit.model = m;
+      hits.add(hit);
+    }
+  }
+
+  /// Do two placed meshes' surfaces touch? All triangle pairs after the interval-box filter.
+  static bool surfacesTouch(const PlacedSimplices& a, const PlacedSimplices& b) {
+    for (std::size_t i = 0; i < a.simplices.size(); ++i) {
+      if (!CGAL::do_overlap(a.boxes[i], b.bbox)) continue;
+      for (std::size_t j = 0; j < b.simplices.size(); ++j) {
+        if (!CGAL::do_overlap(a.boxes[i], b.boxes[j])) continue;
+        if (overlapsSimplex(a.simplices[i], b.simplices[j])) return true;
+      }
+    }
+    return false;
+  }
+
+  /// Bounds-only scene queries: the exact box of the placed vertices against the shape.
+  static bool boundsTouch(const Cuboid& box, const Sphere& s) {
+    const Point c = toPoint(s.center);
+    FT d2 = 0;  // squared distance from the centre to the box
+    for (int i = 0; i < 3; ++i) {
+      if (c[i] < box.min()[i]) d2 += CGAL::square(box.min()[i] - c[i]);
+      else if (box.max()[i] < c[i]) d2 += CGAL::square(c[i] - box.max()[i]);
+    }
+    const FT r(double(s.radius));
+    return d2 <= r * r;
+  }
+  static bool boundsTouch(const Cuboid& box, const Aabb& b) {
+    return CGAL::do_intersect(box, Cuboid(toPoint(b.min), toPoint(b.max), 0));
+  }
+  static bool boundsTouch(const Cuboid& box, const Obb& b) { return overlapsCuboid(box, b); }
+
   template <class Test>
   bool anyTriangle(MeshHandle m, const Test& test) const {
     const Mesh& mesh = this->mesh(m);
@@ -182,6 +375,9 @@ class ExactWorld final : public CollisionWorld {
       if (test(mesh.triangle(i))) return true;
     return false;
   }
+
+  oracle::ModelTable models_;
+  std::vector<ModelCache> cache_;  ///< by model handle
 };
 
 }  // namespace

@@ -15,11 +15,22 @@ namespace crux::exact {
 /// conservative interval-box filter — fine for the small meshes the fuzzer makes, slow for
 /// real ones (a 10k × 10k pair is 10^8 box tests). Transforms of mesh_mesh are applied
 /// exactly: the rotation is the exact rational matrix of q/|q| (the rotation the quaternion
-/// denotes), the translation is added exactly. Model and scene ops: Unsupported.
+/// denotes), the translation is added exactly.
+///
+/// Models and the scene: names and the hierarchy are oracle::ModelTable's (remove and
+/// set_parent keep the world pose by recomputing the local transform in Real, as crux does);
+/// world transforms are composed EXACTLY from the local ones (exact_rigid.hpp: rational
+/// rotation matrices, Hamilton products), with crux's axis-aligned snapping applied to every
+/// local and composed rotation, and each model's triangles are placed exactly and cached until
+/// the model or an ancestor changes. Model ops test the placed triangles brute force; scene_ray
+/// offers every model's hits (ties: RayHitCollector's (t, model, triangle)); scene_query tests
+/// triangles, or with boundsOnly the exact axis-aligned box of the placed vertices (crux pads
+/// its boxes, so its bounds-only answers may be a superset); scene_pairs tests every model pair
+/// (exact box pre-check, then all triangle pairs).
 ///
 /// Booleans are exact. Distances are exact values rounded once (a few ulps of double); the
-/// choice among mesh ray hits whose exact distances differ by less than that (and the
-/// max-distance cut) is made on the rounded distances.
+/// choice among ray hits whose exact distances differ by less than that (and the max-distance
+/// cut) is made on the rounded distances.
 std::unique_ptr<CollisionWorld> makeExactWorld();
 
 /// CollisionWorld::tolerance of the exact backend: booleans exact, numbers within 16 ulps of
