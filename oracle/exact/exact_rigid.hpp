@@ -40,7 +40,7 @@ class ExactRigid {
   /// How a crux transform's rotation is read.
   enum class Rotation {
     Snapped,  ///< snapped when axis-aligned (the model layer's rule)
-    AsGiven,  ///< the rotation of q/|q| exactly (the mesh layer's mesh_mesh does not snap)
+    AsGiven,  ///< the rotation of q/|q| exactly, never snapped
   };
   /// A crux transform taken exactly.
   explicit ExactRigid(const Transform& tf, Rotation rotation = Rotation::Snapped);

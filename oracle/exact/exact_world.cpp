@@ -167,8 +167,9 @@ class ExactWorld final : public CollisionWorld {
     return anyTriangle(m, [&](const Triangle& t) { return exact::overlaps(t, q); });
   }
   bool doOverlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) override {
-    const PlacedSimplices pa(mesh(a), ExactRigid(ta, ExactRigid::Rotation::AsGiven)),
-        pb(mesh(b), ExactRigid(tb, ExactRigid::Rotation::AsGiven));
+    // Axis-aligned rotations snapped, as crux's mesh layer does for the relative frame.
+    const PlacedSimplices pa(mesh(a), ExactRigid(ta, ExactRigid::Rotation::Snapped)),
+        pb(mesh(b), ExactRigid(tb, ExactRigid::Rotation::Snapped));
     for (std::size_t i = 0; i < pa.simplices.size(); ++i) {
       for (std::size_t j = 0; j < pb.simplices.size(); ++j) {
         if (!CGAL::do_overlap(pa.boxes[i], pb.boxes[j])) continue;

@@ -2,19 +2,16 @@
 /// @file rigid.hpp  Internal: rigid maps between a model's mesh space and the world, exact for
 /// the 24 axis-aligned rotations, and transform composition built on them.
 
+#include <crux/geometry/axis_aligned.hpp>
 #include <crux/math.hpp>
 
 #include <optional>
 
 namespace crux::model_detail {
 
-/// If q is within kAxisAlignedRotationTolerance (per component) of the quaternion of one of
-/// the 24 rotations that map coordinate axes to signed coordinate axes, returns that quaternion
-/// with correctly rounded components (in {0, ±½, ±√½, ±1}, same sign as q); else nullopt.
-std::optional<Quat> snapAxisAligned(const Quat& q);
-
-/// The exact signed-permutation matrix of a quaternion returned by snapAxisAligned.
-Mat3 signedPermutation(const Quat& snapped);
+// The 24 axis-aligned rotations live in the geometry layer (axis_aligned.hpp).
+using crux::signedPermutation;
+using crux::snapAxisAligned;
 
 /// A rigid transform prepared for mapping many points: the rotation as a matrix (the exact
 /// signed permutation when the rotation is axis-aligned).

@@ -200,14 +200,13 @@ TEST(ExactWorldModels, MovingAParentMovesTheSubtreeAndHandleReuseSeesTheNewMesh)
   EXPECT_EQ(w->descendants(a), std::vector<std::string>{"b"});
 }
 
-TEST(ExactWorldModels, KnownBugModelPairsUnderQuarterTurns) {
+TEST(ExactWorldModels, ModelPairsTouchingAtACornerUnderAHalfTurnAboutAFaceDiagonal) {
   // Two 2×1×1 bars touching at one corner (2, 1, -1): "p" turned a half turn about the face
   // diagonal (1,0,1)/√2 (quaternion (0, √½, 0, √½), rounded), "q" unturned. Both contain the
-  // corner (both backends agree on that), so the models touch. crux's model–model test maps q
-  // into p's frame with the rounded relative quaternion (model_query.cpp overlaps(PlacedMesh,
-  // PlacedMesh) -> mesh_query.cpp RelativeFrame::map, rel_.apply in Real), which is exact only for
-  // relative rotations with components in {0, ±½, ±1}; the corner moves by an ulp and the contact
-  // is lost. Reported to the lead; here the exact answer is asserted and crux's printed.
+  // corner, so the models touch. Regression: crux's model–model test used to map q into p's
+  // frame with the rounded relative quaternion (mesh_query.cpp RelativeFrame), moving the corner
+  // by an ulp and losing the contact; relative frames of axis-aligned rotations are now exact
+  // signed permutations.
   const std::shared_ptr<const Mesh> bar = boxMesh(2, 1, 1);
   const Real h = std::sqrt(Real(0.5));
   const Transform tp = makeTransform(v3(2, 2, -1), Quat(0, -h, 0, -h)), tq = makeTransform(v3(0, 0, -2));
@@ -221,8 +220,11 @@ TEST(ExactWorldModels, KnownBugModelPairsUnderQuarterTurns) {
   const ModelId a = scene.add(bar, tp), b = scene.add(bar, tq);
   EXPECT_TRUE(overlaps(scene.placed(a), Sphere{v3(2, 1, -1), 0}));
   EXPECT_TRUE(overlaps(scene.placed(b), Sphere{v3(2, 1, -1), 0}));
-  std::printf("crux::Scene overlappingPairs: %zu pair(s) (exact: 1)%s\n", scene.overlappingPairs().size(),
-              scene.overlappingPairs().empty() ? " -- the known bug is still there" : "");
+  EXPECT_EQ(scene.overlappingPairs().size(), 1u);
+  // The same through the mesh layer directly, both placements given, in either order.
+  EXPECT_TRUE(overlaps(*bar, tp, *bar, tq));
+  EXPECT_TRUE(overlaps(*bar, tq, *bar, tp));
+  EXPECT_TRUE(w->overlaps(m, tp, m, tq));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -414,17 +416,6 @@ class SceneSubject final : public Subject {
 
   /// The model's world bounds as crux computes them (to aim queries at it).
   Aabb boundsOf(const std::string& name) const { return worldBounds(scene_.placed(ids_.at(name))); }
-  /// Whether b's rotation relative to a's is one of the axis-aligned rotations whose quaternion
-  /// has two ±√½ components (quarter turns about axes, half turns about face diagonals).
-  bool relativeRotationHasSqrtHalf(const std::string& a, const std::string& b) const {
-    const Quat q = (scene_.models().world(ids_.at(a)).rotation.conjugate() * scene_.models().world(ids_.at(b)).rotation)
-                       .normalized();
-    int n = 0;
-    for (int i = 0; i < 4; ++i)
-      if (std::abs(std::abs(q.coeffs()[i]) - std::sqrt(Real(0.5))) <= Real(1e-4)) ++n;
-    return n == 2;
-  }
-
  private:
   static bool touchesPlaced(const PlacedMesh& m, const Segment& s) { return intersects(m, s); }
   template <class S>
@@ -451,7 +442,6 @@ struct Rate {
 class IntegerGridDriver {
  public:
   int failures = 0;
-  int knownPairMisses = 0;
 
   void fail(const std::string& message) {
     if (++failures <= 5) ADD_FAILURE() << message;
@@ -681,18 +671,6 @@ class IntegerGridDriver {
     for (auto& r : refs_) {
       const auto got = r->pairs();
       if (got == e) continue;
-      // Pairs exact finds and crux misses whose relative rotation has ±√½ components are the
-      // known crux bug (see KnownBugModelPairsUnderQuarterTurns); anything else fails.
-      std::vector<std::pair<std::string, std::string>> missed, extra;
-      std::set_difference(e.begin(), e.end(), got.begin(), got.end(), std::back_inserter(missed));
-      std::set_difference(got.begin(), got.end(), e.begin(), e.end(), std::back_inserter(extra));
-      const bool known = extra.empty() && std::all_of(missed.begin(), missed.end(), [&](const auto& ab) {
-                           return scene().relativeRotationHasSqrtHalf(ab.first, ab.second);
-                         });
-      if (known) {
-        ++knownPairMisses;
-        continue;
-      }
       fail(log_ + "scene_pairs: exact " + join(e) + " vs " + r->label() + " " + join(got));
     }
   }
@@ -778,9 +756,7 @@ TEST(ExactWorldModels, IntegerGridAgreesWithCrux) {
   std::map<std::string, Rate> rates;
   IntegerGridDriver driver(0x5eed2026u);
   driver.run(150, rates, native);
-  std::printf(
-      "%d disagreements; %d scene_pairs answers missing only pairs under a relative quarter turn (known crux bug)\n",
-      driver.failures, driver.knownPairMisses);
+  std::printf("%d disagreements\n", driver.failures);
   EXPECT_EQ(driver.failures, 0);
   for (const auto& [op, rate] : rates) {
     const double r = double(rate.hits) / rate.cases;

@@ -24,6 +24,7 @@
 /// Queries take validated shapes and a PlacedMesh with a non-null mesh and a unit rotation;
 /// they never throw and (except raycastAll) never allocate.
 
+#include <crux/geometry/axis_aligned.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
 #include <limits>
@@ -39,10 +40,7 @@ namespace crux {
 /// Accepted rotations are normalised when stored.
 inline constexpr Real kUnitQuaternionTolerance = Real(1e-5);
 
-/// Per-component distance (in units of |q| = 1) within which a unit quaternion is taken as one
-/// of the 24 axis-aligned rotations: 4 ulps of Real, i.e. below the rounding of the rotation
-/// itself (a rotation by 4 ulps moves a point by less than rotating it rounds).
-inline constexpr Real kAxisAlignedRotationTolerance = 4 * std::numeric_limits<Real>::epsilon();
+// kAxisAlignedRotationTolerance: crux/geometry/axis_aligned.hpp.
 
 /// Throws InvalidInput unless the translation is finite and the rotation a finite quaternion
 /// with | |q| - 1 | <= kUnitQuaternionTolerance (the message names `name`.rotation or
