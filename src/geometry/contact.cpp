@@ -1,0 +1,344 @@
+// Contact manifolds of convex pairs: GJK/EPA normal, supporting features, reference-feature
+// clipping (Sutherland–Hodgman), reduction to 4 points. Fixed-size buffers only.
+
+#include <crux/geometry/contact.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "geometry/gjk_internal.hpp"
+
+namespace crux {
+namespace {
+
+using detail::M3;
+using detail::Placed;
+using detail::V3;
+
+/// Hull faces with more vertices than this are not clipped (one contact point instead).
+constexpr int kMaxFeatureVerts = 32;
+constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
+
+/// sin of the feature angle (kContactFaceAngleCos).
+const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
+
+/// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
+struct Feature {
+  V3 v[kMaxFeatureVerts];
+  std::uint32_t vid[kMaxFeatureVerts];
+  int n = 0;
+  V3 normal = V3::Zero();  // outward unit normal of a face (n >= 3)
+  double align = 0;        // normal·d for a face
+  std::uint32_t id = 0;    // featureId of the whole feature
+};
+
+void setVertex(Feature& f, const V3& v, int index) {
+  f.n = 1;
+  f.v[0] = v;
+  f.vid[0] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(index));
+  f.id = f.vid[0];
+}
+
+/// Supporting vertex `s` (index is) or, when one of the edges (s, other[k]) is perpendicular to d
+/// within the feature angle, that edge.
+void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int nOthers, std::uint32_t edgeBase,
+                  Feature& f) {
+  const V3 vs = P.vertex(is);
+  int bestK = -1;
+  double bestCos = kSinTol;
+  for (int k = 0; k < nOthers; ++k) {
+    const V3 e = P.vertex(others[k]) - vs;
+    const double len = e.norm();
+    if (!(len > 0)) continue;
+    const double c = std::abs(e.dot(d)) / len;
+    if (c <= bestCos) {
+      bestCos = c;
+      bestK = k;
+    }
+  }
+  if (bestK < 0) {
+    setVertex(f, vs, is);
+    return;
+  }
+  f.n = 2;
+  f.v[0] = vs;
+  f.v[1] = P.vertex(others[bestK]);
+  f.vid[0] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(is));
+  f.vid[1] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(others[bestK]));
+  f.id = featureId(FeatureKind::Edge, edgeBase + static_cast<std::uint32_t>(std::min(is, others[bestK]) * 64 +
+                                                                          std::max(is, others[bestK])));
+}
+
+/// The feature of P's core that supports direction d (unit, world).
+void supportingFeature(const Placed& P, const V3& d, Feature& f) {
+  const ConvexShape& s = *P.shape;
+  const double cosTol = double(kContactFaceAngleCos);
+  int is = 0;
+  P.support(d, &is);
+  switch (s.kind) {
+    case ConvexKind::Sphere: setVertex(f, P.p[0], 0); return;
+    case ConvexKind::Capsule: {
+      const int other[1] = {1 - is};
+      vertexOrEdge(P, d, is, other, 1, 0, f);
+      return;
+    }
+    case ConvexKind::Triangle: {
+      V3 m = (P.p[1] - P.p[0]).cross(P.p[2] - P.p[0]);
+      const double len = m.norm();
+      if (len > 0 && std::abs(m.dot(d)) >= cosTol * len) {
+        m /= len;
+        const bool front = m.dot(d) > 0;
+        f.n = 3;
+        const int order[3] = {0, front ? 1 : 2, front ? 2 : 1};
+        for (int k = 0; k < 3; ++k) {
+          f.v[k] = P.p[order[k]];
+          f.vid[k] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(order[k]));
+        }
+        f.normal = front ? m : V3(-m);
+        f.align = std::abs(m.dot(d));
+        f.id = featureId(FeatureKind::Face, front ? 0 : 1);
+        return;
+      }
+      const int others[2] = {(is + 1) % 3, (is + 2) % 3};
+      vertexOrEdge(P, d, is, others, 2, 0, f);
+      return;
+    }
+    case ConvexKind::Box: {
+      const V3 l = P.axes.transpose() * d;
+      int k = 0;
+      l.cwiseAbs().maxCoeff(&k);
+      if (std::abs(l[k]) >= cosTol) {
+        const bool pos = l[k] > 0;
+        const int u = (k + 1) % 3, v = (k + 2) % 3;
+        const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+        f.n = 4;
+        for (int q = 0; q < 4; ++q) {
+          const int qq = pos ? q : 3 - q;
+          const int idx = (pos ? 1 << k : 0) | (su[qq] << u) | (sv[qq] << v);
+          f.v[q] = P.vertex(idx);
+          f.vid[q] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(idx));
+        }
+        f.normal = pos ? V3(P.axes.col(k)) : V3(-P.axes.col(k));
+        f.align = std::abs(l[k]);
+        f.id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (pos ? 1 : 0)));
+        return;
+      }
+      const int others[3] = {is ^ 1, is ^ 2, is ^ 4};
+      vertexOrEdge(P, d, is, others, 3, 0, f);
+      return;
+    }
+    case ConvexKind::Hull: {
+      const ConvexHull& h = *s.hull;
+      const V3 l = P.R.transpose() * d;
+      int bestFace = -1;
+      double bestAlign = cosTol;
+      for (std::size_t i = 0; i < h.faces().size(); ++i) {
+        const double a = h.faces()[i].normal.cast<double>().dot(l);
+        if (a >= bestAlign) {
+          bestAlign = a;
+          bestFace = static_cast<int>(i);
+        }
+      }
+      if (bestFace >= 0 && h.faces()[static_cast<std::size_t>(bestFace)].count <= std::uint32_t(kMaxFeatureVerts)) {
+        const HullFace& hf = h.faces()[static_cast<std::size_t>(bestFace)];
+        f.n = static_cast<int>(hf.count);
+        for (std::uint32_t q = 0; q < hf.count; ++q) {
+          const std::uint32_t vi = h.faceVertices()[hf.first + q];
+          f.v[q] = P.vertex(static_cast<int>(vi));
+          f.vid[q] = featureId(FeatureKind::Vertex, vi);
+        }
+        f.normal = P.R * hf.normal.cast<double>();
+        f.align = bestAlign;
+        f.id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(bestFace));
+        return;
+      }
+      // Neighbours of the support vertex along face loops.
+      int others[kMaxFeatureVerts];
+      int no = 0;
+      for (const HullFace& hf : h.faces())
+        for (std::uint32_t q = 0; q < hf.count && no + 2 <= kMaxFeatureVerts; ++q)
+          if (h.faceVertices()[hf.first + q] == std::uint32_t(is)) {
+            others[no++] = static_cast<int>(h.faceVertices()[hf.first + (q + 1) % hf.count]);
+            others[no++] = static_cast<int>(h.faceVertices()[hf.first + (q + hf.count - 1) % hf.count]);
+          }
+      if (h.dimension() == 1) others[no++] = 1 - is;
+      vertexOrEdge(P, d, is, others, no, 0, f);
+      return;
+    }
+  }
+}
+
+struct ClipVertex {
+  V3 p;
+  std::uint32_t id;
+};
+
+/// Sutherland–Hodgman: keeps the part of polygon `in` (closed loop, or a segment when n == 2)
+/// with dot(x - o, m) >= 0.
+int clip(const ClipVertex* in, int n, const V3& o, const V3& m, std::uint32_t cutId, ClipVertex* out) {
+  if (n == 2) {  // a segment: clip its parameter interval
+    const double d0 = (in[0].p - o).dot(m), d1 = (in[1].p - o).dot(m);
+    if (d0 < 0 && d1 < 0) return 0;
+    int k = 0;
+    if (d0 >= 0) out[k++] = in[0];
+    if ((d0 < 0) != (d1 < 0)) out[k++] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cutId};
+    if (d1 >= 0) out[k++] = in[1];
+    return k;
+  }
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    const ClipVertex& a = in[i];
+    const ClipVertex& b = in[(i + 1) % n];
+    const double da = (a.p - o).dot(m), db = (b.p - o).dot(m);
+    if (da >= 0) out[k++] = a;
+    if ((da < 0) != (db < 0) && k < kMaxClipVerts) out[k++] = {a.p + (b.p - a.p) * (da / (da - db)), cutId};
+  }
+  return k;
+}
+
+/// Keeps the deepest point and the three that maximise the manifold's area (about axis u).
+void reduce(ContactPoint* pts, int& count, const V3& u) {
+  if (count <= ContactManifold::kMaxContactPoints) return;
+  int sel[4];
+  sel[0] = 0;
+  for (int i = 1; i < count; ++i)
+    if (pts[i].separation < pts[sel[0]].separation) sel[0] = i;
+  auto P = [&](int i) { return pts[i].pointB.template cast<double>(); };
+  double best = -1;
+  sel[1] = sel[0] == 0 ? 1 : 0;
+  for (int i = 0; i < count; ++i)
+    if ((P(i) - P(sel[0])).squaredNorm() > best) {
+      best = (P(i) - P(sel[0])).squaredNorm();
+      sel[1] = i;
+    }
+  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
+  int hi = -1, lo = -1;
+  for (int i = 0; i < count; ++i) {
+    if (i == sel[0] || i == sel[1]) continue;
+    if (hi < 0 || area(i) > area(hi)) hi = i;
+    if (lo < 0 || area(i) < area(lo)) lo = i;
+  }
+  sel[2] = hi;
+  sel[3] = lo;
+  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the two largest |area|
+    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
+    sel[3] = -1;
+    double a3 = -1;
+    for (int i = 0; i < count; ++i) {
+      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
+      // the point adding the most area to the triangle: max distance outside its edges
+      const V3 q = P(i);
+      double gain = 0;
+      for (int e = 0; e < 3; ++e) {
+        const V3 a = P(sel[e]), b = P(sel[(e + 1) % 3]);
+        gain = std::max(gain, std::abs((b - a).cross(q - a).dot(u)));
+      }
+      if (gain > a3) {
+        a3 = gain;
+        sel[3] = i;
+      }
+    }
+  }
+  ContactPoint kept[4];
+  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
+  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
+  count = 4;
+}
+
+}  // namespace
+
+Real ContactManifold::depth() const {
+  Real d = 0;
+  for (int i = 0; i < count; ++i) d = std::max(d, -points[i].separation);
+  return d;
+}
+
+bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
+              ContactManifold& out) {
+  out.count = 0;
+  const Placed A(a, ta), B(b, tb);
+  const DistanceResult dr = detail::coreQuery(A, B);
+  out.normal = dr.normal;
+  if (!(dr.distance <= margin)) return false;
+  V3 n = dr.normal.cast<double>();
+  const double rA = A.radius, rB = B.radius, m = double(margin);
+
+  Feature fa, fb;
+  supportingFeature(A, -n, fa);
+  supportingFeature(B, n, fb);
+  // Two edges are clipped only when parallel (within the feature angle); crossing edges touch at
+  // one point, the GJK/EPA one.
+  bool clipFeatures = fa.n >= 2 && fb.n >= 2;
+  if (clipFeatures && fa.n == 2 && fb.n == 2) {
+    const V3 ea = fa.v[1] - fa.v[0], eb = fb.v[1] - fb.v[0];
+    clipFeatures = ea.cross(eb).norm() <= kSinTol * ea.norm() * eb.norm();
+  }
+  if (clipFeatures) {
+    // Reference: the better aligned face; else (two edges) A's edge.
+    bool refIsA = fa.n >= 3 && (fb.n < 3 || fa.align >= fb.align - 1e-9);
+    if (fa.n < 3 && fb.n >= 3) refIsA = false;
+    const Feature& ref = refIsA ? fa : fb;
+    const Feature& inc = refIsA ? fb : fa;
+    V3 u = refIsA ? V3(-n) : n;  // outward from the reference body
+    if (ref.n >= 3) {
+      u = ref.normal.normalized();
+      n = refIsA ? V3(-u) : u;
+    }
+    ClipVertex bufA[kMaxClipVerts], bufB[kMaxClipVerts];
+    int cnt = inc.n;
+    for (int i = 0; i < cnt; ++i) bufA[i] = {inc.v[i], inc.vid[i]};
+    ClipVertex* cur = bufA;
+    ClipVertex* nxt = bufB;
+    if (ref.n >= 3) {
+      for (int i = 0; i < ref.n && cnt > 0; ++i) {
+        const V3 e = ref.v[(i + 1) % ref.n] - ref.v[i];
+        cnt = clip(cur, cnt, ref.v[i], u.cross(e), inc.id, nxt);
+        std::swap(cur, nxt);
+      }
+    } else {
+      V3 e = ref.v[1] - ref.v[0];
+      e -= u * u.dot(e);
+      cnt = clip(cur, cnt, ref.v[0], e, inc.id, nxt);
+      std::swap(cur, nxt);
+      if (cnt > 0) cnt = clip(cur, cnt, ref.v[1], -e, inc.id, nxt);
+      std::swap(cur, nxt);
+    }
+    ContactPoint pts[kMaxClipVerts];
+    int np = 0;
+    const V3 r0 = ref.v[0];
+    for (int i = 0; i < cnt; ++i) {
+      const V3 q = cur[i].p;
+      const double s = u.dot(q - r0);
+      const double sep = s - rA - rB;
+      if (!(sep <= m)) continue;
+      const V3 onRef = q - s * u;
+      const V3 ca = refIsA ? onRef : q, cb = refIsA ? q : onRef;
+      ContactPoint& c = pts[np++];
+      c.pointA = (ca - n * rA).cast<Real>();
+      c.pointB = (cb + n * rB).cast<Real>();
+      c.separation = static_cast<Real>(sep);
+      c.featureA = refIsA ? ref.id : cur[i].id;
+      c.featureB = refIsA ? cur[i].id : ref.id;
+    }
+    if (np > 0) {
+      reduce(pts, np, u);
+      out.normal = n.cast<Real>();
+      out.count = np;
+      for (int i = 0; i < np; ++i) out.points[i] = pts[i];
+      return true;
+    }
+  }
+  // One point: the GJK/EPA closest (deepest) pair.
+  out.normal = dr.normal;
+  out.count = 1;
+  ContactPoint& c = out.points[0];
+  c.pointA = dr.pointA;
+  c.pointB = dr.pointB;
+  c.separation = dr.distance;
+  c.featureA = fa.id;
+  c.featureB = fb.id;
+  return true;
+}
+
+}  // namespace crux
