@@ -6,11 +6,17 @@
 #include "cli/scene_ops.hpp"
 
 #include <crux/error.hpp>
+#include <world_factory.hpp>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
 #include <istream>
 #include <ostream>
+#include <stdexcept>
 
 namespace crux::cli {
 namespace {
@@ -143,14 +149,170 @@ bool isBlank(std::string_view s) {
   return std::all_of(s.begin(), s.end(), [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; });
 }
 
-OpTable buildTable(Backend backend) {
+OpTable buildTable() {
   OpTable table;
-  if (backend == Backend::Native) {
-    addPrimitiveOps(table);
-    addMeshOps(table);
-    addSceneOps(table);
-  }
+  addPrimitiveOps(table);
+  addMeshOps(table);
+  addSceneOps(table);
   return table;
+}
+
+/// A line parsed into its request, or the answer already decided (a malformed line, a bad
+/// "id" or "op", an unknown op).
+struct ParsedLine {
+  Json request;
+  std::optional<Answer> answer;
+  std::string op;  ///< the protocol op when `answer` is empty
+};
+
+ParsedLine parseLine(const std::string& rawLine) {
+  ParsedLine parsed;
+  std::string_view line = rawLine;
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (isBlank(line)) {
+    parsed.answer = errorAnswer(Json(), "empty line");
+    return parsed;
+  }
+  RequestBuilder builder;
+  Json::sax_parse(line.begin(), line.end(), &builder);
+  parsed.request = std::move(builder.root);
+  const Json& request = parsed.request;
+  if (builder.failure) {
+    const auto& f = *builder.failure;
+    if (f.id == 406) {  // out_of_range.406: a number literal beyond double
+      parsed.answer = errorAnswer(request, (f.path.empty() ? std::string("request") : f.path) + ": number " +
+                                               f.token + " overflows double");
+    } else {
+      parsed.answer = errorAnswer(request, "invalid JSON: " + parseMessage(f.what));
+    }
+    return parsed;
+  }
+  if (!request.is_object()) {
+    parsed.answer = errorAnswer(request, std::string("request: expected a JSON object, got ") + request.type_name());
+    return parsed;
+  }
+  if (const auto id = request.find("id"); id != request.end() && !id->is_string()) {
+    parsed.answer = errorAnswer(request, std::string("id: expected a string, got ") + id->type_name());
+    return parsed;
+  }
+  const auto opField = request.find("op");
+  if (opField == request.end()) {
+    parsed.answer = errorAnswer(request, "op: missing field");
+    return parsed;
+  }
+  if (!opField->is_string()) {
+    parsed.answer = errorAnswer(request, std::string("op: expected a string, got ") + opField->type_name());
+    return parsed;
+  }
+  const std::string& op = opField->get_ref<const std::string&>();
+  const auto& ops = protocolOps();
+  if (!std::binary_search(ops.begin(), ops.end(), std::string_view(op))) {
+    parsed.answer = errorAnswer(request, "op: unknown op \"" + op + "\"");
+    return parsed;
+  }
+  parsed.op = op;
+  return parsed;
+}
+
+/// Answers a parsed line through the world of `state`.
+Answer answerParsed(const ParsedLine& parsed, BatchState& state) {
+  if (parsed.answer) return *parsed.answer;
+  const Json& request = parsed.request;
+  try {
+    const std::optional<WorldOp> op = parseOp(parsed.op);
+    if (!op) return errorAnswer(request, "internal error: op \"" + parsed.op + "\" has no world op");
+    if (!state.world->supports(*op)) return errorAnswer(request, Unsupported(*op, state.world->backend()).what());
+    const OpTable& table = opTable();
+    const auto handler = table.find(parsed.op);
+    if (handler == table.end()) return errorAnswer(request, "internal error: no handler for \"" + parsed.op + "\"");
+
+    Answer answer = Answer::object();
+    if (const auto id = request.find("id"); id != request.end()) answer["id"] = Answer(*id);
+    answer["op"] = parsed.op;
+    handler->second(request, answer, state);
+    return answer;
+  } catch (const InvalidInput& e) {
+    return errorAnswer(request, e.what());
+  } catch (const Unsupported& e) {
+    return errorAnswer(request, e.what());
+  } catch (const BackendFailure& e) {
+    return errorAnswer(request, e.what());
+  } catch (const std::exception& e) {
+    return errorAnswer(request, std::string("internal error: ") + e.what());
+  }
+}
+
+/// The answer to a line, never throwing (a failure to build the answer itself, such as
+/// std::bad_alloc, becomes an error answer).
+Answer answerSafely(const ParsedLine& parsed, BatchState& state) {
+  try {
+    return answerParsed(parsed, state);
+  } catch (const std::exception& e) {
+    return errorAnswer(Json(), std::string("internal error: ") + e.what());
+  }
+}
+
+/// The output line of an answer (without its '\n'), as writeAnswer writes it.
+std::string answerText(const Answer& answer) { return answer.dump(-1, ' ', false, Answer::error_handler_t::replace); }
+
+/// Answers lines [begin, end) of a window, all queries, in parallel (the world was prepared),
+/// serialising each answer on its worker too.
+void answerInParallel(const std::vector<ParsedLine>& parsed, std::vector<std::string>& answers, std::size_t begin,
+                      std::size_t end, BatchState& state, tbb::task_arena& arena) {
+  if (end - begin < 2) {
+    for (std::size_t i = begin; i < end; ++i) answers[i] = answerText(answerSafely(parsed[i], state));
+    return;
+  }
+  state.world->prepareConcurrentQueries();
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) answers[i] = answerText(answerSafely(parsed[i], state));
+    });
+  });
+}
+
+/// runBatch with threads > 1 on a world that allows concurrent queries.
+int runParallel(std::istream& in, std::ostream& out, BatchState& state, int threads) {
+  tbb::task_arena arena(threads);
+  std::vector<std::string> lines;
+  std::vector<ParsedLine> parsed;
+  std::vector<std::string> answers;
+  lines.reserve(kBatchWindow);
+  for (bool more = true; more;) {
+    lines.clear();
+    std::string line;
+    while (lines.size() < kBatchWindow && std::getline(in, line)) lines.push_back(std::move(line));
+    more = lines.size() == kBatchWindow;
+    if (lines.empty()) break;
+    parsed.assign(lines.size(), ParsedLine{});
+    answers.assign(lines.size(), std::string());
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines.size()),
+                        [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                            try {
+                              parsed[i] = parseLine(lines[i]);
+                            } catch (const std::exception& e) {
+                              parsed[i].answer = errorAnswer(Json(), std::string("internal error: ") + e.what());
+                            }
+                          }
+                        });
+    });
+    std::size_t runStart = 0;
+    for (std::size_t i = 0; i < parsed.size(); ++i) {
+      if (parsed[i].answer || !isBarrierOp(parsed[i].op)) continue;
+      answerInParallel(parsed, answers, runStart, i, state, arena);
+      answers[i] = answerText(answerSafely(parsed[i], state));
+      runStart = i + 1;
+    }
+    answerInParallel(parsed, answers, runStart, parsed.size(), state, arena);
+    for (const std::string& a : answers) {
+      out << a << '\n';
+      if (!out) return 1;
+    }
+  }
+  out.flush();
+  return (in.bad() || !out) ? 1 : 0;
 }
 
 }  // namespace
@@ -185,68 +347,60 @@ const std::vector<std::string_view>& protocolOps() {
   return ops;
 }
 
-const OpTable& opTable(Backend backend) {
-  static const std::array<OpTable, kBackendNames.size()> tables = {
-      buildTable(Backend::Native), buildTable(Backend::Fcl), buildTable(Backend::Bullet),
-      buildTable(Backend::Exact)};
-  return tables[static_cast<std::size_t>(backend)];
+const OpTable& opTable() {
+  static const OpTable table = buildTable();
+  return table;
 }
 
-Answer answerLine(const std::string& rawLine, BatchState& state) {
-  std::string_view line = rawLine;
-  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-  if (isBlank(line)) return errorAnswer(Json(), "empty line");
+const OpTable& opTable(Backend) { return opTable(); }
 
-  RequestBuilder builder;
-  Json::sax_parse(line.begin(), line.end(), &builder);
-  const Json& request = builder.root;
-  if (builder.failure) {
-    const auto& f = *builder.failure;
-    if (f.id == 406) {  // out_of_range.406: a number literal beyond double
-      return errorAnswer(request, (f.path.empty() ? std::string("request") : f.path) + ": number " + f.token +
-                                      " overflows double");
-    }
-    return errorAnswer(request, "invalid JSON: " + parseMessage(f.what));
-  }
-  if (!request.is_object())
-    return errorAnswer(request, std::string("request: expected a JSON object, got ") + request.type_name());
-
-  try {
-    if (const auto id = request.find("id"); id != request.end() && !id->is_string())
-      return errorAnswer(request, std::string("id: expected a string, got ") + id->type_name());
-    const Json& opField = member(request, "op");
-    if (!opField.is_string())
-      return errorAnswer(request, std::string("op: expected a string, got ") + opField.type_name());
-    const std::string& op = opField.get_ref<const std::string&>();
-    const auto& ops = protocolOps();
-    if (!std::binary_search(ops.begin(), ops.end(), std::string_view(op)))
-      return errorAnswer(request, "op: unknown op \"" + op + "\"");
-
-    const OpTable& table = opTable(state.options.backend);
-    const auto handler = table.find(op);
-    if (handler == table.end())
-      return errorAnswer(request, "unsupported: " + op + " on " + std::string(backendName(state.options.backend)));
-
-    Answer answer = Answer::object();
-    if (const auto id = request.find("id"); id != request.end()) answer["id"] = Answer(*id);
-    answer["op"] = op;
-    handler->second(request, answer, state);
-    return answer;
-  } catch (const InvalidInput& e) {
-    return errorAnswer(request, e.what());
-  } catch (const std::exception& e) {
-    return errorAnswer(request, std::string("internal error: ") + e.what());
-  }
+bool isBarrierOp(std::string_view op) {
+  static constexpr std::array<std::string_view, 7> kBarriers = {
+      "mesh", "load_mesh", "add_model", "set_transform", "set_parent", "remove_model", "scene_pairs"};
+  return std::find(kBarriers.begin(), kBarriers.end(), op) != kBarriers.end();
 }
 
-void writeAnswer(std::ostream& out, const Answer& answer) {
-  out << answer.dump(-1, ' ', false, Answer::error_handler_t::replace) << '\n';
+// ---- BatchState -----------------------------------------------------------------------------------
+
+BatchState::BatchState(BatchOptions opts) : options(opts), world(makeWorld(backendName(opts.backend))) {}
+
+BatchState::BatchState(BatchState&& other) noexcept
+    : options(other.options),
+      world(std::move(other.world)),
+      models(std::move(other.models)),
+      modelNames(std::move(other.modelNames)) {}
+
+BatchState& BatchState::operator=(BatchState&& other) noexcept {
+  options = other.options;
+  world = std::move(other.world);
+  models = std::move(other.models);
+  modelNames = std::move(other.modelNames);
+  return *this;
 }
+
+BatchState::~BatchState() = default;
+
+std::size_t BatchMeshes::count(std::string_view name) const {
+  return state_->world && state_->world->findMesh(name) ? 1 : 0;
+}
+
+const std::shared_ptr<const Mesh>& BatchMeshes::at(std::string_view name) const {
+  const auto handle = state_->world ? state_->world->findMesh(name) : std::nullopt;
+  if (!handle) throw std::out_of_range("no mesh named \"" + std::string(name) + "\"");
+  return state_->world->sharedMesh(*handle);
+}
+
+std::size_t BatchScene::size() const { return state_->models.size(); }
+
+Answer answerLine(const std::string& line, BatchState& state) { return answerSafely(parseLine(line), state); }
+
+void writeAnswer(std::ostream& out, const Answer& answer) { out << answerText(answer) << '\n'; }
 
 int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options) {
   if (options.threads < 1)
     throw InvalidInput("threads: must be at least 1, got " + std::to_string(options.threads));
   BatchState state(options);
+  if (options.threads > 1 && state.world->concurrentQueries()) return runParallel(in, out, state, options.threads);
   std::string line;
   while (std::getline(in, line)) {
     writeAnswer(out, answerLine(line, state));

@@ -2,12 +2,15 @@
 /// @file batch.hpp  `crux batch`: the JSON Lines protocol of /work/shared/contracts/batch-protocol.md
 /// (documented for users in docs/batch.md), as a library so tests drive it without processes.
 ///
-/// One request object per input line, one answer object per input line, in input order. A
-/// request is dispatched through a table op-name -> handler chosen by the backend; an op the
-/// protocol names but the backend's table lacks answers "unsupported: <op> on <backend>".
+/// One request object per input line, one answer object per input line, in input order. Every
+/// op is answered by a crux::CollisionWorld made by crux::makeWorld(backend): a request is
+/// dispatched through one table op-name -> handler (the same for every backend) whose handler
+/// reads the fields, resolves names and calls the world; an op the world does not supports()
+/// answers "unsupported: <op> on <backend>" (crux::Unsupported's text), and a peer's failure
+/// answers crux::BackendFailure's text.
 
 #include <crux/mesh/mesh.hpp>
-#include <crux/scene/scene.hpp>
+#include <crux/world/collision_world.hpp>
 
 #include <nlohmann/json.hpp>
 
@@ -27,8 +30,7 @@ using Json = nlohmann::json;
 /// An answer: keys in insertion order, so "id" and "op" come first.
 using Answer = nlohmann::ordered_json;
 
-/// The library that answers the queries. Only Native is implemented; the others are accepted
-/// and answer every op with "unsupported: <op> on <backend>" until their oracle lands.
+/// The library that answers the queries (a crux::makeWorld backend name).
 enum class Backend { Native, Fcl, Bullet, Exact };
 
 /// The protocol name of a backend ("native", "fcl", "bullet", "exact").
@@ -41,24 +43,61 @@ std::vector<std::string_view> backendNames();
 /// Options of one `crux batch` run.
 struct BatchOptions {
   Backend backend = Backend::Native;
-  /// Worker threads (>= 1). Accepted for forward compatibility; requests are answered
-  /// sequentially for now (the answers would be identical and in the same order anyway).
+  /// Worker threads (>= 1). With N > 1 and a backend whose world allows concurrent queries
+  /// (native), runBatch answers each run of consecutive query lines in parallel with oneTBB;
+  /// the output is byte-identical to N = 1. Peer backends are answered serially.
   int threads = 1;
 };
 
-/// State that lives for a whole batch: meshes and models by name, and the scene.
+struct BatchState;
+
+/// Read-only view of the meshes a batch defined (`mesh`, `load_mesh`), by name, as its world
+/// holds them.
+class BatchMeshes {
+ public:
+  explicit BatchMeshes(const BatchState* state) : state_(state) {}
+  /// 1 when a mesh named `name` is defined, else 0.
+  std::size_t count(std::string_view name) const;
+  /// The mesh named `name`; throws std::out_of_range when there is none.
+  const std::shared_ptr<const Mesh>& at(std::string_view name) const;
+
+ private:
+  friend struct BatchState;
+  const BatchState* state_;
+};
+
+/// Read-only view of the batch's scene: how many models it holds.
+class BatchScene {
+ public:
+  explicit BatchScene(const BatchState* state) : state_(state) {}
+  std::size_t size() const;
+
+ private:
+  friend struct BatchState;
+  const BatchState* state_;
+};
+
+/// State that lives for a whole batch: the world of the chosen backend (meshes, models, the
+/// scene) and the model names the protocol uses, mapped to the world's handles (the batch
+/// layer resolves names itself so that errors name the request's field).
 struct BatchState {
-  explicit BatchState(BatchOptions opts = {}) : options(opts) {}
+  /// Makes the world with crux::makeWorld(backendName(opts.backend)); throws crux::InvalidInput
+  /// when that backend is not built.
+  explicit BatchState(BatchOptions opts = {});
+  BatchState(BatchState&& other) noexcept;
+  BatchState& operator=(BatchState&& other) noexcept;
+  BatchState(const BatchState&) = delete;
+  BatchState& operator=(const BatchState&) = delete;
+  ~BatchState();
+
   BatchOptions options;
-  /// Meshes defined by `mesh` and `load_mesh`, by name. Meshes are immutable and shared:
-  /// redefining a name replaces the entry for later requests, while anything already holding
-  /// the old pointer keeps the old mesh. A failed definition leaves the entry unchanged.
-  std::map<std::string, std::shared_ptr<const Mesh>, std::less<>> meshes;
-  /// The models of `add_model` (one scene per batch, dynamic AABB tree broad phase).
-  Scene scene;
-  /// Model names -> ids in `scene`, and back (modelNames[id]; empty for unused ids).
-  std::map<std::string, ModelId, std::less<>> models;
-  std::vector<std::string> modelNames;
+  std::unique_ptr<CollisionWorld> world;
+  /// Live model names -> handles, and back.
+  std::map<std::string, ModelHandle, std::less<>> models;
+  std::map<ModelHandle, std::string> modelNames;
+  /// Views for callers and tests (they follow the world).
+  BatchMeshes meshes{this};
+  BatchScene scene{this};
 };
 
 /// Answers one request: reads the fields it needs from `request` and adds the answer fields
@@ -66,14 +105,20 @@ struct BatchState {
 /// naming the field, for a missing, ill-typed or invalid field; the dispatcher turns that
 /// into an error answer.
 using OpHandler = std::function<void(const Json& request, Answer& answer, BatchState& state)>;
-/// Handlers by op name, for one backend.
+/// Handlers by op name (one table for every backend: each handler calls the world).
 using OpTable = std::map<std::string, OpHandler, std::less<>>;
 
 /// Every op the protocol defines, sorted. An op outside this list is "unknown"; an op in it
-/// that a backend's table lacks is "unsupported".
+/// that the backend's world does not supports() is "unsupported".
 const std::vector<std::string_view>& protocolOps();
-/// The handler table of `backend` (built once, immutable).
+/// The handler table (built once, immutable; every protocol op).
+const OpTable& opTable();
+/// The same table, whatever the backend (kept for callers of the per-backend form).
 const OpTable& opTable(Backend backend);
+/// Whether `op` changes the batch's state or caches (mesh, load_mesh, add_model,
+/// set_transform, set_parent, remove_model, and scene_pairs, which updates the broad phase's
+/// pair cache): such lines are barriers for --threads.
+bool isBarrierOp(std::string_view op);
 
 /// Answers one input line (without its line terminator; a trailing '\r' is ignored). Never
 /// throws for bad input: a malformed line, an unknown op or a bad field gives an answer with
@@ -85,8 +130,16 @@ Answer answerLine(const std::string& line, BatchState& state);
 void writeAnswer(std::ostream& out, const Answer& answer);
 
 /// Runs a batch: answers every line of `in` on `out`, one line each, in order, and flushes.
-/// Returns 0 when `in` was read to its end and every answer was written, 1 when reading or
-/// writing failed. Throws crux::InvalidInput for invalid options (threads < 1).
+/// With options.threads > 1 and a world whose concurrentQueries() is true, it reads windows of
+/// up to kBatchWindow lines, answers each run of consecutive non-barrier lines in parallel
+/// (oneTBB, at most `threads` workers, after CollisionWorld::prepareConcurrentQueries()) and
+/// each barrier line alone, and writes the answers in input order: the output is identical to
+/// threads = 1. Returns 0 when `in` was read to its end and every answer was written, 1 when
+/// reading or writing failed. Throws crux::InvalidInput for invalid options (threads < 1, a
+/// backend not built).
 int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options);
+
+/// Lines runBatch reads ahead with threads > 1.
+inline constexpr std::size_t kBatchWindow = 4096;
 
 }  // namespace crux::cli

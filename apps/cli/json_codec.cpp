@@ -3,6 +3,7 @@
 #include <crux/error.hpp>
 
 #include <cmath>
+#include <sstream>
 #include <limits>
 
 namespace crux::cli {
@@ -161,6 +162,56 @@ Answer writeReal(Real x, const std::string& name) {
 Answer writeVec3(const Vec3& v, const std::string& name) {
   if (!v.allFinite()) fail(name, "result is not finite (the computation overflowed)");
   return Answer::array({static_cast<double>(v.x()), static_cast<double>(v.y()), static_cast<double>(v.z())});
+}
+
+Answer writeDouble(double x, const std::string& name) {
+  if (!std::isfinite(x)) fail(name, "result is not finite (the computation overflowed)");
+  return Answer(x);
+}
+
+Answer writeVec3d(const Eigen::Vector3d& v, const std::string& name) {
+  if (!v.allFinite()) fail(name, "result is not finite (the computation overflowed)");
+  return Answer::array({v.x(), v.y(), v.z()});
+}
+
+std::string quoted(const std::string& s) { return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace); }
+
+RayQueryOptions readRayOptions(const Json& request, bool* all) {
+  RayQueryOptions options;
+  if (const auto it = request.find("max"); it != request.end()) options.maxDistance = readReal(*it, "max");
+  if (all) *all = readFlag(request, "all");
+  options.cullBackFaces = readFlag(request, "cull");
+  return options;
+}
+
+void checkRayOptions(const RayQueryOptions& options) {
+  if (options.maxDistance < 0) {
+    std::ostringstream message;
+    message.precision(17);
+    message << "max is negative: " << options.maxDistance;
+    throw InvalidInput(message.str());
+  }
+}
+
+void writeRayHit(Answer& out, const WorldRayHit& hit) {
+  out["t"] = writeDouble(hit.t, "t");
+  out["point"] = writeVec3d(hit.point, "point");
+  out["normal"] = writeVec3d(hit.normal, "normal");
+  out["triangle"] = hit.triangle;
+}
+
+void writeRayAnswer(Answer& answer, const RayHitCollector& hits, bool all) {
+  const std::optional<WorldRayHit> first = hits.hit();
+  answer["hit"] = hits.hasHit();
+  if (first) writeRayHit(answer, *first);
+  if (!all) return;
+  Answer list = Answer::array();
+  for (const WorldRayHit& h : hits.hits()) {
+    Answer item = Answer::object();
+    writeRayHit(item, h);
+    list.push_back(std::move(item));
+  }
+  answer["hits"] = std::move(list);
 }
 
 }  // namespace crux::cli

@@ -10,6 +10,7 @@
 #include "cli/batch.hpp"
 
 #include <crux/geometry/shapes.hpp>
+#include <crux/world/collision_world.hpp>
 
 #include <string>
 
@@ -70,5 +71,24 @@ Shape readField(const Json& request, const std::string& key) {
 Answer writeReal(Real x, const std::string& name);
 /// A result vector as `[x, y, z]`, as writeReal per coordinate.
 Answer writeVec3(const Vec3& v, const std::string& name);
+/// The same for results a world reports in double (a peer's numbers are not rounded to Real).
+Answer writeDouble(double x, const std::string& name);
+Answer writeVec3d(const Eigen::Vector3d& v, const std::string& name);
+
+/// A string for use inside an error message: JSON-quoted (escapes kept readable).
+std::string quoted(const std::string& s);
+
+/// The ray options of mesh_ray, model_ray and scene_ray, read in this order: optional "max"
+/// (a Real; checked >= 0 by checkRayOptions), the flag "all" into `*all` (when `all` is not
+/// null: scene_ray has no "all"), and the flag "cull".
+RayQueryOptions readRayOptions(const Json& request, bool* all);
+/// Throws "max is negative: <max>" when options.maxDistance < 0.
+void checkRayOptions(const RayQueryOptions& options);
+
+/// Adds a ray hit's answer fields "t", "point", "normal", "triangle".
+void writeRayHit(Answer& out, const WorldRayHit& hit);
+/// Answers a ray query from its collector: "hit", the first hit's fields, and with `all` the
+/// list "hits" (each as writeRayHit).
+void writeRayAnswer(Answer& answer, const RayHitCollector& hits, bool all);
 
 }  // namespace crux::cli

@@ -22,9 +22,6 @@ namespace {
 
 std::string got(const Json& value) { return std::string("got ") + value.type_name(); }
 
-/// A string for use inside an error message: JSON-quoted (escapes kept readable).
-std::string quoted(const std::string& s) { return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace); }
-
 /// The name a mesh is defined under (field "name"): a non-empty string.
 std::string readNewName(const Json& request) {
   const std::string& name = readString(member(request, "name"), "name", "a mesh name (string)");
@@ -32,12 +29,12 @@ std::string readNewName(const Json& request) {
   return name;
 }
 
-/// The mesh that field `key` names. Unknown names are an error naming the field and the name.
-const Mesh& findMesh(const BatchState& state, const std::string& key, const std::string& name) {
-  const auto it = state.meshes.find(name);
-  if (it == state.meshes.end())
-    fail(key, "no mesh named " + quoted(name) + " (define it first with mesh or load_mesh)");
-  return *it->second;
+/// The world's handle of the mesh that field `key` names. Unknown names are an error naming the
+/// field and the name.
+MeshHandle findMesh(const BatchState& state, const std::string& key, const std::string& name) {
+  const std::optional<MeshHandle> handle = state.world->findMesh(name);
+  if (!handle) fail(key, "no mesh named " + quoted(name) + " (define it first with mesh or load_mesh)");
+  return *handle;
 }
 
 /// Field `key` of the request as a mesh name (syntax only; findMesh resolves it).
@@ -95,8 +92,9 @@ void defineMesh(const Json& request, Answer& answer, BatchState& state) {
   std::vector<Vec3> vertices = readVertices(request);
   std::vector<TriangleIndices> triangles = readTriangles(request, vertices.size());
   auto mesh = std::make_shared<const Mesh>(std::move(vertices), std::move(triangles), name);
-  answer["triangles"] = mesh->triangleCount();
-  state.meshes.insert_or_assign(name, std::move(mesh));
+  const std::size_t count = mesh->triangleCount();
+  state.world->addMesh(name, std::move(mesh));
+  answer["triangles"] = count;
 }
 
 void loadMeshOp(const Json& request, Answer& answer, BatchState& state) {
@@ -109,80 +107,51 @@ void loadMeshOp(const Json& request, Answer& answer, BatchState& state) {
   } catch (const InvalidInput& e) {  // loadMesh's message starts with the file's path
     fail("path", e.what());
   }
-  answer["triangles"] = mesh->triangleCount();
-  state.meshes.insert_or_assign(name, std::move(mesh));
-}
-
-/// A ray hit's answer fields.
-void writeHit(Answer& out, const MeshRayHit& hit) {
-  out["t"] = writeReal(hit.t, "t");
-  out["point"] = writeVec3(hit.point, "point");
-  out["normal"] = writeVec3(hit.normal, "normal");
-  out["triangle"] = hit.triangle;
+  const std::size_t count = mesh->triangleCount();
+  state.world->addMesh(name, std::move(mesh));
+  answer["triangles"] = count;
 }
 
 /// mesh_ray: closest hit; extensions "all" (every hit, in "hits") and "cull" (back faces).
 void meshRay(const Json& request, Answer& answer, BatchState& state) {
   const std::string meshName = readMeshName(request, "mesh");
   const auto ray = readField<Ray>(request, "ray");
-  std::optional<Real> maxDistance;
-  if (const auto it = request.find("max"); it != request.end()) maxDistance = readReal(*it, "max");
-  const bool all = readFlag(request, "all");
-  const bool cull = readFlag(request, "cull");
+  bool all = false;
+  const RayQueryOptions options = readRayOptions(request, &all);
 
-  const Mesh& mesh = findMesh(state, "mesh", meshName);
+  const MeshHandle mesh = findMesh(state, "mesh", meshName);
   validate(ray, "ray");
-  if (maxDistance && *maxDistance < 0) {
-    std::ostringstream message;
-    message.precision(17);
-    message << "max is negative: " << *maxDistance;
-    throw InvalidInput(message.str());
-  }
-
-  RayQueryOptions options;
-  if (maxDistance) options.maxDistance = *maxDistance;
-  options.cullBackFaces = cull;
-  if (all) {
-    const std::vector<MeshRayHit> hits = raycastAll(mesh, ray, options);
-    answer["hit"] = !hits.empty();
-    if (!hits.empty()) writeHit(answer, hits.front());  // raycastAll sorts as raycastClosest picks
-    Answer list = Answer::array();
-    for (const MeshRayHit& h : hits) {
-      Answer item = Answer::object();
-      writeHit(item, h);
-      list.push_back(std::move(item));
-    }
-    answer["hits"] = std::move(list);
-    return;
-  }
-  const std::optional<MeshRayHit> hit = raycastClosest(mesh, ray, options);
-  answer["hit"] = hit.has_value();
-  if (hit) writeHit(answer, *hit);
+  checkRayOptions(options);
+  RayHitCollector hits(all ? RayCollect::All : RayCollect::Closest);
+  state.world->raycast(mesh, ray, hits, options);
+  writeRayAnswer(answer, hits, all);
 }
 
-/// The mesh-layer test for each query shape (segments "intersect", solids "overlap").
-bool touches(const Mesh& mesh, const Segment& s) { return intersects(mesh, s); }
+/// The world's test for each query shape (segments "intersect", solids "overlap").
+bool touches(CollisionWorld& world, MeshHandle mesh, const Segment& s) { return world.intersects(mesh, s); }
 template <class Shape>
-bool touches(const Mesh& mesh, const Shape& s) {
-  return overlaps(mesh, s);
+bool touches(CollisionWorld& world, MeshHandle mesh, const Shape& s) {
+  return world.overlaps(mesh, s);
 }
 
-/// mesh_<shape>: `hit`; with "triangles": true also the touching triangle indices.
+/// mesh_<shape>: `hit`; with "triangles": true also the touching triangle indices (when the
+/// backend lists them; otherwise the extension is ignored).
 template <class Shape>
 OpHandler meshShape(std::string key) {
   return [key](const Json& request, Answer& answer, BatchState& state) {
     const std::string meshName = readMeshName(request, "mesh");
     const auto shape = readField<Shape>(request, key);
     const bool listTriangles = readFlag(request, "triangles");
-    const Mesh& mesh = findMesh(state, "mesh", meshName);
+    const MeshHandle mesh = findMesh(state, "mesh", meshName);
     validate(shape, key);
     if (listTriangles) {
-      const std::vector<std::uint32_t> touching = touchingTriangles(mesh, shape);
-      answer["hit"] = !touching.empty();
-      answer["triangles"] = touching;
-    } else {
-      answer["hit"] = touches(mesh, shape);
+      if (const auto touching = state.world->touchingTriangles(mesh, shape)) {
+        answer["hit"] = !touching->empty();
+        answer["triangles"] = *touching;
+        return;
+      }
     }
+    answer["hit"] = touches(*state.world, mesh, shape);
   };
 }
 
@@ -197,17 +166,18 @@ void meshMesh(const Json& request, Answer& answer, BatchState& state) {
   const Transform ta = optionalTransform("transform_a");
   const Transform tb = optionalTransform("transform_b");
   const bool listTriangles = readFlag(request, "triangles");
-  const Mesh& a = findMesh(state, "a", nameA);
-  const Mesh& b = findMesh(state, "b", nameB);
+  const MeshHandle a = findMesh(state, "a", nameA);
+  const MeshHandle b = findMesh(state, "b", nameB);
   if (listTriangles) {
-    const auto pairs = touchingTrianglePairs(a, ta, b, tb);
-    answer["hit"] = !pairs.empty();
-    Answer list = Answer::array();
-    for (const auto& [i, j] : pairs) list.push_back(Answer::array({i, j}));
-    answer["triangles"] = std::move(list);
-  } else {
-    answer["hit"] = overlaps(a, ta, b, tb);
+    if (const auto pairs = state.world->touchingTrianglePairs(a, ta, b, tb)) {
+      answer["hit"] = !pairs->empty();
+      Answer list = Answer::array();
+      for (const auto& [i, j] : *pairs) list.push_back(Answer::array({i, j}));
+      answer["triangles"] = std::move(list);
+      return;
+    }
   }
+  answer["hit"] = state.world->overlaps(a, ta, b, tb);
 }
 
 }  // namespace

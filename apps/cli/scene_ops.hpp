@@ -1,16 +1,16 @@
 #pragma once
 /// @file scene_ops.hpp  Handlers of the batch protocol's model and scene ops (see docs/batch.md):
-/// models by name in BatchState's crux::Scene, queried through the model and scene layers.
+/// models by name (BatchState::models), held and queried by the batch's crux::CollisionWorld.
 
 #include "cli/batch.hpp"
 
 namespace crux::cli {
 
-/// Adds `add_model`, `set_transform`, `set_parent`, `remove_model` (crux::Scene edits),
-/// `model_ray`, `model_segment`, `model_sphere`, `model_aabb`, `model_obb`, `model_plane`,
-/// `model_triangle` (the PlacedMesh queries of include/crux/model/model_query.hpp), `children`
-/// (ModelHierarchy::descendants), `scene_ray`, `scene_query` and `scene_pairs` (Scene::raycast,
-/// Scene::query, Scene::overlappingPairs).
+/// Adds `add_model`, `set_transform`, `set_parent`, `remove_model` (CollisionWorld::addModel,
+/// setTransform, setParent, removeModel), `children` (descendants), `model_ray`,
+/// `model_segment`, `model_sphere`, `model_aabb`, `model_obb`, `model_plane`, `model_triangle`
+/// (the world's model queries), `scene_ray`, `scene_query` and `scene_pairs` (sceneRaycast,
+/// sceneQuery, scenePairs). For native these are crux::Scene's edits and queries.
 void addSceneOps(OpTable& table);
 
 }  // namespace crux::cli

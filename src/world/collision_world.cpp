@@ -378,6 +378,35 @@ std::vector<std::pair<std::string, std::string>> CollisionWorld::scenePairs() {
   return guarded(WorldOp::ScenePairs, [&] { return doScenePairs(); });
 }
 
+// ---- extensions -----------------------------------------------------------------------------------
+
+std::optional<std::vector<std::uint32_t>> CollisionWorld::touchingTriangles(MeshHandle mesh,
+                                                                            const MeshQueryShape& shape) {
+  entry(mesh, "mesh");
+  static constexpr std::array<WorldOp, 6> kOps = {WorldOp::MeshSegment, WorldOp::MeshSphere, WorldOp::MeshAabb,
+                                                  WorldOp::MeshObb,     WorldOp::MeshPlane,  WorldOp::MeshTriangle};
+  static constexpr std::array<const char*, 6> kFields = {"segment", "sphere", "aabb", "obb", "plane", "triangle"};
+  std::visit([&](const auto& s) { validate(s, kFields[shape.index()]); }, shape);
+  return guarded(kOps[shape.index()], [&] { return doTouchingTriangles(mesh, shape); });
+}
+
+std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> CollisionWorld::touchingTrianglePairs(
+    MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) {
+  entry(a, "a");
+  entry(b, "b");
+  validateTransform(ta, "transform_a");
+  validateTransform(tb, "transform_b");
+  return guarded(WorldOp::MeshMesh, [&] { return doTouchingTrianglePairs(a, ta, b, tb); });
+}
+
+std::optional<std::vector<std::uint32_t>> CollisionWorld::doTouchingTriangles(MeshHandle, const MeshQueryShape&) {
+  return std::nullopt;
+}
+std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> CollisionWorld::doTouchingTrianglePairs(
+    MeshHandle, const Transform&, MeshHandle, const Transform&) {
+  return std::nullopt;
+}
+
 // ---- default hooks: unsupported -------------------------------------------------------------------
 
 Vec3d CollisionWorld::doClosestPoint(const Triangle&, const Vec3&) { unsupported(WorldOp::ClosestPointTriangle); }

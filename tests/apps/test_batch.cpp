@@ -7,6 +7,8 @@
 #include "cli/json_codec.hpp"
 
 #include <crux/geometry/raycast.hpp>
+#include <crux/world/collision_world.hpp>
+#include <world_factory.hpp>
 
 #include <gtest/gtest.h>
 
@@ -467,12 +469,20 @@ TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   }
 }
 
-TEST(BatchUnsupported, OtherBackendsAnswerEveryOpUnsupported) {
-  for (const Backend b : {Backend::Fcl, Backend::Bullet, Backend::Exact}) {
-    for (const std::string_view name : protocolOps()) {
-      const std::string n(name);
+/// Every built backend answers "unsupported: <op> on <backend>" for exactly the ops its world
+/// does not supports(), before reading any field; the others get past dispatch.
+TEST(BatchUnsupported, EachBackendAnswersUnsupportedExactlyForWhatItDoesNotSupport) {
+  for (const std::string_view name : builtBackends()) {
+    const Backend b = *parseBackend(name);
+    const auto world = makeWorld(name);
+    for (const std::string_view opName : protocolOps()) {
+      const std::string n(opName);
       const Answer a = ask(R"({"op":")" + n + R"(","triangle":)" + kUnitTriangle + "}", b);
-      EXPECT_EQ(errorOf(a), "unsupported: " + n + " on " + std::string(backendName(b))) << a.dump();
+      const std::string unsupported = "unsupported: " + n + " on " + std::string(name);
+      if (world->supports(*parseOp(opName)))
+        EXPECT_NE(errorOf(a), unsupported) << a.dump();
+      else
+        EXPECT_EQ(errorOf(a), unsupported) << a.dump();
     }
   }
 }
@@ -681,9 +691,306 @@ TEST(BatchExecutable, CommandLine) {
   EXPECT_EQ(status, 0);
   EXPECT_EQ(out, R"({"id":"p","op":"triangle_plane","hit":true})" "\n" R"({"error":"empty line"})" "\n"
                  R"({"id":"p","op":"triangle_plane","hit":true})" "\n");
-  const auto [fclStatus, fclOut] = run("printf '%s\\n' '" + request + "' | '" + crux + "' batch --backend fcl");
-  EXPECT_EQ(fclStatus, 0);
-  EXPECT_EQ(fclOut, R"({"id":"p","op":"triangle_plane","error":"unsupported: triangle_plane on fcl"})" "\n");
+  // Every built backend answers through the executable: a clear crossing, or "unsupported".
+  const std::string crossing =
+      R"({"id":"p","op":"triangle_plane","triangle":[[0,0,-1],[1,0,1],[0,1,1]],"plane":{"normal":[0,0,1],"d":0}})";
+  for (const std::string_view name : builtBackends()) {
+    const std::string backend(name);
+    const auto [peerStatus, peerOut] = run("printf '%s\\n' '" + crossing + "' | '" + crux + "' batch --backend " + backend);
+    EXPECT_EQ(peerStatus, 0) << backend;
+    EXPECT_EQ(peerOut, makeWorld(name)->supports(WorldOp::TrianglePlane)
+                           ? std::string(R"({"id":"p","op":"triangle_plane","hit":true})" "\n")
+                           : R"({"id":"p","op":"triangle_plane","error":"unsupported: triangle_plane on )" + backend +
+                                 "\"}\n")
+        << backend;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Every backend through the protocol: the sanity script.
+
+const std::string kCube =
+    R"("vertices":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]],)"
+    R"("triangles":[[0,2,1],[0,3,2],[4,5,6],[4,6,7],[0,1,5],[0,5,4],[1,2,6],[1,6,5],[2,3,7],[2,7,6],[3,0,4],[3,4,7]])";
+const std::string kT = R"([[0,0,0],[4,0,0],[0,4,0]])";
+const std::string kScenePairs = R"({"id":"q","op":"scene_pairs"})";
+const std::string kRot45 = R"([[0.7071067811865476,0.7071067811865476,0],[-0.7071067811865476,0.7071067811865476,0],[0,0,1]])";
+
+/// A script covering every protocol op on unambiguous cases: every hit is a clear crossing or
+/// penetration, every miss a clear separation (no touching, no shape inside a closed mesh), and
+/// every ray meets a face away from its edges.
+std::vector<std::string> sanityScript() {
+  const auto obb = [](const std::string& center, const std::string& half) {
+    return R"({"center":)" + center + R"(,"half":)" + half + R"(,"axes":)" + kRot45 + "}";
+  };
+  const auto at = [](const std::string& t) { return R"({"translation":)" + t + "}"; };
+  return {
+      op("closest_point_triangle", R"("triangle":)" + kT + R"(,"point":[1,1,3])"),
+      op("triangle_sphere", R"("triangle":)" + kT + R"(,"sphere":{"center":[1,1,1],"radius":2})"),
+      op("triangle_sphere", R"("triangle":)" + kT + R"(,"sphere":{"center":[1,1,5],"radius":1})"),
+      op("triangle_aabb", R"("triangle":)" + kT + R"(,"aabb":{"min":[0.5,0.5,-1],"max":[1,1,1]})"),
+      op("triangle_aabb", R"("triangle":)" + kT + R"(,"aabb":{"min":[5,5,-1],"max":[6,6,1]})"),
+      op("triangle_obb", R"("triangle":)" + kT + R"(,"obb":)" + obb("[1,1,0]", "[0.5,0.5,0.5]")),
+      op("triangle_obb", R"("triangle":)" + kT + R"(,"obb":)" + obb("[1,1,3]", "[0.5,0.5,0.5]")),
+      op("triangle_plane", R"("triangle":)" + kT + R"(,"plane":{"normal":[1,0,0],"d":1})"),
+      op("triangle_plane", R"("triangle":)" + kT + R"(,"plane":{"normal":[0,0,1],"d":2})"),
+      op("triangle_triangle", R"("a":)" + kT + R"(,"b":[[1,1,-1],[2,1,1],[1,1,1]])"),
+      op("triangle_triangle", R"("a":)" + kT + R"(,"b":[[1,1,4],[2,1,6],[1,1,6]])"),
+      op("ray_triangle", R"("triangle":)" + kT + R"(,"ray":{"origin":[1,1,5],"dir":[0,0,-1]})"),
+      op("ray_triangle", R"("triangle":)" + kT + R"(,"ray":{"origin":[1,1,5],"dir":[0,0,1]})"),
+      op("segment_triangle", R"("triangle":)" + kT + R"(,"segment":{"start":[1,1,1],"end":[1,1,-1]})"),
+      op("segment_triangle", R"("triangle":)" + kT + R"(,"segment":{"start":[1,1,1],"end":[1,1,2]})"),
+      op("mesh", R"("name":"cube",)" + kCube),
+      op("load_mesh", R"("name":"tetrahedron","path":")" + std::string(CRUX_SOURCE_DIR) +
+                          R"(/data/meshes/reference_tetrahedron.off")"),
+      op("mesh_ray", R"("mesh":"cube","ray":{"origin":[0.25,0.75,5],"dir":[0,0,-1]})"),
+      op("mesh_ray", R"("mesh":"cube","ray":{"origin":[5,5,5],"dir":[0,0,-1]})"),
+      op("mesh_segment", R"("mesh":"cube","segment":{"start":[0.3,0.6,0.5],"end":[0.3,0.6,3]})"),
+      op("mesh_segment", R"("mesh":"cube","segment":{"start":[3,3,3],"end":[4,4,4]})"),
+      op("mesh_sphere", R"("mesh":"cube","sphere":{"center":[0.3,0.6,1],"radius":0.25})"),
+      op("mesh_sphere", R"("mesh":"cube","sphere":{"center":[3,3,3],"radius":0.5})"),
+      op("mesh_aabb", R"("mesh":"cube","aabb":{"min":[0.8,0.8,0.8],"max":[1.5,1.5,1.5]})"),
+      op("mesh_aabb", R"("mesh":"cube","aabb":{"min":[2,2,2],"max":[3,3,3]})"),
+      op("mesh_obb", R"("mesh":"cube","obb":)" + obb("[1,1,1]", "[0.3,0.3,0.3]")),
+      op("mesh_obb", R"("mesh":"cube","obb":)" + obb("[3,3,3]", "[0.3,0.3,0.3]")),
+      op("mesh_plane", R"("mesh":"cube","plane":{"normal":[0,0,1],"d":0.5})"),
+      op("mesh_plane", R"("mesh":"cube","plane":{"normal":[0,0,1],"d":3})"),
+      op("mesh_triangle", R"("mesh":"cube","triangle":[[0.5,0.5,0.5],[2,0.6,0.5],[0.6,2,0.5]])"),
+      op("mesh_triangle", R"("mesh":"cube","triangle":[[3,3,3],[4,3,3],[3,4,3]])"),
+      op("mesh_mesh", R"("a":"cube","b":"cube","transform_b":)" + at("[0.5,0.3,0.2]")),
+      op("mesh_mesh", R"("a":"cube","b":"cube","transform_b":)" + at("[3,0,0]")),
+      op("add_model", R"("name":"a","mesh":"cube")"),
+      op("add_model", R"("name":"b","mesh":"cube","transform":)" + at("[3,0,0]")),
+      op("add_model", R"("name":"c","mesh":"cube","parent":"a","transform":)" + at("[0,0,3]")),
+      op("children", R"("model":"a")"),
+      op("model_ray", R"("model":"c","ray":{"origin":[0.25,0.75,10],"dir":[0,0,-1]})"),
+      op("model_ray", R"("model":"b","ray":{"origin":[0.25,0.75,10],"dir":[0,0,-1]})"),
+      op("model_segment", R"("model":"a","segment":{"start":[0.3,0.6,0.5],"end":[0.3,0.6,2]})"),
+      op("model_segment", R"("model":"b","segment":{"start":[0.3,0.6,0.5],"end":[0.3,0.6,2]})"),
+      op("model_sphere", R"("model":"b","sphere":{"center":[3.3,0.6,1],"radius":0.25})"),
+      op("model_sphere", R"("model":"a","sphere":{"center":[3.3,0.6,1],"radius":0.25})"),
+      op("model_aabb", R"("model":"c","aabb":{"min":[0.8,0.8,3.8],"max":[1.5,1.5,4.5]})"),
+      op("model_aabb", R"("model":"a","aabb":{"min":[0.8,0.8,3.8],"max":[1.5,1.5,4.5]})"),
+      op("model_obb", R"("model":"a","obb":)" + obb("[1,1,1]", "[0.3,0.3,0.3]")),
+      op("model_obb", R"("model":"b","obb":)" + obb("[1,1,1]", "[0.3,0.3,0.3]")),
+      op("model_plane", R"("model":"b","plane":{"normal":[1,0,0],"d":3.5})"),
+      op("model_plane", R"("model":"a","plane":{"normal":[1,0,0],"d":3.5})"),
+      op("model_triangle", R"("model":"a","triangle":[[0.5,0.5,0.5],[2,0.6,0.5],[0.6,2,0.5]])"),
+      op("model_triangle", R"("model":"b","triangle":[[0.5,0.5,0.5],[2,0.6,0.5],[0.6,2,0.5]])"),
+      op("scene_ray", R"("ray":{"origin":[3.25,0.75,10],"dir":[0,0,-1]})"),
+      op("scene_ray", R"("ray":{"origin":[10,10,10],"dir":[0,0,-1]})"),
+      op("scene_query", R"("sphere":{"center":[0.5,0.5,2],"radius":1.2})"),
+      op("scene_query", R"("aabb":{"min":[2.5,-1,-1],"max":[3.5,2,2]})"),
+      op("scene_query", R"("obb":)" + obb("[3.5,0.5,1]", "[0.2,0.2,0.2]")),
+      op("scene_query", R"("aabb":{"min":[-1,-1,-1],"max":[10,10,10]},"bounds":true)"),
+      kScenePairs,
+      op("set_transform", R"("model":"b","transform":)" + at("[0.5,0,0]")),
+      kScenePairs,
+      op("set_parent", R"("model":"c","parent":null)"),
+      op("set_transform", R"("model":"a","transform":)" + at("[0,0,2.5]")),
+      kScenePairs,
+      op("remove_model", R"("model":"c")"),
+      kScenePairs,
+      op("children", R"("model":"a")"),
+      op("scene_ray", R"("ray":{"origin":[0.25,0.75,10],"dir":[0,0,-1]})"),
+  };
+}
+
+/// `peer` equals `native` except that numbers may differ by `tolerance`: same keys in the same
+/// order, same booleans, strings and integers.
+::testing::AssertionResult sameAnswer(const Json& native, const Json& peer, double tolerance) {
+  if (native.is_number_float() || peer.is_number_float()) {
+    if (!native.is_number() || !peer.is_number() ||
+        !(std::fabs(native.get<double>() - peer.get<double>()) <= tolerance))
+      return ::testing::AssertionFailure() << peer.dump() << " != " << native.dump() << " within " << tolerance;
+    return ::testing::AssertionSuccess();
+  }
+  if (native.type() != peer.type()) return ::testing::AssertionFailure() << peer.dump() << " != " << native.dump();
+  if (native.is_array() || native.is_object()) {
+    if (native.size() != peer.size()) return ::testing::AssertionFailure() << peer.dump() << " != " << native.dump();
+    if (native.is_object()) {
+      for (auto it = native.begin(); it != native.end(); ++it) {
+        if (!peer.contains(it.key())) return ::testing::AssertionFailure() << "no " << it.key() << " in " << peer.dump();
+        auto r = sameAnswer(*it, peer[it.key()], tolerance);
+        if (!r) return r << " (member " << it.key() << ")";
+      }
+    } else {
+      for (std::size_t i = 0; i < native.size(); ++i) {
+        auto r = sameAnswer(native[i], peer[i], tolerance);
+        if (!r) return r << " (element " << i << ")";
+      }
+    }
+    return ::testing::AssertionSuccess();
+  }
+  if (native != peer) return ::testing::AssertionFailure() << peer.dump() << " != " << native.dump();
+  return ::testing::AssertionSuccess();
+}
+
+/// Every built backend answers the sanity script: ops it supports() exactly as native does
+/// (numbers within the two backends' declared tolerances), the others "unsupported: <op> on
+/// <backend>". Native itself answers every line without an error, with hits and misses as
+/// hand-checked.
+TEST(BatchBackends, EveryBackendAnswersTheSanityScriptAsNativeDoes) {
+  const std::vector<std::string> script = sanityScript();
+  BatchState native(BatchOptions{Backend::Native, 1});
+  std::vector<Answer> nativeAnswers;
+  for (const std::string& line : script) {
+    nativeAnswers.push_back(answerLine(line, native));
+    EXPECT_EQ(errorOf(nativeAnswers.back()), "") << line << " -> " << nativeAnswers.back().dump();
+  }
+  // Hand-checked answers: the hits and misses alternate as written, and a few values.
+  std::size_t hits = 0, misses = 0;
+  for (const Answer& a : nativeAnswers) {
+    if (!a.contains("hit")) continue;
+    (a["hit"].get<bool>() ? hits : misses) += 1;
+  }
+  EXPECT_EQ(hits, 24u);
+  EXPECT_EQ(misses, 23u);
+  EXPECT_TRUE(isPoint(nativeAnswers[0]["point"], 1, 1, 0));
+  EXPECT_EQ(nativeAnswers[17]["triangle"], 3);
+  EXPECT_EQ(nativeAnswers[36].dump(), R"({"id":"q","op":"children","models":["c"]})");
+  EXPECT_EQ(nativeAnswers[51]["model"], "b");
+  EXPECT_EQ(nativeAnswers[51]["t"], 9.0);
+  EXPECT_EQ(nativeAnswers[53].dump(), R"({"id":"q","op":"scene_query","models":["a","c"]})");
+  EXPECT_EQ(nativeAnswers[55].dump(), R"({"id":"q","op":"scene_query","models":["b"]})");
+  EXPECT_EQ(nativeAnswers[56].dump(), R"({"id":"q","op":"scene_query","models":["a","b","c"]})");
+  EXPECT_EQ(nativeAnswers[57].dump(), R"({"id":"q","op":"scene_pairs","pairs":[]})");
+  EXPECT_EQ(nativeAnswers[59].dump(), R"({"id":"q","op":"scene_pairs","pairs":[["a","b"]]})");
+  EXPECT_EQ(nativeAnswers[62].dump(), R"({"id":"q","op":"scene_pairs","pairs":[["a","c"]]})");
+  EXPECT_EQ(nativeAnswers[64].dump(), R"({"id":"q","op":"scene_pairs","pairs":[]})");
+  EXPECT_EQ(nativeAnswers[65].dump(), R"({"id":"q","op":"children","models":[]})");
+  EXPECT_TRUE(isPoint(nativeAnswers[66]["point"], 0.25, 0.75, 3.5));
+
+  const double nativeError = makeWorld("native")->tolerance().at(10);
+  for (const std::string_view name : builtBackends()) {
+    if (name == "native") continue;
+    BatchState peer(BatchOptions{*parseBackend(name), 1});
+    const double tolerance = nativeError + peer.world->tolerance().at(10);
+    std::size_t supported = 0;
+    for (std::size_t i = 0; i < script.size(); ++i) {
+      const Answer a = answerLine(script[i], peer);
+      const std::string opName = Json::parse(script[i])["op"];
+      if (peer.world->supports(*parseOp(opName))) {
+        ++supported;
+        EXPECT_TRUE(sameAnswer(Json::parse(nativeAnswers[i].dump()), Json::parse(a.dump()), tolerance))
+            << name << ", line " << i << ": " << script[i];
+      } else {
+        EXPECT_EQ(a.dump(), R"({"id":"q","op":")" + opName + R"(","error":"unsupported: )" + opName + " on " +
+                                std::string(name) + R"("})")
+            << script[i];
+      }
+    }
+    std::printf("  %-7s answers %zu of the %zu sanity lines (the others: unsupported)\n", std::string(name).c_str(),
+                supported, script.size());
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// --threads: parallel runs of query lines, answers identical to one thread.
+
+/// A seeded mixed script of `lines` lines: meshes (the cube and the bunny), models added,
+/// moved, re-parented and removed among runs of ray, shape and scene queries, scene_pairs,
+/// malformed and empty lines.
+std::string mixedScript(std::size_t lines, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const auto uniform = [&](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  const auto pick = [&](int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); };
+  const auto vec = [&](double r) {
+    std::ostringstream os;
+    os.precision(17);
+    os << "[" << uniform(-r, r) << "," << uniform(-r, r) << "," << uniform(-r, r) << "]";
+    return os.str();
+  };
+  std::ostringstream out;
+  out << op("mesh", R"("name":"cube",)" + kCube) << "\n";
+  out << op("load_mesh", R"("name":"bunny","path":")" + std::string(CRUX_SOURCE_DIR) + R"(/data/meshes/bunny00.off")")
+      << "\n";
+  int nextModel = 0;
+  std::vector<int> live;
+  const auto model = [&] { return "\"m" + std::to_string(live[std::size_t(pick(int(live.size())))]) + "\""; };
+  for (std::size_t i = 2; i < lines; ++i) {
+    const int r = pick(100);
+    if (live.size() < 4 || r < 3) {
+      const std::string parent = (!live.empty() && pick(3) == 0) ? R"(,"parent":)" + model() : "";
+      out << op("add_model", R"("name":"m)" + std::to_string(nextModel) + R"(","mesh":")" +
+                                 (pick(4) == 0 ? "bunny" : "cube") + R"(","transform":{"translation":)" + vec(3) + "}" +
+                                 parent)
+          << "\n";
+      live.push_back(nextModel++);
+    } else if (r < 6) {
+      out << op("set_transform", R"("model":)" + model() + R"(,"transform":{"translation":)" + vec(3) +
+                                     R"(,"rotation":[0.7071067811865476,0,0.7071067811865476,0]})")
+          << "\n";
+    } else if (r < 7) {
+      const std::size_t k = std::size_t(pick(int(live.size())));
+      out << op("remove_model", R"("model":"m)" + std::to_string(live[k]) + "\"") << "\n";
+      live.erase(live.begin() + std::ptrdiff_t(k));
+    } else if (r < 8) {
+      out << op("set_parent", R"("model":)" + model() + R"(,"parent":)" + (pick(2) ? model() : "null")) << "\n";
+    } else if (r < 9) {
+      out << kScenePairs << "\n";
+    } else if (r < 10) {
+      out << (pick(2) ? "" : "{\"op\":") << "\n";
+    } else if (r < 40) {
+      out << op("scene_ray", R"("ray":{"origin":)" + vec(4) + R"(,"dir":)" + vec(1) + "}") << "\n";
+    } else if (r < 60) {
+      out << op("mesh_ray", R"("mesh":"bunny","all":true,"ray":{"origin":)" + vec(0.2) + R"(,"dir":)" + vec(1) + "}")
+          << "\n";
+    } else if (r < 75) {
+      out << op("model_ray", R"("model":)" + model() + R"(,"ray":{"origin":)" + vec(4) + R"(,"dir":)" + vec(1) + "}")
+          << "\n";
+    } else if (r < 85) {
+      out << op("scene_query", R"("sphere":{"center":)" + vec(4) + R"(,"radius":0.7})") << "\n";
+    } else if (r < 95) {
+      out << op("model_sphere", R"("model":)" + model() + R"(,"sphere":{"center":)" + vec(4) + R"(,"radius":0.5})")
+          << "\n";
+    } else {
+      out << op("children", R"("model":)" + model()) << "\n";
+    }
+  }
+  return out.str();
+}
+
+std::string runWith(const std::string& text, Backend backend, int threads) {
+  std::istringstream in(text);
+  std::ostringstream out;
+  EXPECT_EQ(runBatch(in, out, BatchOptions{backend, threads}), 0);
+  return out.str();
+}
+
+TEST(BatchThreads, ParallelRunsAnswerExactlyAsOneThread) {
+  const std::string text = mixedScript(6000, 8);  // more than one read-ahead window
+  const std::string one = runWith(text, Backend::Native, 1);
+  const auto lines = splitLines(one);
+  ASSERT_EQ(lines.size(), 6000u);
+  std::size_t errors = 0, hits = 0;
+  for (const std::string& l : lines) {
+    errors += l.find("\"error\"") != std::string::npos;
+    hits += l.find("\"hit\":true") != std::string::npos;
+  }
+  EXPECT_GT(hits, 600u) << "the script should hit often";
+  EXPECT_LT(errors, 600u) << "the script should mostly be valid";
+  for (const int threads : {2, 8}) EXPECT_EQ(runWith(text, Backend::Native, threads), one) << threads << " threads";
+  // A window ending in a barrier, and a last window of one line.
+  const std::string edge = op("mesh", R"("name":"cube",)" + kCube) + "\n" +
+                           op("mesh_ray", R"("mesh":"cube","ray":{"origin":[0.25,0.75,5],"dir":[0,0,-1]})") + "\n";
+  EXPECT_EQ(runWith(edge, Backend::Native, 2), runWith(edge, Backend::Native, 1));
+}
+
+TEST(BatchThreads, PeerBackendsAnswerSeriallyWithTheSameOutput) {
+  const std::vector<std::string> script = sanityScript();
+  std::string text;
+  for (const std::string& line : script) text += line + "\n";
+  for (const std::string_view name : builtBackends())
+    EXPECT_EQ(runWith(text, *parseBackend(name), 4), runWith(text, *parseBackend(name), 1)) << name;
+}
+
+TEST(BatchThreads, BarrierOps) {
+  for (const char* name : {"mesh", "load_mesh", "add_model", "set_transform", "set_parent", "remove_model", "scene_pairs"})
+    EXPECT_TRUE(isBarrierOp(name)) << name;
+  std::size_t barriers = 0;
+  for (const std::string_view name : protocolOps()) barriers += isBarrierOp(name);
+  EXPECT_EQ(barriers, 7u);
 }
 
 }  // namespace

@@ -8,6 +8,8 @@
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
 #include <crux/mesh/mesh_query.hpp>
+#include <crux/model/model_query.hpp>
+#include <crux/scene/scene.hpp>
 #include <crux/world/collision_world.hpp>
 #include <crux/world/native_world.hpp>
 #include <exact/exact_world.hpp>
@@ -29,6 +31,8 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 namespace crux {
@@ -580,14 +584,217 @@ TEST(CollisionWorldEdge, OpsAreTheBatchProtocolOps) {
 }
 #endif
 
-TEST(NativeWorld, SupportsExactlyWhatItAnswers) {
+TEST(NativeWorld, SupportsEveryOp) {
   const auto w = makeNativeWorld();
   EXPECT_EQ(w->backend(), "native");
-  for (const WorldOp op : allWorldOps()) {
-    const bool mesh = op <= WorldOp::MeshMesh;
-    EXPECT_EQ(w->supports(op), mesh) << opName(op) << ": models and the scene come with the scene layer";
+  for (const WorldOp op : allWorldOps()) EXPECT_TRUE(w->supports(op)) << opName(op);
+  EXPECT_TRUE(w->scenePairs().empty());
+  EXPECT_TRUE(w->concurrentQueries());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Models and the scene: the native world is a crux::Scene with names.
+
+/// A closed axis-aligned box mesh [0, s]^3.
+std::shared_ptr<const Mesh> boxMesh(Real s, const std::string& meshName) {
+  std::vector<Vec3> v = {{0, 0, 0}, {s, 0, 0}, {s, s, 0}, {0, s, 0}, {0, 0, s}, {s, 0, s}, {s, s, s}, {0, s, s}};
+  std::vector<TriangleIndices> t = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                    {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+  return std::make_shared<const Mesh>(std::move(v), std::move(t), meshName);
+}
+
+/// Runs a seeded random sequence of model edits on a native world and, identically, on a
+/// crux::Scene, checking after every edit that every model, ray and scene query of the world
+/// answers exactly what the scene answers.
+TEST(NativeWorld, ModelAndSceneOpsAreExactlyTheScene) {
+  for (const Family family : {Family::IntegerGrid, Family::GeneralPosition}) {
+    Gen gen(family, 20261122);
+    const auto w = makeNativeWorld();
+    Scene scene;
+    const std::shared_ptr<const Mesh> box = boxMesh(2, "box");
+    const MeshHandle boxHandle = w->addMesh("box", box);
+    std::map<ModelId, std::string> names;  // the scene's ids -> the world's names
+    std::map<ModelId, ModelHandle> handles;
+    int next = 0, rayHits = 0, rays = 0;
+    const auto randomTransform = [&] {
+      Transform t;
+      t.translation = gen.point(6);
+      if (!gen.integer()) t.rotation = gen.rotation();
+      return t;
+    };
+    for (int step = 0; step < 60; ++step) {
+      const int action = names.size() < 3 ? 0 : gen.intIn(0, 4);
+      std::vector<ModelId> ids;
+      for (const auto& [id, n] : names) ids.push_back(id);
+      const ModelId some = ids.empty() ? kNoModel : ids[std::size_t(gen.intIn(0, int(ids.size()) - 1))];
+      std::string what;
+      if (action <= 1) {
+        const Transform t = randomTransform();
+        const ModelId parent = (!ids.empty() && gen.chance(0.4)) ? some : kNoModel;
+        const std::string n = "m" + std::to_string(next++);
+        const ModelId id = scene.add(box, t, parent);
+        const ModelHandle h = w->addModel(n, boxHandle, t, parent == kNoModel ? std::nullopt
+                                                                               : std::optional<ModelHandle>(handles.at(parent)));
+        names[id] = n, handles[id] = h;
+        what = "add " + n + " " + str(t);
+      } else if (action == 2) {
+        const Transform t = randomTransform();
+        scene.setTransform(some, t);
+        w->setTransform(handles.at(some), t);
+        what = "set_transform " + names[some] + " " + str(t);
+      } else if (action == 3) {
+        const ModelId other = ids[std::size_t(gen.intIn(0, int(ids.size()) - 1))];
+        const std::vector<ModelId> below = scene.models().descendants(some);
+        if (other == some || std::binary_search(below.begin(), below.end(), other)) continue;
+        const bool detach = gen.chance(0.3);
+        scene.setParent(some, detach ? kNoModel : other);
+        w->setParent(handles.at(some), detach ? std::nullopt : std::optional<ModelHandle>(handles.at(other)));
+        what = "set_parent " + names[some] + " " + (detach ? std::string("null") : names[other]);
+      } else {
+        what = "remove " + names[some];
+        scene.remove(some);
+        w->removeModel(handles.at(some));
+        names.erase(some), handles.erase(some);
+      }
+      SCOPED_TRACE("step " + std::to_string(step) + " (" + name(family) + "): " + what);
+
+      for (const auto& [id, n] : names) {
+        ASSERT_EQ(w->findModel(n), handles.at(id));
+        std::vector<std::string> want;
+        for (const ModelId d : scene.models().descendants(id)) want.push_back(names.at(d));
+        std::sort(want.begin(), want.end());
+        EXPECT_EQ(w->descendants(handles.at(id)), want) << n;
+        const Ray r = gen.ray(6);
+        RayHitCollector all(RayCollect::All);
+        w->raycast(handles.at(id), r, all);
+        const std::vector<MeshRayHit> direct = raycastAll(scene.placed(id), r);
+        ASSERT_EQ(all.hits().size(), direct.size()) << n << " " << str(r);
+        for (std::size_t k = 0; k < direct.size(); ++k) {
+          WorldRayHit expected = toWorld(direct[k]);
+          expected.model = handles.at(id);
+          EXPECT_TRUE(same(all.hits()[k], expected)) << n << " " << str(r);
+        }
+        const Sphere sp = gen.sphere(6, 2);
+        EXPECT_EQ(w->overlaps(handles.at(id), sp), overlaps(scene.placed(id), sp)) << n << " " << str(sp);
+        const Segment sg = gen.segment(6);
+        EXPECT_EQ(w->intersects(handles.at(id), sg), intersects(scene.placed(id), sg)) << n << " " << str(sg);
+        const Triangle tr = gen.triangle(6);
+        EXPECT_EQ(w->overlaps(handles.at(id), tr), overlaps(scene.placed(id), tr)) << n << " " << str(tr);
+      }
+      for (int k = 0; k < 4; ++k) {
+        const Ray r = gen.ray(8);
+        RayHitCollector closest;
+        w->sceneRaycast(r, closest);
+        const std::optional<SceneRayHit> direct = scene.raycast(r);
+        ++rays;
+        ASSERT_EQ(closest.hasHit(), direct.has_value()) << str(r);
+        if (!direct) continue;
+        ++rayHits;
+        WorldRayHit expected = toWorld(direct->hit);
+        expected.model = handles.at(direct->model);
+        EXPECT_TRUE(same(*closest.hit(), expected)) << str(r);
+        const Aabb b = gen.aabb(6, 3);
+        for (const bool bounds : {false, true}) {
+          std::vector<std::string> want;
+          for (const ModelId id : scene.query(b, bounds ? RegionTest::Bounds : RegionTest::Triangles))
+            want.push_back(names.at(id));
+          std::sort(want.begin(), want.end());
+          EXPECT_EQ(w->sceneQuery(b, bounds), want) << str(b) << " bounds " << bounds;
+        }
+      }
+      std::vector<std::pair<std::string, std::string>> pairs;
+      for (const auto& [a, b] : scene.overlappingPairs())
+        pairs.emplace_back(std::min(names.at(a), names.at(b)), std::max(names.at(a), names.at(b)));
+      std::sort(pairs.begin(), pairs.end());
+      EXPECT_EQ(w->scenePairs(), pairs);
+    }
+    EXPECT_GE(rayHits, rays / 10) << name(family) << ": scene rays should hit now and then";
   }
-  EXPECT_THROW(w->scenePairs(), Unsupported);
+}
+
+TEST(NativeWorld, ModelErrorsNameTheField) {
+  const auto w = makeNativeWorld();
+  const MeshHandle box = w->addMesh("box", boxMesh(1, "box"));
+  const ModelHandle a = w->addModel("a", box);
+  const ModelHandle b = w->addModel("b", box, Transform{}, a);
+  EXPECT_EQ(invalidInputMessage([&] { w->addModel("a", box); }), "name: a model named \"a\" already exists");
+  EXPECT_EQ(invalidInputMessage([&] { w->addModel("", box); }), "name: a model name must not be empty");
+  EXPECT_EQ(invalidInputMessage([&] { w->addModel("c", box, Transform{}, ModelHandle{77}); }),
+            "parent: no model with handle 77 in this world");
+  EXPECT_EQ(invalidInputMessage([&] { w->setParent(a, a); }), "parent: \"a\" is the model itself (a cycle)");
+  EXPECT_EQ(invalidInputMessage([&] { w->setParent(a, b); }), "parent: \"b\" descends from \"a\" (a cycle)");
+  EXPECT_EQ(invalidInputMessage([&] { w->setTransform(ModelHandle{5}, Transform{}); }),
+            "model: no model with handle 5 in this world");
+  EXPECT_EQ(invalidInputMessage([&] { w->overlaps(ModelHandle{5}, Sphere{}); }),
+            "model: no model with handle 5 in this world");
+  w->removeModel(a);
+  EXPECT_FALSE(w->findModel("a"));
+  EXPECT_EQ(invalidInputMessage([&] { w->descendants(a); }), "model: no model with handle 0 in this world");
+  EXPECT_EQ(w->descendants(b), std::vector<std::string>{});
+  // Removing the mesh keeps the models' geometry (meshes are shared).
+  w->removeMesh("box");
+  EXPECT_TRUE(w->overlaps(b, Sphere{Vec3(Real(0.5), Real(0.5), 0), 0}));
+}
+
+/// The extension listing the touching triangles is the mesh layer's.
+TEST(NativeWorld, TouchingTrianglesAreTheMeshLayers) {
+  Gen gen(Family::IntegerGrid, 7);
+  const auto w = makeNativeWorld();
+  const auto mesh = gen.mesh(40, "soup");
+  const MeshHandle m = w->addMesh("soup", mesh);
+  for (int i = 0; i < 200; ++i) {
+    const Sphere s = gen.sphere(4, 2);
+    EXPECT_EQ(w->touchingTriangles(m, s), std::optional(touchingTriangles(*mesh, s))) << str(s);
+    const Segment g = gen.segment(4);
+    EXPECT_EQ(w->touchingTriangles(m, g), std::optional(touchingTriangles(*mesh, g))) << str(g);
+    const Transform ta, tb{Quat::Identity(), gen.point(2)};
+    EXPECT_EQ(w->touchingTrianglePairs(m, ta, m, tb), std::optional(touchingTrianglePairs(*mesh, ta, *mesh, tb)));
+  }
+}
+
+/// Queries from several threads at once after prepareConcurrentQueries() answer what one
+/// thread answers (run under ThreadSanitizer to check for races).
+TEST(NativeWorld, ConcurrentQueriesAfterPrepareMatchSerial) {
+  Gen gen(Family::GeneralPosition, 99);
+  const auto w = makeNativeWorld();
+  const MeshHandle box = w->addMesh("box", boxMesh(1, "box"));
+  std::vector<ModelHandle> models;
+  for (int i = 0; i < 30; ++i) {
+    Transform t;
+    t.translation = gen.point(20);
+    t.rotation = gen.rotation();
+    models.push_back(w->addModel("m" + std::to_string(i), box, t, i % 3 ? std::optional(models.back()) : std::nullopt));
+  }
+  for (int i = 0; i < 30; i += 4) w->setTransform(models[std::size_t(i)], Transform{gen.rotation(), gen.point(20)});
+  std::vector<Ray> rays;
+  for (int i = 0; i < 400; ++i) rays.push_back(gen.ray(20));
+  const auto answer = [&](std::size_t i) {
+    RayHitCollector c;
+    w->sceneRaycast(rays[i], c);
+    const bool model = w->overlaps(models[i % models.size()], Sphere{rays[i].origin, 3});
+    return std::make_pair(c.hit() ? c.hit()->t : -1.0, model);
+  };
+  w->prepareConcurrentQueries();
+  std::vector<std::pair<double, bool>> serial(rays.size()), parallel(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) serial[i] = answer(i);
+  w->setTransform(models[1], Transform{gen.rotation(), gen.point(20)});  // stale world transforms again
+  w->setTransform(models[1], Transform{});
+  for (std::size_t i = 0; i < rays.size(); ++i) serial[i] = answer(i);
+  w->setTransform(models[1], Transform{gen.rotation(), gen.point(20)});
+  w->setTransform(models[1], Transform{});
+  w->prepareConcurrentQueries();
+  std::vector<std::thread> threads;
+  for (std::size_t k = 0; k < 4; ++k)
+    threads.emplace_back([&, k] {
+      for (std::size_t i = k; i < rays.size(); i += 4) parallel[i] = answer(i);
+    });
+  for (std::thread& t : threads) t.join();
+  int hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_EQ(parallel[i], serial[i]) << str(rays[i]);
+    hits += serial[i].first >= 0;
+  }
+  EXPECT_GT(hits, 0);
 }
 
 }  // namespace

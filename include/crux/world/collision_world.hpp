@@ -213,6 +213,9 @@ struct WorldTolerance {
 /// Shapes a scene query accepts.
 using SceneQueryShape = std::variant<Sphere, Aabb, Obb>;
 
+/// Shapes a mesh query accepts (mesh_segment ... mesh_triangle), for touchingTriangles.
+using MeshQueryShape = std::variant<Segment, Sphere, Aabb, Obb, Plane, Triangle>;
+
 /// A world of meshes, models and a scene, answering every query of the batch protocol through
 /// one collision library. Not thread-safe: one world per thread.
 ///
@@ -330,6 +333,31 @@ class CollisionWorld {
   /// scene_pairs: sorted name pairs (a < b) of models whose triangles touch.
   std::vector<std::pair<std::string, std::string>> scenePairs();
 
+  // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
+
+  /// mesh_<shape> with "triangles": true: the ascending indices of the mesh's triangles the
+  /// shape touches, or nothing when the backend does not list triangles (callers then ask
+  /// intersects/overlaps for the hit alone).
+  std::optional<std::vector<std::uint32_t>> touchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
+  /// mesh_mesh with "triangles": true: the sorted pairs (triangle of a, triangle of b) that
+  /// touch, or nothing when the backend does not list them.
+  std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> touchingTrianglePairs(MeshHandle a,
+                                                                                          const Transform& ta,
+                                                                                          MeshHandle b,
+                                                                                          const Transform& tb);
+
+  // ---- concurrency ------------------------------------------------------------------------------
+
+  /// Whether queries (every op except mesh, load_mesh, add_model, set_transform, set_parent,
+  /// remove_model and scene_pairs, which may update caches) may run on several threads at once
+  /// once prepareConcurrentQueries() was called after the last change. False unless the
+  /// backend says so: peer libraries are not thread-safe.
+  virtual bool concurrentQueries() const { return false; }
+  /// Brings every lazily computed cache up to date (e.g. cached world transforms), so that the
+  /// queries above only read shared state. Call it after the last change and before queries go
+  /// parallel; it is itself a change (exclusive).
+  virtual void prepareConcurrentQueries() {}
+
  protected:
   CollisionWorld() = default;
 
@@ -378,6 +406,11 @@ class CollisionWorld {
   virtual void doSceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options);
   virtual std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly);
   virtual std::vector<std::pair<std::string, std::string>> doScenePairs();
+
+  /// Extensions; the defaults return nothing (triangles not listed).
+  virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
+  virtual std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> doTouchingTrianglePairs(
+      MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb);
 
  private:
   struct MeshEntry {
