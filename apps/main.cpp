@@ -1,17 +1,26 @@
 /// @file main.cpp  The `crux` command line: argument parsing only; the work is in apps/cli/.
 
 #include "cli/batch.hpp"
+#include "cli/diff.hpp"
 #include "cli/info.hpp"
+#include "cli/report.hpp"
 
 #include <crux/config.hpp>
 #include <crux/error.hpp>
 
 #include <CLI/CLI.hpp>
 
+#include <cstdio>
 #include <iostream>
 #include <limits>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
+
+#ifndef CRUX_DIFF_DEFAULT_MESH_DIR
+#define CRUX_DIFF_DEFAULT_MESH_DIR "data/meshes"  // relative to the working directory
+#endif
 
 namespace {
 
@@ -42,8 +51,8 @@ int main(int argc, char** argv) {
   batch
       ->add_option("--backend", backend,
                    "Library that answers the queries: " + joinedBackendNames(", ") +
-                       ". Only native is implemented; the others answer every op with "
-                       "\"unsupported: <op> on <backend>\".")
+                       " (a crux::CollisionWorld each). An op the backend cannot answer gets "
+                       "\"unsupported: <op> on <backend>\"; a backend not built in exits with status 2.")
       ->capture_default_str()
       ->check(CLI::Validator(
           [](std::string& name) {
@@ -54,8 +63,9 @@ int main(int argc, char** argv) {
           joinedBackendNames("|"), "backend"));
   batch
       ->add_option("--threads", threads,
-                   "Worker threads, N >= 1. Accepted; requests are currently answered sequentially "
-                   "(the output is the same either way).")
+                   "Worker threads, N >= 1 (oneTBB). Runs of query lines between state changes are "
+                   "answered in parallel on native; fcl, bullet and exact answer serially. The output "
+                   "is identical for every N.")
       ->capture_default_str()
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
 
@@ -69,6 +79,55 @@ int main(int argc, char** argv) {
   bool infoJson = false;
   info->add_option("meshes", meshPaths, "Mesh files")->required();
   info->add_flag("--json", infoJson, "One JSON object per file and line instead of the text report");
+
+  // ---- crux diff (the differential fuzzer, docs/diff.md) ----
+  CLI::App* diff = app.add_subcommand(
+      "diff",
+      "Differential fuzzer: generate cases in named families, answer them on every backend through the "
+      "batch protocol, classify each answer against the exact backend, shrink and write the "
+      "interesting ones, and print an op x backend summary (docs/diff.md). Exit status 1 when a "
+      "crux-wrong case was found.");
+  crux::cli::DiffOptions diffOptions;
+  diffOptions.meshDir = CRUX_DIFF_DEFAULT_MESH_DIR;
+  std::string diffFamilies, diffOps, diffBackends;
+  diff->add_option("--seed", diffOptions.seed, "Seed of the run (cases derive their seeds from it)")->capture_default_str();
+  auto* diffCases = diff->add_option("--cases", diffOptions.cases, "Number of cases")->capture_default_str();
+  diff->add_option("--seconds", diffOptions.seconds, "Run for this many seconds instead of --cases")
+      ->excludes(diffCases)
+      ->check(CLI::PositiveNumber);
+  diff->add_option("--families", diffFamilies, "Comma-separated families (default: all)");
+  diff->add_option("--ops", diffOps, "Comma-separated query ops (default: all)");
+  diff->add_option("--backends", diffBackends, "Comma-separated backends (default: every one built; exact always runs)");
+  diff->add_option("--out", diffOptions.outDir, "Write shrunk crux-wrong and peer-wrong cases here (JSON Lines + .json sidecar)");
+  diff->add_option("--json", diffOptions.jsonFile, "Write the summary as JSON to this file");
+  diff->add_option("--meshes", diffOptions.meshDir, "Directory of the real meshes (bunny00.off, cow.off, ...)")
+      ->capture_default_str();
+  diff->add_flag("--quiet", diffOptions.quiet, "No text summary");
+
+  // ---- crux report (the main job, docs/report.md) ----
+  CLI::App* report = app.add_subcommand(
+      "report",
+      "The main job: cross-validation (oracle sanity suite, crux diff) and performance against Embree, "
+      "FCL and Bullet (bench_mesh, bench_scene, bench_scaling, ...), written to DIR/index.html (SVG "
+      "charts), DIR/summary.md and DIR/results.json (docs/report.md). Progress on stderr.");
+  crux::cli::ReportOptions reportOptions;
+  bool reportQuick = false, reportFull = false;
+  std::string reportBudget;
+  report->add_option("--out", reportOptions.outDir, "Output directory")->capture_default_str();
+  auto* reportQuickFlag = report->add_flag("--quick", reportQuick, "A few minutes on 2 cores (the default)");
+  report->add_flag("--full", reportFull, "The whole sweep: meshes to 1M triangles, scenes to 100k models")
+      ->excludes(reportQuickFlag);
+  report->add_option("--budget", reportBudget, "tiny|quick|full (tiny: seconds, for tests; overrides --quick/--full)")
+      ->check(CLI::IsMember({"tiny", "quick", "full"}));
+  report->add_option("--clock", reportOptions.clock,
+                     "Clock of the single-threaded benches: wall, cpu, or auto (cpu when the load average "
+                     "exceeds half the hardware threads)")
+      ->check(CLI::IsMember({"wall", "cpu", "auto"}))
+      ->capture_default_str();
+  report->add_flag("--callgrind", reportOptions.callgrind,
+                   "Also count instructions per ray per backend under valgrind's callgrind");
+  report->add_option("--bin-dir", reportOptions.binDir,
+                     "Directory of the bench executables and test_sanity (default: next to crux)");
 
   try {
     app.parse(argc, argv);
@@ -90,6 +149,38 @@ int main(int argc, char** argv) {
       std::cerr << "crux batch: " << e.what() << '\n';
       return 2;
     }
+  }
+  if (diff->parsed()) {
+    auto split = [](const std::string& list) {
+      std::vector<std::string> out;
+      std::string item;
+      for (char ch : list + ",") {
+        if (ch == ',') {
+          if (!item.empty()) out.push_back(item);
+          item.clear();
+        } else if (ch != ' ') {
+          item += ch;
+        }
+      }
+      return out;
+    };
+    diffOptions.families = split(diffFamilies);
+    diffOptions.ops = split(diffOps);
+    diffOptions.backends = split(diffBackends);
+    diffOptions.progress = !diffOptions.quiet && isatty(fileno(stderr));
+    try {
+      return crux::cli::runDiffCommand(diffOptions, std::cout, std::cerr);
+    } catch (const crux::InvalidInput& e) {
+      std::cerr << "crux diff: " << e.what() << '\n';
+      return 2;
+    }
+  }
+  if (report->parsed()) {
+    reportOptions.budget = reportFull ? crux::cli::ReportBudget::Full : crux::cli::ReportBudget::Quick;
+    if (reportBudget == "tiny") reportOptions.budget = crux::cli::ReportBudget::Tiny;
+    if (reportBudget == "full") reportOptions.budget = crux::cli::ReportBudget::Full;
+    if (reportBudget == "quick") reportOptions.budget = crux::cli::ReportBudget::Quick;
+    return crux::cli::runReport(reportOptions, std::cerr);
   }
   if (info->parsed()) {
     crux::cli::InfoOptions options;

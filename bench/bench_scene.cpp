@@ -80,6 +80,7 @@ struct Options {
   std::uint64_t seed = 20240601;
   std::string only;  // run only engines whose name contains this (profiling)
   std::string workloads = "pairs,rays,boxes,spheres";
+  std::string json;  // --json FILE: every row (crux report reads it)
   bool has(const char* w) const { return workloads.find(w) != std::string::npos; }
 };
 
@@ -856,10 +857,46 @@ void printScaling(const Options& opt) {
   }
 }
 
+std::string jsonText(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+/// --json FILE: the settings and every printed row (seconds per frame or per query).
+void writeJson(const Options& opt) {
+  std::ofstream out(opt.json);
+  if (!out) {
+    std::fprintf(stderr, "bench_scene: cannot write %s\n", opt.json.c_str());
+    return;
+  }
+  out << "{\n  \"bench\": \"bench_scene\",\n  \"build_type\": " << jsonText(CRUX_BENCH_BUILD_TYPE)
+      << ",\n  \"crux_real\": " << jsonText(sizeof(Real) == sizeof(float) ? "float" : "double")
+      << ",\n  \"quick\": " << (opt.quick ? "true" : "false") << ",\n  \"runs\": " << opt.runs
+      << ",\n  \"clock\": " << jsonText(opt.cpuClock ? "cpu" : "wall") << ",\n  \"seed\": " << opt.seed
+      << ",\n  \"rows\": [";
+  char number[32];
+  for (std::size_t i = 0; i < gRows.size(); ++i) {
+    const Row& r = gRows[i];
+    out << (i ? "," : "") << "\n    {\"models\": " << r.models << ", \"workload\": " << jsonText(r.workload)
+        << ", \"engine\": " << jsonText(r.engine) << ", \"agreement\": " << jsonText(r.agree);
+    std::snprintf(number, sizeof number, "%.9g", r.perItem);
+    out << ", \"seconds_per_item\": " << number;
+    std::snprintf(number, sizeof number, "%.4g", r.cpuShare);
+    out << ", \"cpu_share\": " << number;
+    std::snprintf(number, sizeof number, "%.9g", r.items);
+    out << ", \"items\": " << number << "}";
+  }
+  out << "\n  ]\n}\n";
+}
+
 void usage() {
   std::printf(
       "bench_scene [--quick] [--sizes N,N,...] [--runs R] [--clock wall|cpu] [--seed S] [--only ENGINE]\n"
-      "            [--workloads pairs,rays,boxes,spheres]\n"
+      "            [--workloads pairs,rays,boxes,spheres] [--json FILE]\n"
       "  crux scenes (3 broad phases) vs Bullet btCollisionWorld+btDbvtBroadphase and FCL\n"
       "  DynamicAABBTreeCollisionManager: update+pairs, scene rays, region queries.\n");
 }
@@ -895,6 +932,8 @@ int main(int argc, char** argv) {
       opt.only = next();
     } else if (a == "--workloads") {
       opt.workloads = next();
+    } else if (a == "--json") {
+      opt.json = next();
     } else {
       usage();
       return a == "--help" || a == "-h" ? 0 : 2;
@@ -976,6 +1015,7 @@ int main(int argc, char** argv) {
   }
   printTargets(opt);
   printScaling(opt);
+  if (!opt.json.empty()) writeJson(opt);
   std::printf("\nload average at end: %s\n", loadAverage().c_str());
   return 0;
 }

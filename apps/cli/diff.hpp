@@ -1,0 +1,181 @@
+#pragma once
+/// @file diff.hpp  `crux diff`: the differential fuzzer (issue 5; user documentation: docs/diff.md).
+///
+/// Generates cases in named families, runs each through the batch protocol (answerLine, one fresh
+/// BatchState per backend, so every case is replayable with `crux batch --backend X`), compares
+/// every backend's answer with the exact (CGAL) backend's, classifies each disagreement, shrinks the
+/// interesting ones to minimal reproductions and summarises the run per op × backend.
+///
+/// A case is a short list of protocol request lines: setup lines (`mesh`, `load_mesh`,
+/// `add_model`, ...) then one query line. Classification of a backend's answer against the
+/// arbiter's (the rules are in docs/diff.md):
+/// - agree: equal booleans and lists, numbers within the two backends' declared tolerances;
+/// - within tolerance: the case is within the backend's declared tolerance τ of a boundary —
+///   moving the query shape by an offset in {-τ,0,τ}³ changes the exact answer — or it is
+///   outside the backend's declared working range (shapes smaller than its minFeature);
+///   never for native booleans on integer-grid cases (those must be exact);
+/// - crux wrong (native) / peer wrong (fcl, bullet, with a likely cause);
+/// - unsupported, error (an error answer where the arbiter answered).
+
+#include "cli/batch.hpp"
+
+#include <crux/world/collision_world.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <iosfwd>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace crux::cli {
+
+/// One generated case: setup lines then one query line, all protocol JSON.
+struct DiffCase {
+  std::string family;
+  std::uint64_t seed = 0;   ///< the run's seed
+  std::uint64_t index = 0;  ///< the case's index in the run (its own seed derives from both)
+  std::string op;           ///< the query's op
+  std::vector<std::string> setup;
+  std::string query;
+  /// Every coordinate is an integer and every transform maps the grid onto itself: native's
+  /// booleans must equal exact's with no tolerance.
+  bool exactGrid = false;
+  /// The setup only loads real meshes (load_mesh lines) and is shared by many cases: runners
+  /// may answer the query in a state prepared once.
+  bool sharedSetup = false;
+  /// Typical size of the case's shapes (compared with a backend's minFeature).
+  double featureSize = 1;
+  /// Largest coordinate magnitude of meshes loaded from files (the lines do not show it).
+  double extraMagnitude = 0;
+};
+
+/// The verdict on one backend's answer to a case.
+enum class Verdict { Agree, WithinTolerance, PeerWrong, CruxWrong, Unsupported, Error, NoArbiter };
+/// "agree", "within_tolerance", "peer_wrong", "crux_wrong", "unsupported", "error", "no_arbiter".
+std::string_view verdictName(Verdict verdict);
+
+/// A verdict with its likely cause ("" when none applies) and a one-line detail.
+struct Classification {
+  Verdict verdict = Verdict::Agree;
+  std::string cause;
+  std::string detail;
+  friend bool operator==(const Classification& a, const Classification& b) {
+    return a.verdict == b.verdict && a.cause == b.cause;
+  }
+};
+
+/// Every family name, in generation order: general, grid, coplanar, touching, degenerate,
+/// near_degenerate, huge, tiny, transformed, mesh, hierarchy, scene.
+const std::vector<std::string_view>& diffFamilies();
+/// The query ops a family generates.
+const std::vector<std::string_view>& diffFamilyOps(std::string_view family);
+
+/// Inputs of case generation that do not change between cases.
+struct DiffGenerator {
+  /// Directory holding the real meshes (data/meshes); empty: the mesh family uses generated
+  /// meshes only.
+  std::string meshDir;
+  /// Query ops to generate (empty: all).
+  std::vector<std::string> ops;
+  /// Real meshes loaded once (name -> mesh), filled lazily by generateCase.
+  std::map<std::string, std::shared_ptr<const Mesh>, std::less<>> realMeshes;
+};
+
+/// The per-case seed of case `index` in a run seeded `seed` (SplitMix64 of both).
+std::uint64_t caseSeed(std::uint64_t seed, std::uint64_t index);
+/// Generates case `index` of `family` for a run seeded `seed`; nothing when the family has no
+/// op in the generator's op filter. Deterministic in (family, seed, index, generator options).
+std::optional<DiffCase> generateCase(std::string_view family, std::uint64_t seed, std::uint64_t index,
+                                     DiffGenerator& generator);
+
+/// Largest coordinate magnitude of a case (points, radii, plane offsets, translations;
+/// directions, normals, rotations and indices excluded), at least extraMagnitude.
+double caseMagnitude(const DiffCase& c);
+/// The case with its query shape (or, for scene_pairs, the last model) translated by `offset`;
+/// nothing when the op has no shape to move (children).
+std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset);
+
+/// Whether two answers to `queryLine` agree: equal booleans and lists (a bounds-only
+/// scene_query may answer a superset), numbers within `tolerance`. Error answers never agree.
+bool answersAgree(const std::string& queryLine, const Answer& got, const Answer& exact, double tolerance);
+
+/// Runs cases through the batch protocol, one BatchState per backend and case (shared-setup
+/// cases reuse one prepared state per backend and setup).
+class DiffRunner {
+ public:
+  DiffRunner();
+  ~DiffRunner();
+  /// The answer of `backend` to the case's query; an error in a setup line is returned as the
+  /// answer (its "error" prefixed with "setup: ").
+  Answer run(const DiffCase& c, std::string_view backend);
+  /// The declared tolerance of a backend (from its CollisionWorld).
+  WorldTolerance tolerance(std::string_view backend);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Classifies `got` (the answer of `backend`) against `exact`, the arbiter's answer to the
+/// same case. `probeExact` answers translated cases on the exact backend (used for the
+/// within-tolerance and cause rules). `tol` is the backend's declared tolerance, `exactTol`
+/// the arbiter's.
+Classification classifyAnswer(const DiffCase& c, std::string_view backend, const Answer& got, const Answer& exact,
+                              const WorldTolerance& tol, const WorldTolerance& exactTol,
+                              const std::function<Answer(const DiffCase&)>& probeExact);
+
+/// Greedy shrinking: drops setup lines and mesh triangles, snaps numbers to 0, integers, fewer
+/// mantissa bits and halves, keeping every change after which `classify` still gives `target`.
+/// At most `budget` evaluations.
+DiffCase shrinkCase(const DiffCase& c, const Classification& target,
+                    const std::function<std::optional<Classification>(const DiffCase&)>& classify, int budget);
+
+/// Options of one `crux diff` run.
+struct DiffOptions {
+  std::uint64_t seed = 1;
+  /// Number of cases; ignored when seconds > 0.
+  std::uint64_t cases = 1000;
+  /// Run for this many seconds instead of a fixed number of cases (0: use cases).
+  double seconds = 0;
+  std::vector<std::string> families;  ///< empty: all
+  std::vector<std::string> ops;       ///< empty: all
+  std::vector<std::string> backends;  ///< empty: every backend built; exact is always run
+  std::string outDir;                 ///< write shrunk cases here ("" : do not)
+  std::string jsonFile;               ///< write the summary as JSON here ("" : do not)
+  std::string meshDir;                ///< real meshes ("" : generated meshes only)
+  bool quiet = false;                 ///< no text summary
+  bool progress = false;              ///< draw a progress line on `err` (a terminal)
+  int shrinkPerKind = 2;              ///< shrunk cases written per (backend, op, verdict, cause)
+};
+
+/// Counts of one run: per op and backend, per verdict; peer-wrong and within-tolerance causes
+/// per backend; the shrunk cases written.
+struct DiffSummary {
+  std::uint64_t cases = 0;
+  double seconds = 0;
+  std::map<std::string, std::map<std::string, std::map<std::string, std::uint64_t>>> table;  // op, backend, verdict
+  std::map<std::string, std::map<std::string, std::uint64_t>> peerCauses;                    // backend, cause
+  std::map<std::string, std::map<std::string, std::uint64_t>> toleranceCauses;               // backend, cause
+  std::vector<Answer> findings;  ///< crux-wrong and shrunk peer cases (metadata)
+  std::uint64_t cruxWrong = 0;
+  /// The first error answer per "backend.op" (with its case), for diagnosis.
+  std::map<std::string, std::string> exampleErrors;
+  /// The summary as JSON (deterministic for a given seed and case count, except "seconds").
+  Answer toJson() const;
+  /// The op × backend table and the causes as text.
+  void print(std::ostream& out) const;
+};
+
+/// Runs the fuzzer. Returns the summary; throws InvalidInput for bad options (unknown family,
+/// op or backend).
+DiffSummary runDiff(const DiffOptions& options, std::ostream& err);
+
+/// `crux diff`: runs, prints the summary on `out` (unless quiet), writes --json. Returns 1 when a
+/// crux-wrong case was found, 0 otherwise.
+int runDiffCommand(const DiffOptions& options, std::ostream& out, std::ostream& err);
+
+}  // namespace crux::cli

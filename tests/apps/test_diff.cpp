@@ -1,0 +1,288 @@
+// Tests of `crux diff` (apps/cli/diff.cpp, diff_generate.cpp): one test per classification rule on
+// hand-built cases, generation, shrinking, determinism, and a short run that must find no
+// crux-wrong case.
+
+#include "cli/diff.hpp"
+
+#include <world_factory.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+
+namespace crux::cli {
+namespace {
+
+using J = Answer;
+
+/// A one-line case (no setup).
+DiffCase primitive(const std::string& query, bool grid) {
+  DiffCase c;
+  c.query = query;
+  c.op = J::parse(query)["op"].get<std::string>();
+  c.exactGrid = grid;
+  return c;
+}
+
+J answer(const std::string& op, bool hit) { return J{{"op", op}, {"hit", hit}}; }
+
+/// Classifies a made-up answer of `backend` against the real exact backend.
+Classification classify(DiffRunner& runner, const DiffCase& c, const std::string& backend, const J& got) {
+  const J exact = runner.run(c, "exact");
+  auto probe = [&](const DiffCase& moved) { return runner.run(moved, "exact"); };
+  return classifyAnswer(c, backend, got, exact, runner.tolerance(backend), runner.tolerance("exact"), probe);
+}
+
+std::string describe(const Classification& k) {
+  return std::string(verdictName(k.verdict)) + " (" + k.cause + "): " + k.detail;
+}
+
+// A triangle and a sphere touching at the corner (0,0,0); a second sphere 1 unit away.
+const std::string kTouching =
+    R"({"op":"triangle_sphere","triangle":[[0,0,0],[4,0,0],[0,4,0]],"sphere":{"center":[-2,0,0],"radius":2}})";
+const std::string kSeparated =
+    R"({"op":"triangle_sphere","triangle":[[0,0,0],[4,0,0],[0,4,0]],"sphere":{"center":[-3,0,0],"radius":2}})";
+
+TEST(DiffClassify, AgreeWhenEqual) {
+  DiffRunner runner;
+  const auto k = classify(runner, primitive(kSeparated, true), "fcl", answer("triangle_sphere", false));
+  EXPECT_EQ(k.verdict, Verdict::Agree) << describe(k);
+}
+
+TEST(DiffClassify, NativeGridBooleanIsNeverWithinTolerance) {
+  DiffRunner runner;
+  // exact says hit (touching); a native miss on an integer-grid case is a crux bug, however close
+  const auto k = classify(runner, primitive(kTouching, true), "native", answer("triangle_sphere", false));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "grid-exactness");
+}
+
+TEST(DiffClassify, NativeOffGridTouchingIsWithinTolerance) {
+  DiffRunner runner;
+  const auto k = classify(runner, primitive(kTouching, false), "native", answer("triangle_sphere", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "boundary");
+}
+
+TEST(DiffClassify, NativeClearMissIsCruxWrong) {
+  DiffRunner runner;
+  const auto k = classify(runner, primitive(kSeparated, false), "native", answer("triangle_sphere", true));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "beyond-tolerance");
+}
+
+TEST(DiffClassify, PeerTouchingWithinItsTolerance) {
+  DiffRunner runner;
+  // FCL declares an absolute 1e-6: a touching contact is within it
+  const auto k = classify(runner, primitive(kTouching, true), "fcl", answer("triangle_sphere", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+}
+
+TEST(DiffClassify, PeerClearlyWrongIsUnexplained) {
+  DiffRunner runner;
+  const auto k = classify(runner, primitive(kSeparated, true), "fcl", answer("triangle_sphere", true));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "unexplained");
+}
+
+TEST(DiffClassify, BulletPlaneEndpoint) {
+  DiffRunner runner;
+  // the ray starts on the triangle (t = 0): Bullet's raycast rejects endpoints on the plane
+  const auto c = primitive(
+      R"({"op":"ray_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"ray":{"origin":[1,1,0],"dir":[0,0,1]}})", true);
+  const auto k = classify(runner, c, "bullet", answer("ray_triangle", false));
+  // a boundary case (moving the origin off the plane changes the exact answer): within tolerance,
+  // with the specific cause recorded
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "plane-endpoint");
+}
+
+TEST(DiffClassify, DegenerateTriangle) {
+  DiffRunner runner;
+  const auto c = primitive(
+      R"({"op":"segment_triangle","triangle":[[0,0,0],[1,1,0],[2,2,0]],"segment":{"start":[1,1,-1],"end":[1,1,1]}})", true);
+  auto k = classify(runner, c, "bullet", answer("segment_triangle", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "degenerate-triangle");
+  // FCL inventing a contact with a collinear triangle 1.41 away: beyond any tolerance
+  const auto far = primitive(
+      R"({"op":"triangle_sphere","triangle":[[-1,0,1],[-1,0,2],[-1,0,3]],"sphere":{"center":[0,-1,2],"radius":1}})", true);
+  k = classify(runner, far, "fcl", answer("triangle_sphere", true));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "degenerate-triangle");
+}
+
+TEST(DiffClassify, FlatShapeAndPointSphere) {
+  DiffRunner runner;
+  const auto box = primitive(
+      R"({"op":"triangle_aabb","triangle":[[0,0,0],[4,0,0],[0,4,0]],"aabb":{"min":[1,1,0],"max":[2,2,0]}})", true);
+  auto k = classify(runner, box, "fcl", answer("triangle_aabb", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "flat-shape");
+  const auto point = primitive(
+      R"({"op":"triangle_sphere","triangle":[[0,0,0],[4,0,0],[0,4,0]],"sphere":{"center":[1,1,0],"radius":0}})", true);
+  k = classify(runner, point, "bullet", answer("triangle_sphere", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "point-sphere");
+}
+
+TEST(DiffClassify, FclNearestPointsInCollision) {
+  DiffRunner runner;
+  const auto c = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,0]})", true);
+  const J got = J{{"op", "closest_point_triangle"}, {"point", J::array({0, 0, 1})}};
+  const auto k = classify(runner, c, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "nearest-points-in-collision");
+}
+
+TEST(DiffClassify, NumericWithinAndBeyondTolerance) {
+  DiffRunner runner;
+  const auto c = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,3]})", true);
+  const double tau = runner.tolerance("bullet").at(4);
+  J got = J{{"op", "closest_point_triangle"}, {"point", J::array({1.0 + 0.5 * tau, 1, 0})}};
+  EXPECT_EQ(classify(runner, c, "bullet", got).verdict, Verdict::Agree);
+  got["point"] = J::array({1.0 + 5e-4 * 4, 1, 0});  // float-sized error beyond the declared bound
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "precision");
+  got["point"] = J::array({2, 1, 0});
+  k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+}
+
+TEST(DiffClassify, BelowMinFeatureIsOutsideBulletsRange) {
+  DiffRunner runner;
+  auto c = primitive(
+      R"({"op":"triangle_aabb","triangle":[[0,0,0],[0.04,0,0],[0,0.04,0]],"aabb":{"min":[0.005,0.005,-0.01],"max":[0.015,0.015,0.01]}})",
+      false);
+  const auto k = classify(runner, c, "bullet", answer("triangle_aabb", false));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "below-min-feature");
+}
+
+TEST(DiffClassify, ErrorsAndUnsupported) {
+  DiffRunner runner;
+  const auto c = primitive(kSeparated, true);
+  J unsupported = J{{"op", "triangle_sphere"}, {"error", "unsupported: triangle_sphere on fcl"}};
+  EXPECT_EQ(classify(runner, c, "fcl", unsupported).verdict, Verdict::Unsupported);
+  J error = J{{"op", "triangle_sphere"}, {"error", "fcl failed on triangle_sphere: boom"}};
+  EXPECT_EQ(classify(runner, c, "fcl", error).verdict, Verdict::Error);
+  EXPECT_EQ(classify(runner, c, "native", error).verdict, Verdict::CruxWrong);
+}
+
+TEST(DiffClassify, TriangleNearPlaneWithinBulletTolerance) {
+  // found by the fuzzer (transformed family; float coordinates): a corner 2e-7 from the plane, the
+  // triangle almost parallel to it
+  DiffRunner runner;
+  const auto c = primitive(
+      R"({"op":"triangle_plane","triangle":[[0.04595436528325081,-2.01593017578125,-3.423585891723633],[-0.5908203125,-2.9112613201141357,-1.476043939590454],[-3.3102543354034424,-2.498046875,-5.76953125]],"plane":{"normal":[1.013140320777893,-2.6767160892486572,-0.8992981910705566],"d":8.521455764770508}})",
+      false);
+  const auto k = classify(runner, c, "bullet", answer("triangle_plane", true));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+}
+
+TEST(DiffCase, TranslatedCaseMovesTheQueryShape) {
+  const auto c = primitive(kTouching, true);
+  const auto moved = translatedCase(c, Vec3d(1, 2, 3));
+  ASSERT_TRUE(moved);
+  const J q = J::parse(moved->query);
+  EXPECT_EQ(q["sphere"]["center"], J::parse("[-1.0,2.0,3.0]"));
+  EXPECT_EQ(q["triangle"], J::parse(c.query)["triangle"]);  // the other operand stays
+  EXPECT_DOUBLE_EQ(caseMagnitude(c), 4.0);
+}
+
+TEST(DiffGenerate, EveryFamilyGeneratesValidCasesDeterministically) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  DiffRunner runner;
+  for (const auto family : diffFamilies()) {
+    int answered = 0;
+    for (std::uint64_t i = 0; i < 40; ++i) {
+      const auto a = generateCase(family, 7, i, g);
+      const auto b = generateCase(family, 7, i, g);
+      ASSERT_TRUE(a && b);
+      EXPECT_EQ(a->query, b->query);
+      EXPECT_EQ(a->setup, b->setup);
+      const J exact = runner.run(*a, "exact");
+      // every generated line is valid protocol input: the arbiter answers it
+      EXPECT_FALSE(exact.contains("error")) << family << " case " << i << ": " << exact.dump() << "\n"
+                                            << a->query;
+      answered += !exact.contains("error");
+    }
+    EXPECT_GT(answered, 0) << family;
+  }
+}
+
+TEST(DiffShrink, ShrinksToASmallerCaseWithTheSameClassification) {
+  // a made-up "backend" that wrongly reports every triangle-sphere pair closer than 1 as hit
+  DiffRunner runner;
+  DiffCase c = primitive(
+      R"({"op":"triangle_sphere","triangle":[[0.125,-3.5,0.375],[4.25,0.5,0.0625],[0.5,4.75,0.25]],"sphere":{"center":[-2.5,0.375,0.125],"radius":1.8125}})",
+      false);
+  auto fake = [&](const DiffCase& t) -> std::optional<Classification> {
+    const J exact = runner.run(t, "exact");
+    if (exact.contains("error")) return std::nullopt;
+    auto probe = [&](const DiffCase& moved) { return runner.run(moved, "exact"); };
+    return classifyAnswer(t, "fcl", answer("triangle_sphere", true), exact, runner.tolerance("fcl"),
+                          runner.tolerance("exact"), probe);
+  };
+  const auto target = fake(c);
+  ASSERT_TRUE(target);
+  ASSERT_EQ(target->verdict, Verdict::PeerWrong);
+  const DiffCase small = shrinkCase(c, *target, fake, 300);
+  EXPECT_EQ(fake(small), target);
+  EXPECT_LT(small.query.size(), c.query.size()) << small.query;
+}
+
+TEST(DiffRun, SameSeedSameSummary) {
+  DiffOptions o;
+  o.seed = 11;
+  o.cases = 40;
+  o.backends = {"native", "fcl"};
+  std::ostringstream err;
+  const J a = runDiff(o, err).toJson(), b = runDiff(o, err).toJson();
+  EXPECT_EQ(a["table"], b["table"]);
+  EXPECT_EQ(a["peer_causes"], b["peer_causes"]);
+  EXPECT_EQ(a["findings"], b["findings"]);
+  o.seed = 12;
+  EXPECT_NE(runDiff(o, err).toJson()["table"], a["table"]);
+}
+
+TEST(DiffRun, RejectsUnknownNames) {
+  std::ostringstream err;
+  DiffOptions o;
+  o.families = {"nope"};
+  EXPECT_THROW(runDiff(o, err), InvalidInput);
+  o = DiffOptions{};
+  o.ops = {"triangle_banana"};
+  EXPECT_THROW(runDiff(o, err), InvalidInput);
+  o = DiffOptions{};
+  o.backends = {"havok"};
+  EXPECT_THROW(runDiff(o, err), InvalidInput);
+}
+
+TEST(DiffRun, ShortRunFindsNoCruxWrong) {
+  // 300 cases over every family, native against exact (this seed found the scene_pairs
+  // regressions of tests/regressions/ before they were fixed)
+  DiffOptions o;
+  o.seed = 2026;
+  o.cases = 300;
+  o.backends = {"native"};
+  o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  std::ostringstream err;
+  const auto start = std::chrono::steady_clock::now();
+  const DiffSummary s = runDiff(o, err);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(s.cases, 300u);
+  EXPECT_EQ(s.cruxWrong, 0u) << err.str();
+  std::uint64_t agree = 0;
+  for (const auto& [op, perBackend] : s.table)
+    if (perBackend.count("native") && perBackend.at("native").count("agree")) agree += perBackend.at("native").at("agree");
+  EXPECT_GT(agree, 250u);  // the generator's cases are answered, not rejected
+  EXPECT_LT(seconds, 20.0);
+}
+
+}  // namespace
+}  // namespace crux::cli
