@@ -274,7 +274,9 @@ std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec
   const Wide len = d.norm();
   RayHit hit;
   hit.t = Real(s * len);
-  if (!(hit.t <= maxT)) return std::nullopt;
+  // A distance that overflows Real (found by fuzz_geometry: a ray almost parallel to a plane)
+  // lies beyond every representable point: a miss, never a hit at t = inf.
+  if (!(hit.t <= maxT) || !std::isfinite(hit.t)) return std::nullopt;
   hit.point = (o + s * d).cast<Real>();
   const Wide nn = normal.norm();
   hit.normal = (nn > 0 ? WVec3(normal / nn) : WVec3(-d / len)).cast<Real>();

@@ -87,6 +87,9 @@ void validate(const Plane& plane, const std::string& name) {
   requireFinite(plane.normal, name + ".normal");
   requireFinite(plane.d, name + ".d");
   if (plane.normal.isZero(0)) throw InvalidInput(name + ".normal is the zero vector");
+  // Distances divide by |normal|²: a normal whose squared length underflows would give Inf/NaN.
+  if (!(plane.normal.template cast<Wide>().squaredNorm() > 0))
+    throw InvalidInput(name + ".normal is too short: " + str(plane.normal));
 }
 
 void validate(const Triangle& triangle, const std::string& name) {

@@ -334,7 +334,18 @@ bool triangleCenteredBox(const WVec3 v[3], const WVec3& h, bool proper) {
 
 }  // namespace
 
-bool overlaps(const Triangle& a, const Triangle& b) {
+namespace {
+
+/// Lexicographic order of the nine coordinates: the canonical argument order of
+/// overlaps(Triangle, Triangle).
+bool precedes(const Triangle& x, const Triangle& y) {
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (x[i][k] != y[i][k]) return x[i][k] < y[i][k];
+  return false;
+}
+
+bool overlapsOrdered(const Triangle& a, const Triangle& b) {
   if (boundsDisjoint(a, b)) return false;
   const Simplex sa = toSimplex(a), sb = toSimplex(b);
   switch (sa.shape.kind) {
@@ -349,6 +360,15 @@ bool overlaps(const Triangle& a, const Triangle& b) {
   // a is a proper triangle, b is degenerate.
   if (sb.shape.kind == TriangleKind::Segment) return segmentOnSimplex(sb.shape.p, sb.shape.q, sa);
   return pointOnSimplex(sb.shape.p, sa);
+}
+
+}  // namespace
+
+// Symmetric by construction: the two argument orders evaluate different predicates, which agree
+// exactly on the integer grid but may round differently elsewhere (found by fuzz_geometry,
+// docs/fuzzing.md), so the pair is evaluated in one canonical order.
+bool overlaps(const Triangle& a, const Triangle& b) {
+  return precedes(b, a) ? overlapsOrdered(b, a) : overlapsOrdered(a, b);
 }
 
 bool overlaps(const Triangle& t, const Sphere& s) {

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "exact/exact.hpp"
+#include "support/test_scale.hpp"
 
 namespace crux {
 namespace {
@@ -263,7 +264,7 @@ TEST(OverlapPlanePlane, NonParallelPlanesAlwaysMeet) {
 // ---- property tests against the exact oracle -------------------------------------------------
 
 /// Number of cases per family and pair.
-constexpr int kCases = 100000;
+const int kCases = crux::test::scaledCases(100000);  // CRUX_TEST_SCALE (support/test_scale.hpp)
 
 /// Draws cases with gen, compares crux (both argument orders) with the exact oracle, and
 /// checks the family's hit rate. Stops after 10 reported mismatches.

@@ -12,8 +12,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exact/exact.hpp>
+#include <iomanip>
 #include <limits>
 #include <optional>
+#include <type_traits>
 #include <utility>
 #include <random>
 #include <sstream>
@@ -898,6 +900,20 @@ TEST(RaycastProperty, SegmentObbMatchesExact) {
 }
 TEST(RaycastProperty, SegmentPlaneMatchesExact) {
   segmentProperty<Plane>("segment-plane", 2009, gridRayPlane, generalRayPlane);
+}
+
+// Found by fuzz_geometry (tests/fuzz/corpus/geometry/crash-ray-plane-infinite-t): a ray almost
+// parallel to a plane meets it so far away that t overflows Real; it was reported as a hit at
+// t = inf with an infinite point. Such a hit is beyond every representable point: a miss.
+TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
+  const Ray ray{Vec3(4, 0, 0), Vec3(2, 1, 5)};
+  const Plane plane{Vec3(-1, 2, std::numeric_limits<Real>::min()), 4};  // n·dir = 5·min
+  const std::optional<RayHit> hit = raycast(ray, plane);
+  if (hit) {
+    EXPECT_TRUE(std::isfinite(hit->t)) << std::setprecision(17) << "t " << hit->t;
+    EXPECT_TRUE(hit->point.allFinite()) << std::setprecision(17) << hit->point.transpose();
+  }
+  if constexpr (std::is_same_v<Real, float>) EXPECT_FALSE(hit) << "t = 8/(5·FLT_MIN)·|dir| overflows float";
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/shapes.hpp>
 #include <limits>
 #include <string>
@@ -117,6 +118,26 @@ TEST(ValidateShapes, NonOrthonormalObbAxes) {
 
 TEST(ValidateShapes, ZeroPlaneNormal) {
   EXPECT_TRUE(throwsNaming([] { validate(Plane{Vec3(0, 0, 0), 1}); }, "plane.normal"));
+}
+
+
+// Found by fuzz_geometry: a plane whose normal is non-zero but whose squared length underflows
+// (possible for double Reals; float normals square exactly in Wide) passed validate, and every
+// distance to it divides by |normal|², giving Inf/NaN. validate now rejects it; a tiny normal
+// whose square is representable still gives finite answers.
+TEST(ValidateShapes, PlaneNormalWhoseSquaredLengthUnderflows) {
+  const Real tiny = std::numeric_limits<Real>::denorm_min();
+  const Plane plane{Vec3(tiny, tiny, 0), 0};
+  if (Wide(tiny) * Wide(tiny) == 0) {
+    EXPECT_TRUE(throwsNaming([&] { validate(plane); }, "plane.normal"));
+  } else {
+    validate(plane);
+    const Vec3 p(3, -5, 7);
+    const Vec3 q = closestPoint(plane, p);
+    EXPECT_TRUE(q.allFinite()) << q.transpose();
+    EXPECT_EQ(q.z(), Real(7));
+    EXPECT_TRUE(std::isfinite(squaredDistance(plane, p)));
+  }
 }
 
 }  // namespace

@@ -268,11 +268,8 @@ class CollisionWorld {
   bool overlaps(const Triangle& t, const Plane& p);
   bool overlaps(const Triangle& a, const Triangle& b);
   /// The reversed argument order, derived: overlap is symmetric.
-  template <class Shape, std::enable_if_t<!std::is_same_v<Shape, Triangle> &&
-                                              std::is_same_v<decltype(std::declval<CollisionWorld&>().overlaps(
-                                                                 std::declval<const Triangle&>(),
-                                                                 std::declval<const Shape&>())),
-                                                             bool>,
+  template <class Shape, std::enable_if_t<std::is_same_v<Shape, Sphere> || std::is_same_v<Shape, Aabb> ||
+                                              std::is_same_v<Shape, Obb> || std::is_same_v<Shape, Plane>,
                                           int> = 0>
   bool overlaps(const Shape& s, const Triangle& t) {
     return overlaps(t, s);
