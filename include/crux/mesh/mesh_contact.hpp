@@ -1,0 +1,129 @@
+#pragma once
+/// @file mesh_contact.hpp  Contacts and distance between a triangle mesh and a convex shape
+/// (sphere, capsule, box, triangle, convex hull) under rigid transforms, for engine narrow phases.
+///
+/// Both queries run in the mesh's frame through its BVH and call the convex narrow phase
+/// (contact.hpp / gjk.hpp) on each candidate triangle, so their per-triangle answers are exactly
+/// those of `contacts(triangle, meshPose, shape, shapePose, ...)` and `distance(...)`.
+///
+/// Convention (as contact.hpp): A is the mesh, B the convex shape. Every normal is the unit
+/// direction from B to A, i.e. from the shape into the mesh: a shape resting on an upward facing
+/// floor gets normal (0, 0, -1) (minus the floor's face normal). pointA − pointB =
+/// separation·normal; separation < 0 is penetration.
+///
+/// Internal edges (ghost contacts). A shape sliding over a flat or concave seam between two
+/// triangles touches the second triangle at its edge, and the convex routine gives that contact
+/// the edge's normal (tilted), which makes bodies bump. As Bullet's btAdjustInternalEdgeContacts
+/// and Jolt's "active edges" do, each contact whose normal lies outside its triangle's face
+/// normal cone (kMeshFaceConeCos) and whose mesh point lies on an edge (within
+/// kMeshFeatureRelativeTolerance) is classified with the triangle adjacency:
+///   - the edge is *active* when it has no neighbour (boundary or non-manifold) or is convex
+///     (the neighbour's opposite vertex is below the triangle's plane, on the side away from the
+///     shape); a vertex contact is active when either of the triangle's two edges at it is;
+///   - an *inactive* (flat or concave) feature gets the face normal instead: the contact is
+///     recomputed as the shape's deepest point along the face normal against the triangle's
+///     plane, and dropped when its separation exceeds the margin or its projection on the plane
+///     falls outside the triangle (then the triangle under that point reports it, with its own
+///     face normal); so every reported point lies on both surfaces.
+/// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
+/// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
+/// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
+/// across those seams (loadMesh merges identical vertices).
+///
+/// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
+/// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×
+/// shape size) and normal (within kContactFaceAngleCos) are merged keeping the deeper; then at
+/// most 4 are kept: the deepest (first), the farthest from it, the one of largest area with those
+/// two, and the one adding most area outside that triangle — stopping early when the next point
+/// would be coincident or collinear within the merge tolerance (a capsule lying on a seam gives 2,
+/// not 4 collinear points). No heap allocation, no exceptions in the queries.
+
+#include <crux/geometry/contact.hpp>
+#include <crux/geometry/raycast.hpp>
+#include <crux/mesh/mesh.hpp>
+#include <crux/mesh/mesh_query.hpp>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace crux {
+
+/// Edge adjacency of a mesh: for triangle t and edge i (from corner i to corner (i+1) mod 3)
+/// the index of the one other triangle sharing that undirected edge, or kNone when the edge is a
+/// boundary (one triangle) or non-manifold (more than two). Built by sorting the edges.
+class MeshAdjacency {
+ public:
+  static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  MeshAdjacency() = default;
+  /// Builds the adjacency of `mesh` (vertex indices, not positions, decide sharing).
+  explicit MeshAdjacency(const Mesh& mesh);
+  /// Neighbour of triangle `t` across edge `edge` (0..2), or kNone.
+  std::uint32_t neighbor(std::uint32_t t, int edge) const { return neighbors_[3 * std::size_t(t) + edge]; }
+  std::size_t triangleCount() const { return neighbors_.size() / 3; }
+
+ private:
+  std::vector<std::uint32_t> neighbors_;
+};
+
+/// Cosine of the face normal cone: a contact normal within acos(kMeshFaceConeCos) of the
+/// triangle's normal is never corrected. The cone is the face normal itself up to rounding
+/// (100 ulps of Real: 0.28° in float), because even a slightly tilted normal at a seam (a rounded
+/// end just past a flat internal edge) makes a body bump.
+inline constexpr Real kMeshFaceConeCos = Real(1) - Real(100) * std::numeric_limits<Real>::epsilon();
+/// A mesh contact point lies on a triangle edge when within this × (the triangle's length scale:
+/// longest edge + largest |coordinate|) of it: 1000 ulps of Real.
+inline constexpr Real kMeshFeatureRelativeTolerance = Real(1000) * std::numeric_limits<Real>::epsilon();
+/// Two candidate points merge when their mesh points are within this × the shape's size.
+inline constexpr Real kMeshContactMergeRelativeTolerance = Real(1e-3);
+/// Capacity of the candidate buffer before reduction.
+inline constexpr int kMeshContactBuffer = 64;
+
+/// One mesh contact point: its own normal (meshes are not planar), the triangle it lies on.
+struct MeshContactPoint {
+  Vec3 pointA = Vec3::Zero();  ///< world position on the mesh
+  Vec3 pointB = Vec3::Zero();  ///< world position on the shape
+  Vec3 normal = Vec3::UnitZ(); ///< unit, from the shape (B) to the mesh (A)
+  Real separation = 0;         ///< signed: > 0 apart (speculative), < 0 penetrating
+  std::uint32_t triangle = 0;  ///< triangle index in the mesh (feature id of A)
+  std::uint32_t featureB = 0;  ///< feature of the shape (featureId, contact.hpp)
+};
+
+/// Up to 4 reduced points. Plain value, no heap.
+struct MeshContactManifold {
+  static constexpr int kMaxContactPoints = 4;
+  int count = 0;
+  MeshContactPoint points[kMaxContactPoints];
+  /// Deepest penetration: max(0, -min separation); 0 when empty.
+  Real depth() const;
+};
+
+/// Contact points between `mesh` (A, placed by meshPose) and `shape` (B, placed by shapePose)
+/// with separation <= margin (>= 0): BVH query of the shape's AABB in the mesh frame grown by
+/// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when
+/// `adjacency` (built from this mesh; one with another triangle count is ignored) is given,
+/// reduction to 4. `path` BruteForce tests every
+/// triangle (reference). Returns out.count > 0. Never throws, never allocates.
+bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
+              Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency = nullptr,
+              QueryPath path = QueryPath::Bvh);
+
+/// Result of distance(mesh, ..., shape, ...).
+struct MeshDistanceResult {
+  bool found = false;          ///< a triangle within maxDistance exists
+  Real distance = kNoLimit;    ///< signed (min over triangles): separation, or -penetration depth
+  Vec3 pointA = Vec3::Zero();  ///< closest point on the mesh (world)
+  Vec3 pointB = Vec3::Zero();  ///< closest point on the shape (world)
+  Vec3 normal = Vec3::UnitZ(); ///< unit, from the shape to the mesh
+  std::uint32_t triangle = 0;  ///< triangle realising it (lowest index among equal distances)
+};
+
+/// Minimum over the triangles of the signed convex distance (gjk.hpp) to the shape, with BVH
+/// pruning: subtrees whose box is farther from the shape's box (both in the mesh frame) than the
+/// best distance so far — initially `maxDistance`, the early-out upper bound — are skipped
+/// (nearest child first). found == false when nothing is within maxDistance. Never allocates.
+MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
+                            const Transform& shapePose, Real maxDistance = kNoLimit,
+                            QueryPath path = QueryPath::Bvh);
+
+}  // namespace crux
