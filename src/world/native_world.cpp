@@ -76,13 +76,9 @@ class NativeWorld final : public CollisionWorld {
   WorldTolerance tolerance() const override { return kNativeTolerance; }
 
   bool concurrentQueries() const override { return true; }
-  void prepareConcurrentQueries() override {
-    // ModelHierarchy caches world transforms in mutable state; computing every stale one now
-    // (as ModelHierarchy::refreshWorld does) leaves the queries nothing to write.
-    if (!changed_) return;
-    for (const ModelId id : scene_.models().ids()) scene_.models().world(id);
-    changed_ = false;
-  }
+  // ModelHierarchy keeps world transforms current on every change and its const accessors never
+  // write (docs/threads.md): nothing to prepare, so the base's no-op prepareConcurrentQueries()
+  // stands.
 
  protected:
   // The base class keeps the crux::Mesh, which carries its own BVH: nothing else to build.
@@ -132,7 +128,6 @@ class NativeWorld final : public CollisionWorld {
     if (id >= names_.size()) names_.resize(std::size_t(id) + 1);
     names_[id] = name;
     byName_.emplace(name, id);
-    changed_ = true;
     return ModelHandle{id};
   }
   void doRemoveModel(ModelHandle model) override {
@@ -140,11 +135,9 @@ class NativeWorld final : public CollisionWorld {
     scene_.remove(id);
     byName_.erase(names_[id]);
     names_[id].clear();
-    changed_ = true;
   }
   void doSetTransform(ModelHandle model, const Transform& local) override {
     scene_.setTransform(require(model, "model"), local);
-    changed_ = true;
   }
   void doSetParent(ModelHandle model, std::optional<ModelHandle> parent) override {
     const ModelId id = require(model, "model");
@@ -158,7 +151,6 @@ class NativeWorld final : public CollisionWorld {
                            " (a cycle)");
     }
     scene_.setParent(id, parentId);
-    changed_ = true;
   }
   std::optional<ModelHandle> doFindModel(std::string_view name) override {
     const auto it = byName_.find(name);
@@ -225,7 +217,6 @@ class NativeWorld final : public CollisionWorld {
   Scene scene_;                                          ///< dynamic AABB tree broad phase
   std::vector<std::string> names_;                       ///< by ModelId; empty for free ids
   std::map<std::string, ModelId, std::less<>> byName_;  ///< live model names
-  bool changed_ = false;  ///< a model changed since the last prepareConcurrentQueries
 };
 
 }  // namespace
