@@ -20,24 +20,7 @@
 #include <string>
 #include <vector>
 
-// ---- allocation counter (replaces the global operator new of this test executable) ----------
-namespace {
-std::atomic<long> gAllocations{0};
-}
-void* operator new(std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 
 namespace crux {
 namespace {
@@ -461,7 +444,7 @@ TEST(MeshContact, QueriesDoNotAllocate) {
   const std::vector<ShapeCase> cases = shapes(hull);
   MeshContactManifold m;
   Real sink = 0;
-  const long before = gAllocations.load();
+  const long before = test::allocationCount();
   for (const ShapeCase& sc : cases)
     for (int i = 0; i < 20; ++i) {
       const Transform pose{Quat(Eigen::AngleAxis<Real>(Real(0.3) * i, Vec3::UnitX())),
@@ -469,7 +452,7 @@ TEST(MeshContact, QueriesDoNotAllocate) {
       contacts(grid, Transform::identity(), sc.shape, pose, Real(0.05), m, &adjacency);
       sink += m.depth() + distance(grid, Transform::identity(), sc.shape, pose, Real(1)).distance;
     }
-  EXPECT_EQ(gAllocations.load(), before) << sink;
+  EXPECT_EQ(test::allocationCount(), before) << sink;
 }
 
 TEST(MeshContact, AdjacencyOfAGrid) {

@@ -26,24 +26,7 @@
 #include <string>
 #include <vector>
 
-// ---- allocation counter (replaces the global operator new of this test executable) ----------
-namespace {
-std::atomic<long> gAllocations{0};
-}
-void* operator new(std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 
 namespace crux {
 namespace {
@@ -978,7 +961,7 @@ TEST(MeshQuery, ClosestAnyAndBooleanQueriesDoNotAllocate) {
   tb.rotation = g.rotation();
   tb.translation = Vec3(0.1f, 0.2f, 0.3f);
   int hits = 0;
-  const long before = gAllocations.load();
+  const long before = test::allocationCount();
   for (int i = 0; i < 200; ++i) {
     hits += raycastClosest(m, rays[i]).has_value();
     hits += raycastAny(m, rays[i]);
@@ -991,7 +974,7 @@ TEST(MeshQuery, ClosestAnyAndBooleanQueriesDoNotAllocate) {
   }
   hits += overlaps(m, Transform::identity(), other, tb);
   hits += overlaps(m, Transform::identity(), other, Transform::identity());
-  const long allocations = gAllocations.load() - before;
+  const long allocations = test::allocationCount() - before;
   EXPECT_EQ(allocations, 0);
   EXPECT_GT(hits, 0);
 }

@@ -28,24 +28,7 @@
 #include <string>
 #include <vector>
 
-// ---- allocation counter (replaces the global operator new of this test executable) ----------
-namespace {
-std::atomic<long> gAllocations{0};
-}
-void* operator new(std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 
 namespace crux {
 namespace {
@@ -433,12 +416,12 @@ TEST(MeshVolumePointInside, NoHeapAllocation) {
     for (int y = 0; y < 3; ++y) v.set(x, y, 1, true);
   const Mesh m = v.mesh("slab");
   const MeshVolume vol(m);
-  const long before = gAllocations.load();
+  const long before = test::allocationCount();
   int inside = 0;
   for (int k = 0; k < 200; ++k) inside += vol.contains(Vec3(Real(k % 9) / 2, Real(k % 7) / 2, Real(k % 5) / 2));
   inside += vol.overlaps(Sphere{Vec3(1, 1, 1), Real(0.25)});
   inside += vol.overlaps(Aabb{Vec3(1, 1, 1), Vec3(2, 2, 2)});
-  EXPECT_EQ(gAllocations.load(), before);
+  EXPECT_EQ(test::allocationCount(), before);
   EXPECT_GT(inside, 0);
 }
 

@@ -33,24 +33,7 @@
 #include <string>
 #include <vector>
 
-// ---- allocation counter (replaces the global operator new of this test executable) ----------
-namespace {
-std::atomic<long> gAllocations{0};
-}
-void* operator new(std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  ++gAllocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+#include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 
 namespace crux {
 namespace {
@@ -1068,7 +1051,7 @@ TEST(ModelQuery, ClosestAnyAndBooleanQueriesDoNotAllocate) {
   std::vector<Obb> obbs;
   for (int i = 0; i < 100; ++i) rays.push_back(randomRay(g, p, m)), spheres.push_back(randomSphere(g, p, m)), obbs.push_back(randomObb(g, p, m));
   int hits = 0;
-  const long before = gAllocations.load();
+  const long before = test::allocationCount();
   for (const Transform& w : {p.world, aligned.world, Transform::identity()}) {
     const PlacedMesh placed{&m, w};
     for (int i = 0; i < 100; ++i) {
@@ -1085,7 +1068,7 @@ TEST(ModelQuery, ClosestAnyAndBooleanQueriesDoNotAllocate) {
     hits += overlaps(placed, PlacedMesh{&other, aligned.world});
     hits += worldBounds(placed).isEmpty();
   }
-  const long allocations = gAllocations.load() - before;
+  const long allocations = test::allocationCount() - before;
   EXPECT_EQ(allocations, 0);
   EXPECT_GT(hits, 0);
 }
