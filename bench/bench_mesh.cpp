@@ -11,6 +11,7 @@
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
+#include "bench_output.hpp"
 #include "peers/bench_types.hpp"
 #if CRUX_BENCH_HAVE_EMBREE
 #include "peers/embree_peer.hpp"
@@ -137,30 +138,6 @@ std::string fmt(const char* f, double v) {
   return buf;
 }
 
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-std::string jsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
-
 std::string readFirstLine(const char* path, const char* prefix) {
   std::ifstream in(path);
   std::string line;
@@ -232,12 +209,6 @@ Workload makeWorkload(std::string key, std::string title, std::string unit, std:
   w.unit = std::move(unit);
   w.queries = queries;
   return w;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0 : (n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]));
 }
 
 template <class F>

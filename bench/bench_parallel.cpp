@@ -11,6 +11,8 @@
 /// good as the second core is idle). Options: --quick, --json FILE, --mesh PATH,
 /// --runs N, --big N (triangles of the tessellated mesh), --seed N.
 
+#include "bench_output.hpp"
+
 #include <crux/mesh/batch_query.hpp>
 #include <crux/mesh/bvh.hpp>
 #include <crux/mesh/mesh.hpp>
@@ -41,6 +43,10 @@
 #endif
 
 namespace {
+
+using crux::bench::jsonNumber;
+using crux::bench::jsonString;
+using crux::bench::median;
 
 using crux::Real;
 using crux::Vec3;
@@ -100,28 +106,6 @@ Settings parseArgs(int argc, char** argv) {
   return s;
 }
 
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
-std::string jsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
-
 double cpuNow() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -141,12 +125,6 @@ std::string loadAverage() {
   std::string a, b, c;
   in >> a >> b >> c;
   return a.empty() ? "?" : a + " " + b + " " + c;
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /// One thread count's figures for a workload.

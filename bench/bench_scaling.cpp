@@ -24,6 +24,7 @@
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
+#include "bench_output.hpp"
 #include "peers/bench_types.hpp"
 #if CRUX_BENCH_HAVE_EMBREE
 #include "peers/embree_peer.hpp"
@@ -194,11 +195,6 @@ struct Row {
 };
 std::vector<Row> gRows;
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
-}
-
 void timeEngines(std::vector<Engine>& engines, double perPassItems, const Settings& s) {
   std::vector<int> reps(engines.size(), 1);
   for (std::size_t i = 0; i < engines.size(); ++i) {
@@ -248,23 +244,6 @@ void print(const std::string& workload, std::size_t triangles, const std::vector
                 build ? (e.bytesPerTriangle >= 0 ? std::to_string(int(std::lround(e.bytesPerTriangle))).c_str() : "-")
                       : e.agreement.c_str());
   }
-}
-
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) continue;
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string jsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
 }
 
 void writeJson(const Settings& s, const std::vector<std::string>& absent) {

@@ -26,6 +26,7 @@
 /// Boxes given to Bullet/FCL are the crux boxes, so they skip computing bounds; the crux Scene
 /// row includes that work (model hierarchy + worldBounds) and the broad-phase rows do not.
 
+#include "bench_output.hpp"
 #include <crux/mesh/mesh.hpp>
 #include <crux/model/model_query.hpp>
 #include <crux/scene/scene.hpp>
@@ -857,15 +858,6 @@ void printScaling(const Options& opt) {
   }
 }
 
-std::string jsonText(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out + "\"";
-}
-
 /// --json FILE: the settings and every printed row (seconds per frame or per query).
 void writeJson(const Options& opt) {
   std::ofstream out(opt.json);
@@ -873,16 +865,16 @@ void writeJson(const Options& opt) {
     std::fprintf(stderr, "bench_scene: cannot write %s\n", opt.json.c_str());
     return;
   }
-  out << "{\n  \"bench\": \"bench_scene\",\n  \"build_type\": " << jsonText(CRUX_BENCH_BUILD_TYPE)
-      << ",\n  \"crux_real\": " << jsonText(sizeof(Real) == sizeof(float) ? "float" : "double")
+  out << "{\n  \"bench\": \"bench_scene\",\n  \"build_type\": " << crux::bench::jsonString(CRUX_BENCH_BUILD_TYPE)
+      << ",\n  \"crux_real\": " << crux::bench::jsonString(sizeof(Real) == sizeof(float) ? "float" : "double")
       << ",\n  \"quick\": " << (opt.quick ? "true" : "false") << ",\n  \"runs\": " << opt.runs
-      << ",\n  \"clock\": " << jsonText(opt.cpuClock ? "cpu" : "wall") << ",\n  \"seed\": " << opt.seed
+      << ",\n  \"clock\": " << crux::bench::jsonString(opt.cpuClock ? "cpu" : "wall") << ",\n  \"seed\": " << opt.seed
       << ",\n  \"rows\": [";
   char number[32];
   for (std::size_t i = 0; i < gRows.size(); ++i) {
     const Row& r = gRows[i];
-    out << (i ? "," : "") << "\n    {\"models\": " << r.models << ", \"workload\": " << jsonText(r.workload)
-        << ", \"engine\": " << jsonText(r.engine) << ", \"agreement\": " << jsonText(r.agree);
+    out << (i ? "," : "") << "\n    {\"models\": " << r.models << ", \"workload\": " << crux::bench::jsonString(r.workload)
+        << ", \"engine\": " << crux::bench::jsonString(r.engine) << ", \"agreement\": " << crux::bench::jsonString(r.agree);
     std::snprintf(number, sizeof number, "%.9g", r.perItem);
     out << ", \"seconds_per_item\": " << number;
     std::snprintf(number, sizeof number, "%.4g", r.cpuShare);
