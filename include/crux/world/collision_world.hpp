@@ -217,7 +217,8 @@ using SceneQueryShape = std::variant<Sphere, Aabb, Obb>;
 using MeshQueryShape = std::variant<Segment, Sphere, Aabb, Obb, Plane, Triangle>;
 
 /// A world of meshes, models and a scene, answering every query of the batch protocol through
-/// one collision library. Not thread-safe: one world per thread.
+/// one collision library. Changes are exclusive; queries may run on several threads at once only
+/// when concurrentQueries() says so (the native world), otherwise one world per thread.
 ///
 /// Meshes are held by name and handle. Redefining a name replaces the mesh for later queries
 /// (the old handle becomes invalid); models made from a mesh keep it (meshes are shared and
