@@ -3,9 +3,12 @@
 
 #include <crux/geometry/contact.hpp>
 
+#include <crux/error.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include "geometry/gjk_internal.hpp"
 
@@ -254,9 +257,15 @@ Real ContactManifold::depth() const {
   return d;
 }
 
+void validateContactMargin(Real margin) {
+  if (!(margin >= 0) || !std::isfinite(margin))
+    throw InvalidInput("margin: expected a finite contact margin >= 0, got " + std::to_string(double(margin)));
+}
+
 bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
               ContactManifold& out) {
   out.count = 0;
+  validateContactMargin(margin);
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);
   out.normal = dr.normal;

@@ -4,10 +4,12 @@
 #include <crux/mesh/mesh_contact.hpp>
 
 #include <crux/geometry/closest_point.hpp>
+#include <crux/error.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 #include <tuple>
 
 namespace crux {
@@ -270,9 +272,12 @@ struct Collector {
 bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency, QueryPath path) {
   out.count = 0;
+  validateContactMargin(margin);
+  if (adjacency && adjacency->triangleCount() != mesh.triangleCount())
+    throw InvalidInput("adjacency: built for a mesh of " + std::to_string(adjacency->triangleCount()) +
+                       " triangles, this mesh has " + std::to_string(mesh.triangleCount()));
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
-  if (adjacency && adjacency->triangleCount() != mesh.triangleCount()) adjacency = nullptr;  // not this mesh's
   Collector c{mesh, meshPose, shape, shapePose, margin, adjacency, mergeTol * mergeTol, {}, 0};
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, mesh.triangle(t));
@@ -305,6 +310,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
 
 MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                             const Transform& shapePose, Real maxDistance, QueryPath path) {
+  if (std::isnan(maxDistance)) throw InvalidInput("maxDistance: expected a number (or +inf for no limit), got NaN");
   MeshDistanceResult r;
   Real best = maxDistance;
   auto consider = [&](std::uint32_t t, const Triangle& tri) {

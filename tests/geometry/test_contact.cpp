@@ -3,6 +3,8 @@
 // speculative margin) and seeded properties over random pairs (every point on both shapes,
 // pointA - pointB = separation·normal, separation <= margin, at most 4 points).
 
+#include <crux/error.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -251,6 +253,24 @@ TEST(ContactsProperty, RandomPairs) {
   }
   EXPECT_GT(withPoints, 800);
   EXPECT_GT(multi, 200);
+}
+
+}  // namespace
+}  // namespace crux
+
+namespace crux {
+namespace {
+
+TEST(Contacts, BadMarginIsInvalidInputNamingIt) {
+  ContactManifold m;
+  for (const Real bad : {Real(-0.1), std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::infinity()}) {
+    try {
+      contacts(Sphere{Vec3::Zero(), Real(0.5)}, at(Real(0.25), 0, Real(1.25)), kCube, Transform{}, bad, m);
+      ADD_FAILURE() << "margin " << bad << " accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("margin: ", 0), 0u) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -6,7 +6,11 @@
 #include <crux/geometry/closest_point.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 
+#include <crux/error.hpp>
+
 #include <gtest/gtest.h>
+
+#include <functional>
 
 #include <atomic>
 #include <chrono>
@@ -476,6 +480,38 @@ TEST(MeshContact, AdjacencyOfAGrid) {
   EXPECT_EQ(boundary, 10);
   const int edges = 3 * 3 + 4 * 2 + 6;  // horizontal + vertical + diagonals
   EXPECT_EQ(interior, 2 * (edges - boundary));
+}
+
+}  // namespace
+}  // namespace crux
+
+namespace crux {
+namespace {
+
+TEST(MeshContact, BadMarginForeignAdjacencyAndNanBoundAreInvalidInput) {
+  const Mesh grid = gridMesh(4, 4, 1, [](int, int) { return Real(0); });
+  const Mesh other = gridMesh(2, 2, 1, [](int, int) { return Real(0); });
+  const MeshAdjacency foreign(other);
+  const Sphere s{Vec3::Zero(), Real(0.5)};
+  const Transform pose{Quat::Identity(), Vec3(2, 2, Real(0.4))};
+  MeshContactManifold m;
+  auto message = [](const std::function<void()>& f) -> std::string {
+    try {
+      f();
+    } catch (const InvalidInput& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(-1), m); }).rfind("margin: ", 0), 0u);
+  EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &foreign); }).rfind("adjacency: ", 0),
+            0u);
+  EXPECT_EQ(message([&] { distance(grid, Transform::identity(), s, pose, std::numeric_limits<Real>::quiet_NaN()); })
+                .rfind("maxDistance: ", 0),
+            0u);
+  // The mesh's own adjacency is accepted.
+  const MeshAdjacency own(grid);
+  EXPECT_TRUE(contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &own));
 }
 
 }  // namespace

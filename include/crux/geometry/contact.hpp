@@ -58,4 +58,8 @@ inline constexpr Real kContactFaceAngleCos = Real(0.99939082701909573);
 bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
               ContactManifold& out);
 
+/// Throws InvalidInput("margin: ...") unless the contact margin is finite and >= 0 (every
+/// contacts() query checks its margin with it before looking at the shapes).
+void validateContactMargin(Real margin);
+
 }  // namespace crux

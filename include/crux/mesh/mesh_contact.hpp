@@ -101,9 +101,11 @@ struct MeshContactManifold {
 /// Contact points between `mesh` (A, placed by meshPose) and `shape` (B, placed by shapePose)
 /// with separation <= margin (>= 0): BVH query of the shape's AABB in the mesh frame grown by
 /// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when
-/// `adjacency` (built from this mesh; one with another triangle count is ignored) is given,
+/// `adjacency` (built from this mesh; one with another triangle count throws InvalidInput) is given,
 /// reduction to 4. `path` BruteForce tests every
-/// triangle (reference). Returns out.count > 0. Never throws, never allocates.
+/// triangle (reference). Returns out.count > 0. Throws InvalidInput for a margin that is negative
+/// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws, never
+/// allocates.
 bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency = nullptr,
               QueryPath path = QueryPath::Bvh);
@@ -121,7 +123,8 @@ struct MeshDistanceResult {
 /// Minimum over the triangles of the signed convex distance (gjk.hpp) to the shape, with BVH
 /// pruning: subtrees whose box is farther from the shape's box (both in the mesh frame) than the
 /// best distance so far — initially `maxDistance`, the early-out upper bound — are skipped
-/// (nearest child first). found == false when nothing is within maxDistance. Never allocates.
+/// (nearest child first). found == false when nothing is within maxDistance. Never allocates;
+/// a NaN maxDistance throws InvalidInput.
 MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                             const Transform& shapePose, Real maxDistance = kNoLimit,
                             QueryPath path = QueryPath::Bvh);
