@@ -1,5 +1,6 @@
 /// @file bench_mesh.cpp  crux meshes against Embree, Bullet and FCL, in one process, on the same
-/// inputs: closest-hit rays, sphere/box–mesh overlap, mesh–mesh overlap, BVH build, memory.
+/// inputs: closest-hit and any-hit rays, segments, sphere/box–mesh overlap, mesh–mesh overlap,
+/// BVH build, BVH refit after moving the vertices, memory.
 ///
 /// Every workload first runs each engine once and compares its answers with crux's (every
 /// query); only then are times taken: runs interleave the engines (order alternating between
@@ -63,6 +64,7 @@ struct Settings {
   std::size_t spheres = 10000;
   std::size_t boxes = 5000;  ///< fewer: Bullet's GJK/EPA per triangle takes ~1 ms per box
   std::size_t poses = 400;
+  std::size_t segments = 50000;
   int buildRuns = 5;
   bool cpuClock = false;  ///< report process CPU time instead of wall time (loaded machines)
   std::uint64_t seed = 20240611;
@@ -125,6 +127,7 @@ Settings parseArgs(int argc, char** argv) {
     s.spheres = 500;
     s.boxes = 500;
     s.poses = 20;
+    s.segments = 2000;
     s.buildRuns = 1;
   }
   return s;
@@ -189,7 +192,7 @@ struct Engine {
 struct Workload {
   std::string key;
   std::string title;
-  std::string unit;  ///< "query" or "build"
+  std::string unit;  ///< "query", "build" or "refit"
   std::size_t queries = 0;
   double hitRate = -1;
   std::vector<Engine> engines;  ///< engines[0] is crux
@@ -228,7 +231,7 @@ void timeWorkload(Workload& w, const std::vector<double>& firstPass, const Setti
     e.wallRuns.clear();
     e.cpuRuns.clear();
   }
-  const double perRun = w.unit == "build" ? 1.0 : double(w.queries);
+  const double perRun = w.unit == "query" ? double(w.queries) : 1.0;
   for (int r = 0; r < runs; ++r) {
     for (std::size_t k = 0; k < w.engines.size(); ++k) {
       Engine& e = w.engines[r % 2 == 0 ? k : w.engines.size() - 1 - k];
@@ -365,6 +368,43 @@ std::vector<PoseQuery> makePoses(const BenchInput& in, std::size_t n, Rng& rng) 
   return q;
 }
 
+/// Segments starting uniformly in the bounds grown 10% per side, uniform random direction,
+/// length in [0.02, 0.5] R (short enough that many miss).
+std::vector<SegmentQuery> makeSegments(const BenchInput& in, std::size_t n, Rng& rng) {
+  std::vector<SegmentQuery> q(n);
+  for (SegmentQuery& g : q) {
+    const Eigen::Vector3d a = boundsPoint(rng, in.mesh->bounds(), 0.1);
+    const Eigen::Vector3d b = a + rng.uniform(0.02, 0.5) * in.radius * rng.unitVector();
+    for (int k = 0; k < 3; ++k) {
+      g.start[k] = float(a[k]);
+      g.end[k] = float(b[k]);
+    }
+  }
+  return q;
+}
+
+/// The moved vertices of the refit workload: every vertex displaced by a smooth field of
+/// amplitude 0.03R (v + 0.03R * sin(3 (v - c) / R + phase) per axis), rounded to float once;
+/// the whole BVH must be refitted, the topology is unchanged.
+MeshArrays deformedArrays(const BenchInput& in) {
+  MeshArrays out = in.arrays;
+  const Eigen::Vector3d c = in.center.cast<double>();
+  for (std::size_t i = 0; i < out.vertexCount(); ++i) {
+    const Eigen::Vector3d v(in.arrays.positions[3 * i], in.arrays.positions[3 * i + 1], in.arrays.positions[3 * i + 2]);
+    const Eigen::Vector3d u = 3.0 * (v - c) / in.radius;
+    const Eigen::Vector3d d(std::sin(u.y() + 0.3), std::sin(u.z() + 1.1), std::sin(u.x() + 2.3));
+    for (int k = 0; k < 3; ++k) out.positions[3 * i + k] = float(v[k] + 0.03 * in.radius * d[k]);
+  }
+  return out;
+}
+
+std::vector<Vec3> cruxVertices(const MeshArrays& a) {
+  std::vector<Vec3> v(a.vertexCount());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    v[i] = Vec3(Real(a.positions[3 * i]), Real(a.positions[3 * i + 1]), Real(a.positions[3 * i + 2]));
+  return v;
+}
+
 // ---- crux side ----------------------------------------------------------------------------
 
 Vec3 vec(const float* p) { return {Real(p[0]), Real(p[1]), Real(p[2])}; }
@@ -410,6 +450,24 @@ void cruxRays(const crux::Mesh& m, const std::vector<RayQuery>& q, RayAnswer* ou
   }
 }
 
+void cruxAnyRays(const crux::Mesh& m, const std::vector<RayQuery>& q, std::uint8_t* out) {
+  for (std::size_t i = 0; i < q.size(); ++i) out[i] = crux::raycastAny(m, crux::Ray{vec(q[i].origin), vec(q[i].dir)});
+}
+
+void cruxSegments(const crux::Mesh& m, const std::vector<SegmentQuery>& q, std::uint8_t* out) {
+  for (std::size_t i = 0; i < q.size(); ++i) out[i] = crux::intersects(m, crux::Segment{vec(q[i].start), vec(q[i].end)});
+}
+
+crux::Segment cruxSegment(const SegmentQuery& q, double grow) {
+  // Lengthened (grow > 0) or shortened (grow < 0, at most to its midpoint) by |grow| at each end.
+  const Vec3 a = vec(q.start), b = vec(q.end);
+  const double len = double((b - a).norm());
+  if (len <= 0) return {a, b};
+  const Vec3 u = (b - a) / Real(len);
+  const double g = std::max(grow, -0.5 * len);
+  return {a - Real(g) * u, b + Real(g) * u};
+}
+
 void cruxSpheres(const crux::Mesh& m, const std::vector<SphereQuery>& q, std::uint8_t* out) {
   for (std::size_t i = 0; i < q.size(); ++i) out[i] = crux::overlaps(m, cruxSphere(q[i]));
 }
@@ -443,8 +501,8 @@ double edgeDistance(const crux::Mesh& m, std::uint32_t tri, const Vec3& p) {
 
 /// Compares every ray; mismatching hit/miss cases are classified by the distance of the
 /// hitting engine's point to the edges of its triangle.
-void compareRays(const BenchInput& in, const std::vector<RayQuery>& rays, const std::vector<RayAnswer>& ref,
-                 const std::vector<RayAnswer>& peer, Engine& e) {
+void compareRays(const crux::Mesh& mesh, double radius, const std::vector<RayQuery>& rays,
+                 const std::vector<RayAnswer>& ref, const std::vector<RayAnswer>& peer, Engine& e) {
   std::size_t onlyCrux = 0, onlyPeer = 0, tMismatch = 0, bothHit = 0, triangleDiffers = 0, nearEdge = 0;
   double worstRel = 0, worstAbs = 0, worstEdge = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -464,10 +522,10 @@ void compareRays(const BenchInput& in, const std::vector<RayQuery>& rays, const 
       double edge = 1e300;
       if (h.triangle != kNoTriangle) {
         const Vec3 p = vec(rays[i].origin) + Real(h.t) * vec(rays[i].dir);
-        edge = edgeDistance(*in.mesh, h.triangle, p);
+        edge = edgeDistance(mesh, h.triangle, p);
       }
       worstEdge = std::max(worstEdge, edge);
-      if (edge <= kNearFraction * in.radius) ++nearEdge;
+      if (edge <= kNearFraction * radius) ++nearEdge;
     }
   }
   const std::size_t hitMismatch = onlyCrux + onlyPeer;
@@ -477,7 +535,7 @@ void compareRays(const BenchInput& in, const std::vector<RayQuery>& rays, const 
   std::ostringstream d;
   d << "hit/miss differ on " << hitMismatch << " of " << rays.size() << " (crux-only " << onlyCrux << ", peer-only "
     << onlyPeer << "; " << nearEdge << " within " << kNearFraction << "R of an edge";
-  if (hitMismatch) d << ", farthest " << fmt("%.2g", worstEdge / in.radius) << "R";
+  if (hitMismatch) d << ", farthest " << fmt("%.2g", worstEdge / radius) << "R";
   d << "); t differs > " << kRayRelTolerance << " rel on " << tMismatch << " of " << bothHit
     << " (worst rel " << fmt("%.2g", worstRel) << ", abs " << fmt("%.2g", worstAbs) << ")";
   if (triangleDiffers) d << "; other triangle at equal t on " << triangleDiffers;
@@ -582,12 +640,12 @@ double hitRate(const std::vector<std::uint8_t>& v) {
 // ---- report -------------------------------------------------------------------------------
 
 void printWorkload(const Workload& w) {
-  std::cout << "\n== " << w.title << " (" << w.queries << (w.unit == "build" ? " triangles" : " queries");
+  std::cout << "\n== " << w.title << " (" << w.queries << (w.unit != "query" ? " triangles" : " queries");
   if (w.hitRate >= 0) std::cout << ", crux hit rate " << fmt("%.1f", 100 * w.hitRate) << "%";
   std::cout << ")\n";
   for (const std::string& n : w.notes) std::cout << "   note: " << n << "\n";
-  const bool build = w.unit == "build";
-  std::printf("   %-8s %-30s %12s %12s %10s  %-8s %5s %s\n", "engine", "config", build ? "ms/build" : "ns/query",
+  const bool build = w.unit != "query";
+  std::printf("   %-8s %-30s %12s %12s %10s  %-8s %5s %s\n", "engine", "config", build ? ("ms/" + w.unit).c_str() : "ns/query",
               build ? "Mtri/s" : "queries/s", "peer/crux", "answers", "cpu%", "reps x runs");
   const double crux = w.engines.front().median;
   for (const Engine& e : w.engines) {
@@ -764,6 +822,7 @@ int main(int argc, char** argv) {
   const std::vector<SphereQuery> spheres = makeSpheres(in, s.spheres, rng);
   const std::vector<BoxQuery> boxes = makeBoxes(in, s.boxes, rng);
   const std::vector<PoseQuery> poses = makePoses(in, s.poses, rng);
+  const std::vector<SegmentQuery> segments = makeSegments(in, s.segments, rng);
   for (const BoxQuery& b : boxes) crux::validate(cruxBox(b), "bench box");
 
   std::vector<Workload> workloads;
@@ -814,27 +873,15 @@ int main(int argc, char** argv) {
     std::size_t hits = 0;
     for (const RayAnswer& a : answers[0]) hits += a.hit;
     w.hitRate = double(hits) / double(rays.size());
-    for (std::size_t i = 1; i < w.engines.size(); ++i) compareRays(in, rays, answers[0], answers[i], w.engines[i]);
+    for (std::size_t i = 1; i < w.engines.size(); ++i) compareRays(mesh, in.radius, rays, answers[0], answers[i], w.engines[i]);
     timeWorkload(w, calibrate(w, first), s, s.runs, true);
     workloads.push_back(std::move(w));
     printWorkload(workloads.back());
   }
 
-  // ---- (2) sphere–mesh and box–mesh overlap ----
-  auto runOverlap = [&](Workload& w, std::vector<std::vector<std::uint8_t>>& answers,
-                        const std::function<bool(std::size_t, double)>& cruxFlips,
-                        const std::function<std::string(std::size_t)>& describe,
-                        const std::vector<std::function<std::string()>>& extras) {
-    std::vector<Seconds> first;
-    for (Engine& e : w.engines) first.push_back(e.pass());
-    w.hitRate = hitRate(answers[0]);
-    for (std::size_t i = 1; i < w.engines.size(); ++i)
-      compareOverlaps(answers[0], answers[i], cruxFlips, describe, in.radius, w.engines[i], extras[i] ? extras[i]() : "");
-    timeWorkload(w, calibrate(w, first), s, s.runs, true);
-    workloads.push_back(std::move(w));
-    printWorkload(workloads.back());
-  };
 
+  // Boolean workloads (any-hit rays, segments, overlaps): first pass, agreement, calibration,
+  // timed runs.
   auto makeAdder = [](Workload& w, std::vector<std::vector<std::uint8_t>>& answers) {
     return [&w, &answers](std::string name, std::string config, std::function<void(std::uint8_t*)> run) {
       answers.emplace_back(w.queries);
@@ -846,6 +893,77 @@ int main(int argc, char** argv) {
       w.engines.push_back(std::move(e));
     };
   };
+  auto runOverlap = [&](Workload& w, std::vector<std::vector<std::uint8_t>>& answers,
+                        const std::function<bool(std::size_t, double)>& cruxFlips,
+                        const std::function<std::string(std::size_t)>& describe,
+                        const std::vector<std::function<std::string()>>& extras) {
+    std::vector<Seconds> first;
+    for (Engine& e : w.engines) first.push_back(e.pass());
+    w.hitRate = hitRate(answers[0]);
+    for (std::size_t i = 1; i < w.engines.size(); ++i)
+      compareOverlaps(answers[0], answers[i], cruxFlips, describe, in.radius, w.engines[i],
+                      i < extras.size() && extras[i] ? extras[i]() : "");
+    timeWorkload(w, calibrate(w, first), s, s.runs, true);
+    workloads.push_back(std::move(w));
+    printWorkload(workloads.back());
+  };
+
+  // ---- (1b) any-hit rays (the same rays) ----
+  {
+    Workload w = makeWorkload("rays_any", "any-hit rays (occlusion)", "query", rays.size());
+    w.notes.push_back("the closest-hit rays again; answer: does the ray hit anything (boolean)");
+    std::vector<std::vector<std::uint8_t>> answers;
+    answers.reserve(4);
+    auto add = makeAdder(w, answers);
+    add("crux", "BVH, raycastAny", [&](std::uint8_t* out) { cruxAnyRays(mesh, rays, out); });
+#if CRUX_BENCH_HAVE_EMBREE
+    add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->anyHits(rays.data(), rays.size(), out); });
+    add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->anyHits(rays.data(), rays.size(), out); });
+    w.notes.push_back("embree: rtcOccluded1 per ray, tnear 0, tfar inf");
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+    add("bullet", "rayTest, first hit", [&](std::uint8_t* out) { bullet->anyHits(rays.data(), rays.size(), out); });
+    w.notes.push_back("bullet: rayTest over a segment of length 4R with a callback that cuts the ray at its first hit "
+                      "(Bullet has no any-hit query)");
+#endif
+    w.notes.push_back("fcl: no ray query");
+    // A disagreement is described by crux's closest hit (distance of its point to an edge).
+    auto describe = [&](std::size_t i) {
+      const crux::Ray ray{vec(rays[i].origin), vec(rays[i].dir)};
+      const auto h = crux::raycastClosest(mesh, ray);
+      return "ray " + std::to_string(i) + (h ? ": crux hits at t " + fmt("%.6g", double(h->t)) + ", edge distance " +
+                                                   fmt("%.2g", edgeDistance(mesh, h->triangle, h->point) / in.radius) + "R"
+                                             : ": crux misses");
+    };
+    runOverlap(w, answers, nullptr, describe, {});
+  }
+
+  // ---- (1c) segments ----
+  {
+    Workload w = makeWorkload("segments", "segment-mesh intersection (boolean)", "query", segments.size());
+    w.notes.push_back("segments from uniform points in the bounds grown 10% per side, random direction, length 0.02R..0.5R");
+    std::vector<std::vector<std::uint8_t>> answers;
+    answers.reserve(4);
+    auto add = makeAdder(w, answers);
+    add("crux", "BVH, exact predicates", [&](std::uint8_t* out) { cruxSegments(mesh, segments, out); });
+#if CRUX_BENCH_HAVE_EMBREE
+    add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->segmentHits(segments.data(), segments.size(), out); });
+    add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->segmentHits(segments.data(), segments.size(), out); });
+    w.notes.push_back("embree: rtcOccluded1 with dir = end - start, tnear 0, tfar 1");
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+    add("bullet", "rayTest, first hit", [&](std::uint8_t* out) { bullet->segmentHits(segments.data(), segments.size(), out); });
+    w.notes.push_back("bullet: rayTest(start, end) with a callback that cuts the ray at its first hit");
+#endif
+    w.notes.push_back("fcl: no segment query");
+    auto flips = [&](std::size_t i, double delta) {
+      const bool base = crux::intersects(mesh, cruxSegment(segments[i], 0));
+      return crux::intersects(mesh, cruxSegment(segments[i], base ? -delta : delta)) != base;
+    };
+    runOverlap(w, answers, flips, nullptr, {});
+  }
+
+  // ---- (2) sphere–mesh and box–mesh overlap ----
 
   {
     Workload w = makeWorkload("sphere_mesh", "sphere-mesh overlap (boolean)", "query", spheres.size());
@@ -968,6 +1086,95 @@ int main(int argc, char** argv) {
     w.notes.push_back("crux BVH build alone (Mesh::buildSeconds, wall, median over the timed builds): " +
                       fmt("%.1f", median(std::vector<double>(bvhOnly.end() - std::ptrdiff_t(s.buildRuns), bvhOnly.end())) * 1e3) +
                       " ms");
+    workloads.push_back(std::move(w));
+    printWorkload(workloads.back());
+  }
+
+  // ---- (5) refit: the vertices move (same topology), the BVH is refitted, not rebuilt ----
+  {
+    Workload w = makeWorkload("refit", "BVH refit after moving every vertex", "refit", nt);
+    w.notes.push_back("every vertex displaced by a smooth field of amplitude 0.03R; passes alternate between the "
+                      "original and the moved vertices; copying the new vertices in is not timed");
+    // Two vertex sets; each engine alternates between them, one refit per pass.
+    const MeshArrays moved = deformedArrays(in);
+    const std::vector<Vec3> cruxA = in.vertices, cruxB = cruxVertices(moved);
+    crux::Mesh cruxMoving(in.vertices, in.triangles, "refit");
+    MeshArrays shared = in.arrays;  // the vertex array Embree and Bullet read (each copies its target in first)
+    auto addRefit = [&](std::string name, std::string config, std::function<Seconds(const MeshArrays&)> refitTo) {
+      Engine e;
+      e.name = std::move(name);
+      e.config = std::move(config);
+      auto toMoved = std::make_shared<bool>(true);
+      e.pass = [refitTo, toMoved, &moved, &in] {
+        const MeshArrays& target = *toMoved ? moved : in.arrays;
+        *toMoved = !*toMoved;
+        return refitTo(target);
+      };
+      w.engines.push_back(std::move(e));
+    };
+    addRefit("crux", "Mesh::setVertices (refit), 1 thread", [&](const MeshArrays& target) {
+      std::vector<Vec3> v = &target == &moved ? cruxB : cruxA;
+      return timeIt([&] { cruxMoving.setVertices(std::move(v)); });
+    });
+#if CRUX_BENCH_HAVE_EMBREE
+    EmbreeConfig embreeRefitConfig{true, false, 1};
+    embreeRefitConfig.refit = true;
+    auto embreeRefit = std::make_unique<EmbreePeer>(shared, embreeRefitConfig);
+    addRefit("embree", embreeRefitConfig.label(), [&](const MeshArrays& target) {
+      std::copy(target.positions.begin(), target.positions.end(), shared.positions.begin());
+      return embreeRefit->refit();
+    });
+    w.notes.push_back("embree: RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC, scene quality LOW (two-level, honours "
+                      "the geometry quality), geometry quality REFIT; rtcUpdateGeometryBuffer + rtcCommitGeometry + "
+                      "rtcCommitScene (without DYNAMIC Embree 3.13.5 rebuilds on every commit)");
+#endif
+#if CRUX_BENCH_HAVE_FCL
+    auto fclRefit = std::make_unique<FclPeer>(in.arrays);
+    addRefit("fcl", "BVHModel<OBBRSSd> update, bottom-up refit",
+             [&](const MeshArrays& target) { return fclRefit->refit(target); });
+    w.notes.push_back("fcl: beginUpdateModel, updateSubModel, endUpdateModel(refit, bottomup); the float->double "
+                      "vertex conversion is not timed");
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+    auto bulletRefit = std::make_unique<BulletPeer>(shared);
+    addRefit("bullet", "btBvhTriangleMeshShape::refitTree", [&](const MeshArrays& target) {
+      std::copy(target.positions.begin(), target.positions.end(), shared.positions.begin());
+      return bulletRefit->refit();
+    });
+    w.notes.push_back("bullet: bounds of the new vertices, refitTree (requantize + refit every node), updateSingleAabb");
+#endif
+    // First pass: every engine refits to the moved vertices; then the refitted structures
+    // answer queries, compared with crux's answers on its refitted mesh.
+    std::vector<Seconds> first;
+    for (Engine& e : w.engines) first.push_back(e.pass());
+    std::vector<RayAnswer> cruxRayAnswers(rays.size()), peerRayAnswers(rays.size());
+    cruxRays(cruxMoving, rays, cruxRayAnswers.data());
+    std::vector<std::uint8_t> cruxSphereAnswers(spheres.size()), peerSphereAnswers(spheres.size());
+    cruxSpheres(cruxMoving, spheres, cruxSphereAnswers.data());
+    for (Engine& e : w.engines) {
+      if (e.name == "embree" || e.name == "bullet") {
+#if CRUX_BENCH_HAVE_EMBREE
+        if (e.name == "embree") embreeRefit->closestHits(rays.data(), rays.size(), peerRayAnswers.data());
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+        if (e.name == "bullet") bulletRefit->closestHits(rays.data(), rays.size(), peerRayAnswers.data());
+#endif
+        compareRays(cruxMoving, in.radius, rays, cruxRayAnswers, peerRayAnswers, e);
+        e.detail = "closest-hit rays after the refit: " + e.detail;
+      }
+#if CRUX_BENCH_HAVE_FCL
+      if (e.name == "fcl") {
+        fclRefit->sphereOverlaps(spheres.data(), spheres.size(), peerSphereAnswers.data());
+        auto flips = [&](std::size_t i, double delta) {
+          const bool base = crux::overlaps(cruxMoving, cruxSphere(spheres[i]));
+          return crux::overlaps(cruxMoving, cruxSphere(spheres[i], base ? -delta : delta)) != base;
+        };
+        compareOverlaps(cruxSphereAnswers, peerSphereAnswers, flips, nullptr, in.radius, e);
+        e.detail = "sphere overlaps after the refit: " + e.detail;
+      }
+#endif
+    }
+    timeWorkload(w, calibrate(w, first), s, s.runs, true);
     workloads.push_back(std::move(w));
     printWorkload(workloads.back());
   }

@@ -15,6 +15,11 @@
 ///    set split in N contiguous chunks, one std::thread each), Bullet `rayTest` on 1 thread.
 ///    Every engine's answers are compared with crux's (1 thread) on every ray before timing:
 ///    hit/miss equal, t within 1e-4 relative.
+///  - refit: every vertex moved by a smooth field (amplitude 0.03R, same topology), passes
+///    alternating between the two vertex sets: crux `Mesh::setVertices`, Embree (robust + dynamic,
+///    scene quality LOW, geometry quality REFIT) update + commit, FCL beginUpdateModel..endUpdateModel,
+///    Bullet `refitTree`; all on 1 thread. Answers after the refit are checked as for rays
+///    (Embree, Bullet) and on sphere overlaps (FCL) against crux's refitted mesh.
 /// Timing: each engine's pass over the query set is repeated to last ~--seconds, --runs runs
 /// interleave the engines (alternating order), the median run is reported (wall clock, or
 /// with --clock cpu the process CPU time).
@@ -150,6 +155,26 @@ std::vector<RayQuery> makeRays(const Input& in, std::size_t n, std::uint64_t see
   return rays;
 }
 
+/// The moved vertices of the refit rows: v + 0.03R * sin(3v/R + phase) per axis, as floats.
+MeshArrays movedArrays(const Input& in) {
+  MeshArrays out = in.arrays;
+  for (std::size_t i = 0; i < out.vertexCount(); ++i) {
+    const double x = in.arrays.positions[3 * i], y = in.arrays.positions[3 * i + 1], z = in.arrays.positions[3 * i + 2];
+    const double a = 3 / in.radius, amp = 0.03 * in.radius;
+    out.positions[3 * i] = float(x + amp * std::sin(a * y + 0.3));
+    out.positions[3 * i + 1] = float(y + amp * std::sin(a * z + 1.1));
+    out.positions[3 * i + 2] = float(z + amp * std::sin(a * x + 2.3));
+  }
+  return out;
+}
+
+std::vector<Vec3> cruxVertices(const MeshArrays& a) {
+  std::vector<Vec3> v(a.vertexCount());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    v[i] = Vec3(Real(a.positions[3 * i]), Real(a.positions[3 * i + 1]), Real(a.positions[3 * i + 2]));
+  return v;
+}
+
 // ---- engines ------------------------------------------------------------------------------------
 
 /// Not inlined: `crux report --callgrind` counts the instructions of this function by name.
@@ -235,12 +260,12 @@ std::size_t rayMismatches(const std::vector<RayAnswer>& ref, const std::vector<R
 
 void print(const std::string& workload, std::size_t triangles, const std::vector<Engine>& engines) {
   std::printf("\n== %s, %zu triangles ==\n", workload.c_str(), triangles);
-  const bool build = workload == "build";
-  std::printf("   %-8s %-26s %12s %10s %6s  %s\n", "engine", "config", build ? "ms/build" : "ns/ray", "vs crux",
-              "cpu%", build ? "bytes/tri" : "answers");
+  const bool build = workload == "build", perRay = workload == "rays";
+  std::printf("   %-8s %-26s %12s %10s %6s  %s\n", "engine", "config", perRay ? "ns/ray" : ("ms/" + workload).c_str(),
+              "vs crux", "cpu%", build ? "bytes/tri" : "answers");
   for (const Engine& e : engines) {
     std::printf("   %-8s %-26s %12.2f %9.2fx %6.0f  %s\n", e.name.c_str(), e.config.c_str(),
-                e.median * (build ? 1e3 : 1e9), e.median / engines.front().median, 100 * e.cpuShare,
+                e.median * (perRay ? 1e9 : 1e3), e.median / engines.front().median, 100 * e.cpuShare,
                 build ? (e.bytesPerTriangle >= 0 ? std::to_string(int(std::lround(e.bytesPerTriangle))).c_str() : "-")
                       : e.agreement.c_str());
   }
@@ -467,6 +492,100 @@ int main(int argc, char** argv) {
     print("rays", nt, rayEngines);
     std::printf("   crux hit rate %.1f%%\n", 100.0 * double(hits) / double(std::max<std::size_t>(1, nr)));
     for (Engine& e : rayEngines) gRows.push_back({"rays", nt, nr, e});
+    rayEngines.clear();
+
+    // ---- refit: every engine moves to the other vertex set per pass; checked after one ----
+    {
+      const MeshArrays moved = movedArrays(in);
+      const std::vector<Vec3> cruxA = in.vertices, cruxB = cruxVertices(moved);
+      crux::Mesh moving(in.vertices, in.triangles, "torus");
+      MeshArrays shared = in.arrays;  // read by Embree and Bullet; each copies its target in first
+      std::vector<Engine> refits;
+      // Each engine's pass alternates: moved, original, moved, ...
+      auto alternating = [&](std::function<Seconds(const MeshArrays&)> refitTo) {
+        auto toMoved = std::make_shared<bool>(true);
+        return [refitTo, toMoved, &moved, &in] {
+          const MeshArrays& target = *toMoved ? moved : in.arrays;
+          *toMoved = !*toMoved;
+          return refitTo(target);
+        };
+      };
+      refits.push_back({"crux", "Mesh::setVertices", 1, alternating([&](const MeshArrays& target) {
+                          std::vector<Vec3> v = &target == &moved ? cruxB : cruxA;
+                          const Stopwatch w;
+                          moving.setVertices(std::move(v));
+                          return w.elapsed();
+                        })});
+#if CRUX_BENCH_HAVE_EMBREE
+      EmbreeConfig refitConfig{true, false, 1};
+      refitConfig.refit = true;
+      auto embreeRefit = std::make_unique<EmbreePeer>(shared, refitConfig);
+      refits.push_back({"embree", refitConfig.label(), 1, alternating([&](const MeshArrays& target) {
+                          std::copy(target.positions.begin(), target.positions.end(), shared.positions.begin());
+                          return embreeRefit->refit();
+                        })});
+#endif
+#if CRUX_BENCH_HAVE_FCL
+      auto fclRefit = std::make_unique<FclPeer>(in.arrays);
+      refits.push_back({"fcl", "BVHModel<OBBRSSd> update", 1,
+                        alternating([&](const MeshArrays& target) { return fclRefit->refit(target); })});
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+      auto bulletRefit = std::make_unique<BulletPeer>(shared);
+      refits.push_back({"bullet", "refitTree", 1, alternating([&](const MeshArrays& target) {
+                          std::copy(target.positions.begin(), target.positions.end(), shared.positions.begin());
+                          return bulletRefit->refit();
+                        })});
+#endif
+      // One refit each (to the moved vertices), then the answers of the refitted structures.
+      for (Engine& e : refits) e.pass();
+      std::vector<RayAnswer> movedReference(nr);
+      cruxRays(moving, rays.data(), nr, movedReference.data());
+      std::mt19937_64 rng(s.seed + 7 * nt);
+      std::vector<SphereQuery> spheres(std::min<std::size_t>(nr, 2000));
+      for (SphereQuery& q : spheres) {
+        for (int k = 0; k < 3; ++k) q.center[k] = float(std::uniform_real_distribution<double>(-in.extent[k], in.extent[k])(rng));
+        q.radius = float(0.05 * in.radius);
+      }
+      std::vector<std::uint8_t> sphereReference(spheres.size()), sphereAnswers(spheres.size());
+      for (std::size_t i = 0; i < spheres.size(); ++i)
+        sphereReference[i] = crux::overlaps(
+            moving, crux::Sphere{Vec3(Real(spheres[i].center[0]), Real(spheres[i].center[1]), Real(spheres[i].center[2])),
+                                 Real(spheres[i].radius)});
+      for (Engine& e : refits) {
+        if (e.name == "crux") continue;
+        std::size_t bad = 0, total = nr;
+        std::string what = "rays";
+#if CRUX_BENCH_HAVE_EMBREE
+        if (e.name == "embree") {
+          embreeRefit->closestHits(rays.data(), nr, answers.data());
+          bad = rayMismatches(movedReference, answers);
+        }
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+        if (e.name == "bullet") {
+          bulletRefit->closestHits(rays.data(), nr, answers.data());
+          bad = rayMismatches(movedReference, answers);
+        }
+#endif
+#if CRUX_BENCH_HAVE_FCL
+        if (e.name == "fcl") {
+          fclRefit->sphereOverlaps(spheres.data(), spheres.size(), sphereAnswers.data());
+          bad = 0;
+          for (std::size_t i = 0; i < spheres.size(); ++i) bad += sphereReference[i] != sphereAnswers[i];
+          total = spheres.size();
+          what = "sphere overlaps";
+        }
+#endif
+        e.mismatches = bad;
+        e.agreement = bad == 0 ? "agree" : "DISAGREE " + std::to_string(bad) + " of " + std::to_string(total) + " " + what;
+      }
+      Settings refitSettings = s;
+      refitSettings.runs = s.quick ? 1 : std::min(s.runs, 3);
+      timeEngines(refits, 1.0, refitSettings);
+      print("refit", nt, refits);
+      for (Engine& e : refits) gRows.push_back({"refit", nt, 1, e});
+    }
   }
   if (!s.jsonPath.empty()) writeJson(s, absent);
   return 0;

@@ -30,6 +30,7 @@
 #include <crux/mesh/mesh.hpp>
 #include <crux/model/model_query.hpp>
 #include <crux/scene/scene.hpp>
+#include <crux/scene/scene_batch.hpp>
 
 #if CRUX_BENCH_HAVE_BULLET
 #include <btBulletCollisionCommon.h>
@@ -58,6 +59,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #ifndef CRUX_BENCH_BUILD_TYPE
@@ -550,6 +552,7 @@ class CruxQueryEngine final : public QueryEngine {
     return c.count;
   }
   std::vector<std::uint32_t> sphereModels(const Sphere& s) override { return scene_.query(s); }
+  const Scene& scene() const { return scene_; }
 
  private:
   BroadPhaseKind kind_;
@@ -806,6 +809,64 @@ void runQueries(const Workload& w, std::vector<QueryEngine*>& all, const Options
       opt);
 }
 
+/// Scene rays as one batch (crux::raycast(scene, rays, out, options, ParallelOptions), scene_batch.hpp)
+/// on 1 thread and on every hardware thread: the cost of the same rays with more cores. Every
+/// ray gets the longest ray length of the set as its maxDistance (a batch takes one options);
+/// the N-thread answers must equal the 1-thread answers bitwise (the batch's contract).
+void runThreadedRays(const Workload& w, const CruxQueryEngine& engine, const Options& opt) {
+  const std::uint32_t n = std::max(2u, std::thread::hardware_concurrency());
+  std::vector<Ray> rays;
+  RayQueryOptions options;
+  options.maxDistance = 0;
+  for (const RayCase& r : w.rays) {
+    rays.push_back(r.ray);
+    options.maxDistance = std::max(options.maxDistance, r.length);
+  }
+  const std::string workload = "scene rays, 1 and N threads";
+  std::printf("\n== %s: %zu models, %zu rays (batch, maxDistance %.3g) ==\n", workload.c_str(), w.models, rays.size(),
+              double(options.maxDistance));
+  std::vector<std::optional<SceneRayHit>> reference(rays.size()), out(rays.size());
+  double reference1 = 0;
+  for (const std::uint32_t threads : {1u, n}) {
+    ParallelOptions parallel;
+    parallel.threads = threads;
+    crux::raycast(engine.scene(), Span<const Ray>(rays), Span<std::optional<SceneRayHit>>(threads == 1 ? reference : out),
+                  options, parallel);
+    std::size_t differ = 0, hits = 0;
+    if (threads != 1) {
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const auto& a = reference[i];
+        const auto& b = out[i];
+        differ += a.has_value() != b.has_value() || (a && (a->model != b->model || a->hit.t != b->hit.t));
+      }
+    }
+    for (const auto& h : reference) hits += h.has_value();
+    // Repetitions so a run lasts ~0.05 s; median of opt.runs runs.
+    const Stopwatch probe;
+    crux::raycast(engine.scene(), Span<const Ray>(rays), Span<std::optional<SceneRayHit>>(out), options, parallel);
+    const Seconds once = probe.elapsed();
+    const int reps = std::max(1, int(0.05 / std::max(1e-6, opt.cpuClock ? once.cpu : once.wall)));
+    Timing timing;
+    for (int run = 0; run < opt.runs; ++run) {
+      const Stopwatch sw;
+      for (int k = 0; k < reps; ++k)
+        crux::raycast(engine.scene(), Span<const Ray>(rays), Span<std::optional<SceneRayHit>>(out), options, parallel);
+      Seconds t = sw.elapsed();
+      t.wall /= reps;
+      t.cpu /= reps;
+      timing.runs.push_back(t);
+    }
+    const Seconds m = timing.median(opt.cpuClock);
+    Row r{w.models, workload, engine.name() + ", " + std::to_string(threads) + (threads == 1 ? " thread" : " threads"),
+          threads == 1 ? "reference" : (differ ? std::to_string(differ) + " rays differ" : "all equal (bitwise)"),
+          (opt.cpuClock ? m.cpu : m.wall) / double(std::max<std::size_t>(1, rays.size())),
+          m.wall > 0 ? m.cpu / m.wall / threads : 0, double(hits)};
+    if (threads == 1) reference1 = r.perItem;
+    printRow(r, reference1);
+    gRows.push_back(r);
+  }
+}
+
 double findTime(std::size_t models, const std::string& workload, const std::string& engine) {
   for (const Row& r : gRows)
     if (r.models == models && r.workload == workload && r.engine == engine) return r.perItem;
@@ -1004,6 +1065,8 @@ int main(int argc, char** argv) {
     for (auto& e : queryEngines)
       if (opt.only.empty() || e->name().find(opt.only) != std::string::npos) raw.push_back(e.get());
     if (!raw.empty()) runQueries(w, raw, opt);
+    if (opt.has("rays") && !queryEngines.empty())
+      if (const auto* engine = dynamic_cast<const CruxQueryEngine*>(queryEngines.front().get())) runThreadedRays(w, *engine, opt);
   }
   printTargets(opt);
   printScaling(opt);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -21,11 +22,11 @@ using Json = nlohmann::json;
 
 // ---- normalised bench figures ------------------------------------------------------------------
 
-/// One engine's time on one workload at one size.
+/// One engine's time (or memory) on one workload at one size.
 struct Entry {
   std::string backend;  ///< crux, embree, fcl, bullet, ... (lower-case first word of the engine name)
   std::string label;    ///< engine [config]
-  double seconds = 0;   ///< per query / frame / build (the bench's reported clock)
+  double seconds = 0;   ///< per query / frame / build (the bench's reported clock); bytes for memory
   std::string agreement;
   double size = 0;      ///< triangles or models (0: one fixed input)
 };
@@ -33,6 +34,7 @@ struct Entry {
 /// One workload of one bench: entries[0] is the reference (crux).
 struct WorkloadFigures {
   std::string bench, key, title, unit, sizeName;
+  std::string valueUnit = "seconds";  ///< what Entry::seconds holds: "seconds" or "bytes"
   std::vector<Entry> entries;  ///< at the largest size
   std::vector<Entry> sweep;    ///< every size (scaling benches)
 };
@@ -52,7 +54,25 @@ std::string slug(const std::string& s) {
   return out;
 }
 
-std::string backendOf(const std::string& engine) { return lower(engine.substr(0, engine.find(' '))); }
+/// The backend of an engine name: its leading letters and digits, lower-case ("FCL DynamicAABBTree"
+/// and "fcl::distance (...)" are both "fcl").
+std::string backendOf(const std::string& engine) {
+  std::size_t n = 0;
+  while (n < engine.size() && std::isalnum(static_cast<unsigned char>(engine[n]))) ++n;
+  return lower(engine.substr(0, n));
+}
+
+/// A workload key usable in a series id (ids are separated by spaces in data-series): letters,
+/// digits, '_' and '-' kept, every other run of characters becomes one '-'.
+std::string keyOf(const std::string& key) {
+  std::string out;
+  for (const char ch : key) {
+    if (std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '-') out += ch;
+    else if (!out.empty() && out.back() != '-') out += '-';
+  }
+  while (!out.empty() && out.back() == '-') out.pop_back();
+  return out;
+}
 
 std::string str(const Json& j, const char* key) {
   const auto it = j.find(key);
@@ -70,7 +90,7 @@ void readWorkloadFormat(const std::string& bench, const Json& data, std::vector<
   for (const Json& w : data.value("workloads", Json::array())) {
     WorkloadFigures f;
     f.bench = bench;
-    f.key = str(w, "key");
+    f.key = keyOf(str(w, "key"));
     f.title = str(w, "title");
     f.unit = str(w, "unit");
     if (f.key.empty() || f.unit.empty()) continue;
@@ -104,6 +124,33 @@ void readWorkloadFormat(const std::string& bench, const Json& data, std::vector<
     }
     if (!f.entries.empty()) out.push_back(f);
   }
+  // bench_mesh's "memory": {"<engine>[_<config>]_bytes_per_triangle": value, ...}, crux first.
+  const auto memory = data.find("memory");
+  if (memory != data.end() && memory->is_object()) {
+    WorkloadFigures f;
+    f.bench = bench;
+    f.key = "memory";
+    f.title = "memory per triangle (arrays + BVH)";
+    f.unit = "triangle";
+    f.valueUnit = "bytes";
+    const std::string suffix = "_bytes_per_triangle";
+    for (int pass = 0; pass < 2; ++pass)
+      for (const auto& [k, v] : memory->items()) {
+        if (!v.is_number() || k.size() <= suffix.size() || k.compare(k.size() - suffix.size(), suffix.size(), suffix) != 0)
+          continue;
+        const std::string name = k.substr(0, k.size() - suffix.size());
+        const std::string backend = name.substr(0, name.find('_'));
+        if ((pass == 0) != (backend == "crux")) continue;
+        Entry x;
+        x.backend = backend;
+        std::string config = name.size() > backend.size() ? name.substr(backend.size() + 1) : "";
+        for (char& ch : config) ch = ch == '_' ? ',' : ch;
+        x.label = backend + (config.empty() ? "" : " [" + config + "]");
+        x.seconds = v.get<double>();
+        f.entries.push_back(x);
+      }
+    if (!f.entries.empty() && f.entries[0].backend == "crux") out.push_back(f);
+  }
 }
 
 /// bench_scene's and bench_scaling's format: {"rows": [{"workload", "engine", "config"?,
@@ -111,16 +158,31 @@ void readWorkloadFormat(const std::string& bench, const Json& data, std::vector<
 void readRowFormat(const std::string& bench, const Json& data, std::vector<WorkloadFigures>& out) {
   std::vector<std::string> order;
   std::map<std::string, WorkloadFigures> byWorkload;
+  WorkloadFigures memory;  // bench_scaling's build rows carry bytes_per_triangle
+  memory.bench = bench;
+  memory.key = "memory";
+  memory.title = "memory per triangle (arrays + BVH)";
+  memory.unit = "triangle";
+  memory.valueUnit = "bytes";
+  memory.sizeName = "triangles";
   for (const Json& r : data.value("rows", Json::array())) {
     const std::string w = str(r, "workload");
     if (w.empty()) continue;
+    if (r.contains("bytes_per_triangle") && r["bytes_per_triangle"].is_number()) {
+      Entry x;
+      x.backend = backendOf(str(r, "engine"));
+      x.label = str(r, "engine") + (str(r, "config").empty() ? "" : " [" + str(r, "config") + "]");
+      x.seconds = r["bytes_per_triangle"].get<double>();
+      x.size = num(r, "triangles");
+      memory.sweep.push_back(x);
+    }
     if (!byWorkload.count(w)) {
       order.push_back(w);
       WorkloadFigures& f = byWorkload[w];
       f.bench = bench;
       f.key = slug(w);
       f.title = w;
-      f.unit = w == "build" ? "build" : w == "update+pairs" ? "frame" : "query";
+      f.unit = w == "build" || w == "refit" ? w : w == "update+pairs" ? "frame" : "query";
       f.sizeName = r.contains("models") ? "models" : "triangles";
     }
     WorkloadFigures& f = byWorkload[w];
@@ -140,15 +202,94 @@ void readRowFormat(const std::string& bench, const Json& data, std::vector<Workl
       if (e.size == largest) f.entries.push_back(e);
     out.push_back(f);
   }
+  if (!memory.sweep.empty()) {
+    double largest = 0;
+    for (const Entry& e : memory.sweep) largest = std::max(largest, e.size);
+    for (const Entry& e : memory.sweep)
+      if (e.size == largest) memory.entries.push_back(e);
+    out.push_back(memory);
+  }
+}
+
+/// bench_contact's printed tables, read when it wrote no JSON: per pair family ("== name: ...")
+/// rows "<query> <ns/query> <peer/crux>", where a row with "-" is a crux reference and the rows
+/// after it with a ratio are its peers; "check vs fcl::distance: N of M differ ..." and "check vs
+/// libccd EPA depth: N of M differ ..." give the agreement of those peers (the other libccd rows
+/// are not checked by the bench, and say so).
+void readContactText(const std::string& bench, const std::string& text, std::vector<WorkloadFigures>& out) {
+  std::istringstream in(text);
+  std::string group, fclAgreement = "not checked", ccdAgreement = "not checked";
+  int current = -1;  // index in `out` of the workload of the last crux row
+  auto checkVerdict = [](const std::string& line) {
+    const auto at = line.find(": ");
+    int differ = -1, total = -1;
+    if (at == std::string::npos || std::sscanf(line.c_str() + at + 2, "%d of %d", &differ, &total) != 2)
+      return std::string("not checked");
+    return differ == 0 ? std::string("agree") : "DISAGREE: " + line.substr(at + 2);
+  };
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("== ", 0) == 0) {
+      const auto colon = line.find(':');
+      group = line.substr(3, colon == std::string::npos ? std::string::npos : colon - 3);
+      fclAgreement = ccdAgreement = "not checked";
+      current = -1;
+      continue;
+    }
+    if (line.rfind("check vs fcl", 0) == 0) fclAgreement = checkVerdict(line);
+    if (line.rfind("check vs libccd", 0) == 0) ccdAgreement = checkVerdict(line);
+    if (group.empty()) continue;
+    std::istringstream fields(line);
+    std::vector<std::string> words;
+    for (std::string w; fields >> w;) words.push_back(w);
+    if (words.size() < 3) continue;
+    const std::string ratio = words.back(), nsText = words[words.size() - 2];
+    char* end = nullptr;
+    const double ns = std::strtod(nsText.c_str(), &end);
+    if (end == nsText.c_str() || *end != '\0' || !(ns > 0)) continue;
+    std::string label;
+    for (std::size_t i = 0; i + 2 < words.size(); ++i) label += (i ? " " : "") + words[i];
+    Entry x;
+    x.backend = backendOf(label);
+    if (x.backend.rfind("fcl", 0) == 0) x.backend = "fcl";
+    x.label = label;
+    x.seconds = ns * 1e-9;
+    if (ratio == "-") {
+      if (x.backend != "crux") continue;
+      WorkloadFigures f;
+      f.bench = bench;
+      const std::string what = label.substr(5);  // after "crux "
+      f.title = group + ": " + what;
+      f.key = slug(group + " " + what.substr(0, what.find(' ')));
+      f.unit = "query";
+      x.agreement = "ref";
+      f.entries.push_back(x);
+      out.push_back(f);
+      current = int(out.size()) - 1;
+    } else if (current >= 0) {
+      const bool checkedDepth = label.find("GJKPenetration") != std::string::npos;
+      x.agreement = x.backend == "fcl" ? fclAgreement : checkedDepth ? ccdAgreement : "not checked";
+      out[std::size_t(current)].entries.push_back(x);
+    }
+  }
 }
 
 std::vector<WorkloadFigures> figures(const Json& results) {
   std::vector<WorkloadFigures> out;
   const auto benches = results.find("benches");
   if (benches == results.end() || !benches->is_object()) return out;
-  for (const auto& [bench, step] : benches->items()) {
+  // The benches in the report's order (docs/report.md), any others after.
+  std::vector<std::string> order = {"bench_mesh", "bench_contact", "bench_scene", "bench_scaling", "bench_parallel"};
+  for (const auto& [bench, step] : benches->items())
+    if (std::find(order.begin(), order.end(), bench) == order.end()) order.push_back(bench);
+  for (const std::string& bench : order) {
+    if (!benches->contains(bench)) continue;
+    const Json& step = (*benches)[bench];
     const auto data = step.find("data");
-    if (data == step.end() || !data->is_object()) continue;
+    if (data == step.end() || !data->is_object()) {
+      if (bench == "bench_contact" && step.contains("text") && step["text"].is_string())
+        readContactText(bench, step["text"].get<std::string>(), out);
+      continue;
+    }
     if (data->contains("workloads")) readWorkloadFormat(bench, *data, out);
     else if (data->contains("rows")) readRowFormat(bench, *data, out);
   }
@@ -179,6 +320,12 @@ std::string duration(double seconds) {
   if (seconds >= 1e-3) return fmt("%.3g ms", seconds * 1e3);
   if (seconds >= 1e-6) return fmt("%.3g us", seconds * 1e6);
   return fmt("%.3g ns", seconds * 1e9);
+}
+
+/// A plotted value in its unit: a duration, or bytes.
+std::string valueText(double v, const std::string& valueUnit) {
+  if (valueUnit == "bytes") return std::isfinite(v) ? fmt("%.4g bytes", v) : "n/a";
+  return duration(v);
 }
 
 std::string html(const std::string& s) {
@@ -267,6 +414,7 @@ std::string barChart(const std::string& id, const Json& s) {
 /// Log-log lines, one per series (x = size, y = seconds per item).
 std::string lineChart(const std::vector<std::pair<std::string, const Json*>>& series, const std::string& title,
                       const std::string& xLabel, const std::string& yLabel) {
+  const std::string valueUnit = series.empty() ? "seconds" : str(*series.front().second, "value_unit");
   double xlo = 1e300, xhi = 0, ylo = 1e300, yhi = 0;
   for (const auto& [id, s] : series)
     for (const Json& p : (*s)["points"]) {
@@ -296,7 +444,7 @@ std::string lineChart(const std::vector<std::pair<std::string, const Json*>>& se
   for (double d = y0; d <= y1 * 1.0001; d *= 10)
     o << "<line x1=\"" << left << "\" y1=\"" << py(d) << "\" x2=\"" << left + w << "\" y2=\"" << py(d)
       << "\" stroke=\"#dddddd\"/><text x=\"" << left - 6 << "\" y=\"" << py(d) + 4 << "\" text-anchor=\"end\">"
-      << html(duration(d)) << "</text>\n";
+      << html(valueText(d, valueUnit)) << "</text>\n";
   o << "<text x=\"" << left + w / 2 << "\" y=\"" << top + h + 36 << "\" text-anchor=\"middle\" fill=\"#555555\">" << html(xLabel)
     << " (log)</text>\n<text x=\"12\" y=\"" << top - 8 << "\" fill=\"#555555\">" << html(yLabel) << " (log)</text>\n";
   double legendY = top + 8;
@@ -314,7 +462,7 @@ std::string lineChart(const std::vector<std::pair<std::string, const Json*>>& se
       pts += fmt("%.1f,", px(vx)) + fmt("%.1f ", py(vy));
       marks << "<circle cx=\"" << px(vx) << "\" cy=\"" << py(vy) << "\" r=\"3\" fill=\"" << color << "\" data-series=\""
             << html(id) << "\" data-x=\"" << exact(vx) << "\" data-y=\"" << exact(vy) << "\"><title>" << html(str(*s, "name"))
-            << ": " << html(duration(vy)) << " at " << fmt("%.0f", vx) << "</title></circle>\n";
+            << ": " << html(valueText(vy, valueUnit)) << " at " << fmt("%.0f", vx) << "</title></circle>\n";
     }
     o << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"1.5\""
       << (dash.empty() ? "" : " stroke-dasharray=\"" + dash + "\"") << " points=\"" << pts << "\"/>\n"
@@ -381,6 +529,13 @@ Headline headline(const Json& results) {
     for (const Entry& e : f.entries)
       if (e.backend != "crux" && std::find(h.peers.begin(), h.peers.end(), e.backend) == h.peers.end())
         h.peers.push_back(e.backend);
+  // A fixed column order (the README's), others after in order of appearance.
+  const std::vector<std::string> preferred = {"embree", "bullet", "fcl", "libccd"};
+  const auto rank = [&preferred](const std::string& p) {
+    return std::size_t(std::find(preferred.begin(), preferred.end(), p) - preferred.begin());
+  };
+  std::stable_sort(h.peers.begin(), h.peers.end(),
+                   [&rank](const std::string& a, const std::string& b) { return rank(a) < rank(b); });
   for (const WorkloadFigures& f : all) {
     if (f.entries.empty() || f.entries[0].backend != "crux") continue;
     const Entry& crux = f.entries[0];
@@ -395,7 +550,7 @@ Headline headline(const Json& results) {
     // bench_parallel counts "rays", "queries", "triangles": per one of them.
     if (unit.size() > 3 && unit.compare(unit.size() - 3, 3, "ies") == 0) unit.replace(unit.size() - 3, 3, "y");
     else if (unit.size() > 3 && unit.back() == 's') unit.pop_back();
-    row.push_back(duration(crux.seconds) + "/" + unit);
+    row.push_back(valueText(crux.seconds, f.valueUnit) + "/" + unit);
     for (const std::string& peer : h.peers) {
       std::string cell = "-";
       for (const Entry& e : f.entries)
@@ -457,16 +612,19 @@ nlohmann::json chartSeries(const nlohmann::json& results) {
     const std::string workload = f.bench + "/" + f.key;
     // Ratio bars at the (largest) size: engine time / crux time.
     if (!f.entries.empty() && f.entries[0].backend == "crux" && f.entries[0].seconds > 0) {
-      Json s = {{"kind", "bar"}, {"chart", base + ".ratio"}, {"workload", workload}, {"unit", "ratio"}};
+      const bool bytes = f.valueUnit == "bytes";
+      Json s = {{"kind", "bar"}, {"chart", base + ".ratio"}, {"workload", workload}, {"unit", "ratio"},
+                {"value_unit", f.valueUnit}, {"crux_value", f.entries[0].seconds}};
       s["title"] = f.bench + ": " + f.title + (f.sizeName.empty() ? "" : fmt(", %.0f ", f.entries[0].size) + f.sizeName) +
-                   " - time relative to " + f.entries[0].label + " (> 1: crux is faster)";
+                   (bytes ? " - relative to crux's " + valueText(f.entries[0].seconds, "bytes") + " (> 1: crux is smaller)"
+                          : " - time relative to " + f.entries[0].label + " (> 1: crux is faster)");
       s["backends"] = backendsOf(f.entries);
       Json points = Json::array();
       for (std::size_t i = 1; i < f.entries.size(); ++i) {
         const Entry& e = f.entries[i];
         if (!std::isfinite(e.seconds)) continue;
         points.push_back({{"x", e.label}, {"y", e.seconds / f.entries[0].seconds}, {"backend", e.backend},
-                          {"agreement", e.agreement}, {"seconds", e.seconds}});
+                          {"agreement", e.agreement}, {bytes ? "bytes" : "seconds", e.seconds}});
       }
       s["points"] = points;
       if (!points.empty()) series[base + ".ratio"] = s;
@@ -477,8 +635,9 @@ nlohmann::json chartSeries(const nlohmann::json& results) {
       if (std::find(labels.begin(), labels.end(), e.label) == labels.end()) labels.push_back(e.label);
     for (const std::string& label : labels) {
       Json s = {{"kind", "line"}, {"chart", base + ".scaling"}, {"workload", workload}, {"name", label},
-                {"title", f.bench + ": " + f.title + " - cost vs size"}, {"x_label", f.sizeName},
-                {"y_label", "time per " + f.unit}, {"unit", "seconds"}};
+                {"title", f.bench + ": " + f.title + (f.valueUnit == "bytes" ? " - bytes vs size" : " - cost vs size")}, {"x_label", f.sizeName},
+                {"y_label", (f.valueUnit == "bytes" ? "bytes per " : "time per ") + f.unit}, {"unit", f.valueUnit},
+                {"value_unit", f.valueUnit}};
       Json points = Json::array();
       std::string backend;
       for (const Entry& e : f.sweep)
@@ -543,7 +702,7 @@ std::string renderSummary(const nlohmann::json& results) {
     o << "\n";
   }
   o << "\nAnswers are compared on every query before timing; \"answers differ\" marks a peer that disagreed "
-       "(see the bench logs in raw/).\n";
+       "(see the bench logs in raw/). Memory rows: peer bytes / crux bytes (> 1: crux is smaller).\n";
   for (const auto& [bench, step] : results["benches"].items())
     if (!step.value("available", false)) o << "\n- " << bench << ": not available in this build";
   o << "\n";
@@ -629,7 +788,7 @@ std::string renderHtml(const nlohmann::json& results) {
       if (f.bench == bench) mine.push_back(f);
     for (const WorkloadFigures& f : mine) {
       o << "<h3>" << html(f.title) << "</h3>\n<table><tr><th>engine</th>" << (f.sizeName.empty() ? "" : "<th>" + f.sizeName + "</th>")
-        << "<th>time per " << html(f.unit) << "</th><th>vs crux</th><th>answers</th></tr>\n";
+        << "<th>" << (f.valueUnit == "bytes" ? "bytes" : "time") << " per " << html(f.unit) << "</th><th>vs crux</th><th>answers</th></tr>\n";
       const std::vector<Entry>& rows = f.sweep.empty() ? f.entries : f.sweep;
       std::map<double, double> cruxAt;
       for (const Entry& e : rows)
@@ -637,7 +796,7 @@ std::string renderHtml(const nlohmann::json& results) {
       for (const Entry& e : rows) {
         const double ref = cruxAt.count(e.size) ? cruxAt[e.size] : std::nan("");
         o << "<tr><td>" << html(e.label) << "</td>" << (f.sizeName.empty() ? "" : "<td>" + fmt("%.0f", e.size) + "</td>")
-          << "<td>" << html(duration(e.seconds)) << "</td><td>" << (ref > 0 ? fmt("%.2fx", e.seconds / ref) : "")
+          << "<td>" << html(valueText(e.seconds, f.valueUnit)) << "</td><td>" << (ref > 0 ? fmt("%.2fx", e.seconds / ref) : "")
           << "</td><td>" << html(e.agreement) << "</td></tr>\n";
       }
       o << "</table>\n";

@@ -32,6 +32,13 @@ struct RayQuery {
   float length;
 };
 
+/// A closed segment [start, end] (a finite ray: Embree gets dir = end - start and tfar = 1,
+/// Bullet the segment itself).
+struct SegmentQuery {
+  float start[3];
+  float end[3];
+};
+
 /// A closest-hit answer: hit flag, distance in world units along the ray, triangle index
 /// (when the engine reports one; otherwise kNoTriangle).
 struct RayAnswer {

@@ -22,6 +22,16 @@ struct ClosestTriangleRay : btCollisionWorld::ClosestRayResultCallback {
   }
 };
 
+/// Stops at the first hit: records it and sets the closest fraction to 0, so every later
+/// triangle is rejected (Bullet's triangle callback skips hits beyond the current fraction).
+struct FirstHitRay : btCollisionWorld::RayResultCallback {
+  btScalar addSingleResult(btCollisionWorld::LocalRayResult& r, bool) override {
+    m_collisionObject = r.m_collisionObject;
+    m_closestHitFraction = 0;
+    return 0;
+  }
+};
+
 /// Records the smallest contact distance contactPairTest reports (positive: separated points
 /// within Bullet's closest-point threshold; <= 0: touching or penetrating).
 struct MinDistance : btCollisionWorld::ContactResultCallback {
@@ -52,9 +62,11 @@ struct BulletPeer::Impl {
   std::unique_ptr<btBvhTriangleMeshShape> meshShape;
   btCollisionObject meshObject;
   btCollisionObject queryObject;
+  const MeshArrays* mesh = nullptr;
 };
 
 BulletPeer::BulletPeer(const MeshArrays& mesh) : impl_(std::make_unique<Impl>()) {
+  impl_->mesh = &mesh;
   // Bullet's interface takes non-const pointers but only reads the arrays.
   impl_->vertexArray = std::make_unique<btTriangleIndexVertexArray>(
       int(mesh.triangleCount()), reinterpret_cast<int*>(const_cast<std::uint32_t*>(mesh.indices.data())),
@@ -94,6 +106,41 @@ void BulletPeer::closestHits(const RayQuery* rays, std::size_t n, RayAnswer* out
       out[i] = {0.0f, kNoTriangle, 0};
     }
   }
+}
+
+void BulletPeer::anyHits(const RayQuery* rays, std::size_t n, std::uint8_t* out) const {
+  for (std::size_t i = 0; i < n; ++i) {
+    const RayQuery& q = rays[i];
+    const btVector3 from(q.origin[0], q.origin[1], q.origin[2]);
+    const btVector3 to = from + btVector3(q.dir[0], q.dir[1], q.dir[2]) * q.length;
+    FirstHitRay cb;
+    impl_->world.rayTest(from, to, cb);
+    out[i] = cb.hasHit();
+  }
+}
+
+void BulletPeer::segmentHits(const SegmentQuery* segments, std::size_t n, std::uint8_t* out) const {
+  for (std::size_t i = 0; i < n; ++i) {
+    const SegmentQuery& q = segments[i];
+    const btVector3 from(q.start[0], q.start[1], q.start[2]), to(q.end[0], q.end[1], q.end[2]);
+    FirstHitRay cb;
+    impl_->world.rayTest(from, to, cb);
+    out[i] = cb.hasHit();
+  }
+}
+
+Seconds BulletPeer::refit() {
+  const Stopwatch watch;
+  const float* p = impl_->mesh->positions.data();
+  btVector3 lo(p[0], p[1], p[2]), hi = lo;
+  for (std::size_t i = 1, nv = impl_->mesh->vertexCount(); i < nv; ++i) {
+    const btVector3 v(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+    lo.setMin(v);
+    hi.setMax(v);
+  }
+  impl_->meshShape->refitTree(lo, hi);
+  impl_->world.updateSingleAabb(&impl_->meshObject);
+  return watch.elapsed();
 }
 
 void BulletPeer::sphereOverlaps(const SphereQuery* q, std::size_t n, std::uint8_t* out, BulletOverlapInfo* info) const {

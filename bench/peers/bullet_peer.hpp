@@ -1,6 +1,7 @@
 #pragma once
-/// @file bullet_peer.hpp  Bullet (float build) as a bench peer: rays via btCollisionWorld::rayTest
-/// and sphere/box overlap via btCollisionWorld::contactPairTest, both on a
+/// @file bullet_peer.hpp  Bullet (float build) as a bench peer: rays and segments via
+/// btCollisionWorld::rayTest (closest, or any hit through a callback that cuts the ray at its
+/// first hit), BVH refit via btBvhTriangleMeshShape::refitTree, and sphere/box overlap via btCollisionWorld::contactPairTest, both on a
 /// btBvhTriangleMeshShape (quantized BVH) over a btTriangleIndexVertexArray that shares the
 /// bench's float arrays.
 
@@ -37,6 +38,16 @@ class BulletPeer {
   /// Closest hit of every ray: rayTest(origin, origin + length*dir) with a
   /// ClosestRayResultCallback; t = hit fraction * segment length.
   void closestHits(const RayQuery* rays, std::size_t n, RayAnswer* out) const;
+  /// Any hit of every ray: rayTest(origin, origin + length*dir) with a callback that sets the
+  /// hit fraction to 0 at the first reported hit (Bullet has no any-hit query: the BVH walk goes
+  /// on, but every later triangle is rejected at once).
+  void anyHits(const RayQuery* rays, std::size_t n, std::uint8_t* out) const;
+  /// Does each closed segment touch the mesh: rayTest(start, end), first-hit callback as above.
+  void segmentHits(const SegmentQuery* segments, std::size_t n, std::uint8_t* out) const;
+  /// After the shared vertex array changed (same count): bounds of the new vertices,
+  /// btBvhTriangleMeshShape::refitTree(bounds) (requantizes and refits every node), and the
+  /// world's AABB of the mesh object; returns their time.
+  Seconds refit();
   /// Sphere–mesh overlap: a btSphereShape (its margin is its radius) against the mesh
   /// (margin 0); out[i] = 1 when some reported contact has distance <= 0.
   void sphereOverlaps(const SphereQuery* q, std::size_t n, std::uint8_t* out, BulletOverlapInfo* info = nullptr) const;

@@ -1,9 +1,11 @@
 #pragma once
-/// @file embree_peer.hpp  Embree 3 as a bench peer: closest-hit rays (rtcIntersect1) and build.
+/// @file embree_peer.hpp  Embree 3 as a bench peer: closest-hit rays (rtcIntersect1), any-hit rays
+/// and segments (rtcOccluded1), build (rtcCommitScene) and refit (RTC_BUILD_QUALITY_REFIT).
 
 #include "bench_types.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -14,6 +16,11 @@ struct EmbreeConfig {
   bool robust = true;        ///< RTC_SCENE_FLAG_ROBUST (watertight-style, no unsafe shortcuts)
   bool highQuality = false;  ///< RTC_BUILD_QUALITY_HIGH (spatial splits) instead of MEDIUM
   int threads = 1;           ///< device threads for the build (0: Embree's default, all cores)
+  /// Refit instead of rebuild when the vertices move: RTC_SCENE_FLAG_DYNAMIC, scene quality
+  /// RTC_BUILD_QUALITY_LOW (the two-level structure that honours per-geometry quality) and
+  /// geometry quality RTC_BUILD_QUALITY_REFIT; refit() then updates the vertex buffer and
+  /// recommits. (Without DYNAMIC, Embree 3.13.5 rebuilds the REFIT geometry on every commit.)
+  bool refit = false;
 
   std::string label() const;
 };
@@ -31,6 +38,14 @@ class EmbreePeer {
   Seconds rebuild();
   /// Closest hit of every ray, one rtcIntersect1 each (tnear 0, tfar +inf).
   void closestHits(const RayQuery* rays, std::size_t n, RayAnswer* out) const;
+  /// Any hit of every ray: one rtcOccluded1 each (tnear 0, tfar +inf); out[i] = 1 when occluded.
+  void anyHits(const RayQuery* rays, std::size_t n, std::uint8_t* out) const;
+  /// Does each closed segment touch the mesh: rtcOccluded1 with dir = end - start, tfar 1.
+  void segmentHits(const SegmentQuery* segments, std::size_t n, std::uint8_t* out) const;
+  /// After the shared vertex array changed (same count): rtcUpdateGeometryBuffer,
+  /// rtcCommitGeometry, rtcCommitScene; returns their time. A refit when config.refit, else
+  /// Embree rebuilds the changed geometry.
+  Seconds refit();
   /// Bytes Embree allocated for the scene (memory monitor), vertices/indices excluded (shared).
   std::size_t sceneBytes() const;
   /// Whether this Embree build culls back faces (crux and Bullet hit both faces).

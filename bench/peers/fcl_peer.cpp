@@ -48,6 +48,7 @@ struct FclPeer::Impl {
   std::vector<fcl::Vector3d> points;
   std::vector<fcl::Triangle> triangles;
   std::shared_ptr<Model> model;
+  std::vector<fcl::Vector3d> moved;  ///< scratch of refit()
 };
 
 FclPeer::FclPeer(const MeshArrays& mesh) : impl_(std::make_unique<Impl>()) {
@@ -68,6 +69,19 @@ Seconds FclPeer::timeBuild() const {
   auto model = buildModel(impl_->points, impl_->triangles);
   const Seconds elapsed = watch.elapsed();
   return elapsed;
+}
+
+Seconds FclPeer::refit(const MeshArrays& moved) {
+  std::vector<fcl::Vector3d>& v = impl_->moved;
+  v.resize(moved.vertexCount());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    v[i] = fcl::Vector3d(moved.positions[3 * i], moved.positions[3 * i + 1], moved.positions[3 * i + 2]);
+  const Stopwatch watch;
+  Model& m = *impl_->model;
+  m.beginUpdateModel();
+  m.updateSubModel(v);
+  m.endUpdateModel(true, true);
+  return watch.elapsed();
 }
 
 void FclPeer::sphereOverlaps(const SphereQuery* q, std::size_t n, std::uint8_t* out) const {

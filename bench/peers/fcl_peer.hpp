@@ -1,6 +1,7 @@
 #pragma once
 /// @file fcl_peer.hpp  FCL 0.7 as a bench peer: sphere/box/mesh overlap against a
-/// BVHModel<OBBRSSd> with fcl::collide (num_max_contacts 1, no contact details, libccd GJK).
+/// BVHModel<OBBRSSd> with fcl::collide (num_max_contacts 1, no contact details, libccd GJK), and
+/// BVH refit (beginUpdateModel / updateSubModel / endUpdateModel).
 
 #include "bench_types.hpp"
 
@@ -28,6 +29,10 @@ class FclPeer {
   void boxOverlaps(const BoxQuery* q, std::size_t n, std::uint8_t* out) const;
   /// Mesh–mesh: fcl::collide(model, identity, model, pose).
   void meshOverlaps(const PoseQuery* q, std::size_t n, std::uint8_t* out) const;
+  /// Moves the model's vertices to `moved` (same count; converted to double before the clock
+  /// starts) with beginUpdateModel, updateSubModel, endUpdateModel(refit = true, bottomup = true);
+  /// returns the time of those three calls. Later queries see the moved model.
+  Seconds refit(const MeshArrays& moved);
   /// Bytes of the model's vertex, triangle and BV arrays.
   std::size_t modelBytes() const;
 
