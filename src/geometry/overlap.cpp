@@ -1,12 +1,15 @@
 /// @file overlap.cpp  Boolean overlap of the non-triangle shape pairs (spheres, boxes, planes).
 ///
-/// Each test is a comparison of division-free polynomials of the inputs evaluated in Wide, so
-/// integer-grid inputs (|coordinates| <= 64, OBB axes signed unit vectors) get the exact answer
-/// (see overlap.hpp and docs/geometry.md). Closed sets: every comparison accepts equality.
+/// Each test is a comparison of division-free polynomials of the inputs. Sphere and plane pairs
+/// read their signs through the exact judges (predicates.hpp: filter, then expansions), so they
+/// are exact for any finite inputs; the box–box separating-axis test is evaluated in Wide, exact
+/// for integer-grid inputs (|coordinates| <= 64, OBB axes signed unit vectors). See overlap.hpp
+/// and docs/geometry.md. Closed sets: every comparison accepts equality.
 
 #include <algorithm>
 #include <cmath>
 #include <crux/geometry/overlap.hpp>
+#include <crux/geometry/predicates.hpp>
 
 namespace crux {
 namespace {
@@ -72,42 +75,57 @@ bool boxesOverlap(const WideBox& a, const WideBox& b) {
 }  // namespace
 
 bool overlaps(const Sphere& a, const Sphere& b) {
-  const Wide r = Wide(a.radius) + Wide(b.radius);
-  return (wide(a.center) - wide(b.center)).squaredNorm() <= r * r;
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    const T r = T(Wide(a.radius)) + T(Wide(b.radius));
+    return judge((robust::lift<T>(a.center) - robust::lift<T>(b.center)).squaredNorm() - r * r) <= 0;
+  });
 }
 
 bool overlaps(const Sphere& s, const Aabb& b) {
-  Wide d2 = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Wide c = s.center[i];
-    Wide excess = 0;
-    if (c < b.min[i]) {
-      excess = Wide(b.min[i]) - c;
-    } else if (c > b.max[i]) {
-      excess = c - Wide(b.max[i]);
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    T d2 = T(Wide(0));
+    for (int i = 0; i < 3; ++i) {
+      const Real c = s.center[i];
+      if (c < b.min[i]) {
+        const T excess = T(Wide(b.min[i])) - T(Wide(c));
+        d2 = d2 + excess * excess;
+      } else if (c > b.max[i]) {
+        const T excess = T(Wide(c)) - T(Wide(b.max[i]));
+        d2 = d2 + excess * excess;
+      }
     }
-    d2 += excess * excess;
-  }
-  const Wide r = s.radius;
-  return d2 <= r * r;
+    const T r = T(Wide(s.radius));
+    return judge(d2 - r * r) <= 0;
+  });
 }
 
 bool overlaps(const Sphere& s, const Obb& b) {
-  const WVec3 d = wide(s.center) - wide(b.center);
-  Wide d2 = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Wide excess = std::abs(d.dot(wide(Vec3(b.axes.col(i))))) - Wide(b.half[i]);
-    if (excess > 0) d2 += excess * excess;
-  }
-  const Wide r = s.radius;
-  return d2 <= r * r;
+  // Distance in the box frame axesᵀ(c - center), the axes exactly as given.
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    const robust::V3<T> d = robust::lift<T>(s.center) - robust::lift<T>(b.center);
+    T d2 = T(Wide(0));
+    for (int i = 0; i < 3; ++i) {
+      const T along = d.dot(robust::lift<T>(Vec3(b.axes.col(i))));
+      const T excess = (judge(along) < 0 ? -along : along) - T(Wide(b.half[i]));
+      if (judge(excess) > 0) d2 = d2 + excess * excess;
+    }
+    const T r = T(Wide(s.radius));
+    return judge(d2 - r * r) <= 0;
+  });
 }
 
 bool overlaps(const Sphere& s, const Plane& p) {
-  const WVec3 n = wide(p.normal);
-  const Wide dist = n.dot(wide(s.center)) - Wide(p.d);  // |n| times the signed distance
-  const Wide r = s.radius;
-  return dist * dist <= r * r * n.squaredNorm();
+  // (n·c - d)² <= r²|n|²: |n| times the signed distance against |n| times the radius.
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    const robust::V3<T> n = robust::lift<T>(p.normal);
+    const T dist = n.dot(robust::lift<T>(s.center)) - T(Wide(p.d));
+    const T r = T(Wide(s.radius));
+    return judge(dist * dist - r * r * n.squaredNorm()) <= 0;
+  });
 }
 
 bool overlaps(const Aabb& a, const Aabb& b) {
@@ -118,32 +136,45 @@ bool overlaps(const Aabb& a, const Obb& b) { return boxesOverlap(wideBox(a), wid
 
 bool overlaps(const Aabb& b, const Plane& p) {
   // n·x over the box spans [lo, hi], reached at the corners picked by the signs of n.
-  Wide lo = 0, hi = 0;
-  for (int i = 0; i < 3; ++i) {
-    const Wide n = p.normal[i];
-    const Wide atMin = n * Wide(b.min[i]), atMax = n * Wide(b.max[i]);
-    lo += std::min(atMin, atMax);
-    hi += std::max(atMin, atMax);
-  }
-  const Wide d = p.d;
-  return lo <= d && d <= hi;
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    T lo = T(Wide(0)), hi = T(Wide(0));
+    for (int i = 0; i < 3; ++i) {
+      const T n = T(Wide(p.normal[i]));
+      const T atMin = n * T(Wide(b.min[i])), atMax = n * T(Wide(b.max[i]));
+      const bool up = p.normal[i] >= 0;
+      lo = lo + (up ? atMin : atMax);
+      hi = hi + (up ? atMax : atMin);
+    }
+    const T d = T(Wide(p.d));
+    return judge(lo - d) <= 0 && judge(hi - d) >= 0;
+  });
 }
 
 bool overlaps(const Obb& a, const Obb& b) { return boxesOverlap(wideBox(a), wideBox(b)); }
 
 bool overlaps(const Obb& b, const Plane& p) {
-  const WVec3 n = wide(p.normal);
-  const Wide dist = n.dot(wide(b.center)) - Wide(p.d);
-  Wide reach = 0;
-  for (int i = 0; i < 3; ++i) reach += Wide(b.half[i]) * std::abs(n.dot(wide(Vec3(b.axes.col(i)))));
-  return std::abs(dist) <= reach;
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    const robust::V3<T> n = robust::lift<T>(p.normal);
+    const T dist = n.dot(robust::lift<T>(b.center)) - T(Wide(p.d));
+    T reach = T(Wide(0));
+    for (int i = 0; i < 3; ++i) {
+      const T along = n.dot(robust::lift<T>(Vec3(b.axes.col(i))));
+      reach = reach + T(Wide(b.half[i])) * (judge(along) < 0 ? -along : along);
+    }
+    return judge(dist - reach) <= 0 && judge(dist + reach) >= 0;
+  });
 }
 
 bool overlaps(const Plane& a, const Plane& b) {
-  const WVec3 na = wide(a.normal), nb = wide(b.normal);
-  if (na.cross(nb) != WVec3::Zero()) return true;  // not parallel: the planes meet in a line
-  // Parallel (nb = k·na): coincident iff d_a·nb = d_b·na, compared without dividing by k.
-  return Wide(a.d) * nb == Wide(b.d) * na;
+  return robust::filtered([&](auto& judge) {
+    using T = predicates::NumberOf<decltype(judge)>;
+    const robust::V3<T> na = robust::lift<T>(a.normal), nb = robust::lift<T>(b.normal);
+    if (!predicates::crossIsZero(judge, na, nb)) return true;  // not parallel: they meet in a line
+    // Parallel (nb = k·na): coincident iff d_a·nb = d_b·na, compared without dividing by k.
+    return predicates::nonzeroAxis(judge, T(Wide(a.d)) * nb - T(Wide(b.d)) * na) < 0;
+  });
 }
 
 }  // namespace crux

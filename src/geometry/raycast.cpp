@@ -1,12 +1,13 @@
 /// @file raycast.cpp  Ray casts and segment tests against the primitive shapes.
 ///
-/// Every hit/miss decision is a sign of a low-degree polynomial of the inputs evaluated in
-/// Wide, so it is exact on the integer grid (|coordinates| <= 64). The ray–triangle edge
-/// signs are exact for all inputs (static filter + exact expansion fallback), which makes the
-/// triangle test watertight at shared vertices as well as shared edges. Ray parameters are
-/// kept as fractions num/den with den > 0 and compared by cross-multiplication (no division
-/// before the answer is known); the reported distance is computed from the winning fraction
-/// at the end.
+/// Ray/segment–triangle decisions are exact for any finite inputs: signs of polynomials of the
+/// input coordinates read by a judge (predicates.hpp, expansion.hpp), first through the
+/// forward-error filter and, when a sign is uncertain, with exact expansions. This also makes
+/// the triangle test watertight at shared vertices and edges. The other shapes' decisions are
+/// signs of low-degree polynomials evaluated in Wide: exact on the integer grid (|coordinates|
+/// <= 64). Ray parameters are kept as fractions num/den with den > 0 and compared by
+/// cross-multiplication (no division before the answer is known); the reported distance is
+/// computed from the winning fraction at the end.
 
 #include <array>
 #include <cmath>
@@ -17,7 +18,6 @@
 namespace crux {
 namespace {
 
-using W2 = Eigen::Matrix<Wide, 2, 1>;
 using predicates::TriangleKind;
 
 /// A ray parameter s = num / den with den > 0.
@@ -32,213 +32,195 @@ struct Fraction {
 
 bool less(const Fraction& a, const Fraction& b) { return a.num * b.den < b.num * a.den; }
 
-/// A fraction p/q with q != 0 brought to a positive denominator.
-Fraction fraction(Wide p, Wide q) { return q < 0 ? Fraction{-p, -q} : Fraction{p, q}; }
+// ---------------------------------------------------------------------------------------------
+// Ray/segment against a (possibly degenerate) triangle, exact: templates over a judge
+// (predicates.hpp), run with the filter and, when some sign is uncertain, with expansions.
+// Coordinates relative to the ray origin are differences of inputs, formed inside the number
+// type (bounded or exact), never rounded before a sign is read.
+// ---------------------------------------------------------------------------------------------
 
-Wide cross2(const W2& a, const W2& b) { return a.x() * b.y() - a.y() * b.x(); }
+using robust::lift;
+using robust::V3;
+using predicates::NumberOf;
+
+/// A ray parameter s = num / den with den > 0 (exact in the exact stage).
+template <class T>
+struct Frac {
+  T num, den;
+  /// Approximate value, >= 0 (a NaN from an underflowed denominator maps to 0).
+  Wide value() const {
+    const Wide s = robust::approx(num) / robust::approx(den);
+    return s > 0 ? s : Wide(0);  // also -0
+  }
+};
+
+template <class T>
+struct P2 {
+  T x, y;
+  friend P2 operator-(const P2& a, const P2& b) { return {a.x - b.x, a.y - b.y}; }
+  T dot(const P2& b) const { return x * b.x + y * b.y; }
+};
+
+template <class T>
+T cross2(const P2<T>& a, const P2<T>& b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 /// The 2-D coordinates left after dropping axis `drop` (cyclic order, as predicates::orient2d).
-W2 project(const WVec3& v, int drop) { return W2(v[(drop + 1) % 3], v[(drop + 2) % 3]); }
+template <class T>
+P2<T> project(const V3<T>& v, int drop) {
+  return {v[(drop + 1) % 3], v[(drop + 2) % 3]};
+}
 
-/// True when p lies in the closed 2-D triangle abc (non-degenerate).
-bool insideTriangle2D(const W2& p, const W2& a, const W2& b, const W2& c) {
-  const Wide e0 = cross2(b - a, p - a), e1 = cross2(c - b, p - b), e2 = cross2(a - c, p - c);
+template <class J, class T>
+bool lessThan(J& judge, const Frac<T>& a, const Frac<T>& b) {
+  return judge(a.num * b.den - b.num * a.den) < 0;
+}
+
+/// p/q with q != 0 brought to a positive denominator.
+template <class J, class T>
+Frac<T> fraction(J& judge, const T& p, const T& q) {
+  return judge(q) < 0 ? Frac<T>{-p, -q} : Frac<T>{p, q};
+}
+
+template <class T>
+Frac<T> zeroFraction() {
+  return {T(Wide(0)), T(Wide(1))};
+}
+
+/// True when the origin lies in the closed 2-D triangle abc (non-degenerate).
+template <class J, class T>
+bool originInTriangle2D(J& judge, const P2<T>& a, const P2<T>& b, const P2<T>& c) {
+  const int e0 = judge(cross2(a, b)), e1 = judge(cross2(b, c)), e2 = judge(cross2(c, a));
   return (e0 >= 0 && e1 >= 0 && e2 >= 0) || (e0 <= 0 && e1 <= 0 && e2 <= 0);
 }
 
 /// First s >= 0 with s*d (a 2-D ray from the origin) on the closed segment [p, q].
-std::optional<Fraction> raySegment2D(const W2& d, const W2& p, const W2& q) {
-  const W2 e = q - p;
-  const Wide den = cross2(d, e);
-  if (den == 0) {                                // parallel lines
-    if (cross2(d, p) != 0) return std::nullopt;  // distinct lines
-    const Wide dp = p.dot(d), dq = q.dot(d), dd = d.squaredNorm();
-    if ((dp <= 0 && dq >= 0) || (dp >= 0 && dq <= 0)) return Fraction{0, 1};  // origin on [p, q]
-    if (dp < 0) return std::nullopt;                                          // both endpoints behind
-    return Fraction{dp < dq ? dp : dq, dd};
+template <class J, class T>
+std::optional<Frac<T>> raySegment2D(J& judge, const P2<T>& d, const P2<T>& p, const P2<T>& q) {
+  const P2<T> e = q - p;
+  const T den = cross2(d, e);
+  if (judge(den) == 0) {                                 // parallel lines
+    if (judge(cross2(d, p)) != 0) return std::nullopt;  // distinct lines
+    const T dp = p.dot(d), dq = q.dot(d);
+    const int sp = judge(dp), sq = judge(dq);
+    if ((sp <= 0 && sq >= 0) || (sp >= 0 && sq <= 0)) return zeroFraction<T>();  // origin on [p, q]
+    if (sp < 0) return std::nullopt;                                             // both behind
+    return Frac<T>{judge(dp - dq) < 0 ? dp : dq, d.dot(d)};
   }
-  const Wide cp = cross2(d, p), cq = cross2(d, q);
+  const int cp = judge(cross2(d, p)), cq = judge(cross2(d, q));
   if ((cp > 0 && cq > 0) || (cp < 0 && cq < 0)) return std::nullopt;  // [p, q] misses the line
   // o + s d on line pq: s cross(d, e) = cross(p, e).
-  const Fraction s = fraction(cross2(p, e), den);
-  if (s.num < 0) return std::nullopt;
+  const Frac<T> s = fraction(judge, cross2(p, e), den);
+  if (judge(s.num) < 0) return std::nullopt;
   return s;
 }
 
-/// First s >= 0 with s*d in the closed 2-D triangle abc (a ray in its plane). A triangle that
-/// is degenerate here (possible when rounding v - o collapses a tiny triangle far from the
-/// origin) is the union of its edges.
-std::optional<Fraction> rayTriangle2D(const W2& d, const W2& a, const W2& b, const W2& c) {
-  if (cross2(b - a, c - a) != 0 && insideTriangle2D(W2::Zero(), a, b, c)) return Fraction{0, 1};
-  std::optional<Fraction> best;
-  const W2* v[3] = {&a, &b, &c};
+/// First s >= 0 with s*d in the closed 2-D triangle abc (a ray in its plane; abc is proper
+/// in this projection).
+template <class J, class T>
+std::optional<Frac<T>> rayTriangle2D(J& judge, const P2<T>& d, const P2<T>& a, const P2<T>& b, const P2<T>& c) {
+  if (originInTriangle2D(judge, a, b, c)) return zeroFraction<T>();
+  std::optional<Frac<T>> best;
+  const P2<T>* v[3] = {&a, &b, &c};
   for (int i = 0; i < 3; ++i) {
-    const auto s = raySegment2D(d, *v[i], *v[(i + 1) % 3]);
-    if (s && (!best || less(*s, *best))) best = s;
+    auto s = raySegment2D(judge, d, *v[i], *v[(i + 1) % 3]);
+    if (s && (!best || lessThan(judge, *s, *best))) best = std::move(s);
   }
   return best;
 }
 
-/// Error-free product: a·b = hi + lo exactly (no underflow assumed).
-void twoProduct(Wide a, Wide b, Wide& hi, Wide& lo) {
-  hi = a * b;
-  lo = std::fma(a, b, -hi);
-}
-
-/// Error-free sum (Knuth's TwoSum): a + b = sum + err exactly.
-void twoSum(Wide a, Wide b, Wide& sum, Wide& err) {
-  sum = a + b;
-  const Wide bv = sum - a, av = sum - bv;
-  err = (a - av) + (b - bv);
-}
-
-/// Exact sign of d·(p × q) for any Wide inputs: the six products d_i p_j q_k are split into
-/// four doubles each by error-free products and summed exactly as a floating-point expansion
-/// (Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric
-/// Predicates", 1997: Grow-Expansion with zero elimination); the sign of the expansion is
-/// the sign of its largest component. Slow path of edgeFunction only.
-int exactTripleSign(const WVec3& d, const WVec3& p, const WVec3& q) {
-  std::array<Wide, 25> e{};
-  int m = 0;
-  auto grow = [&](Wide x) {
-    int out = 0;
-    for (int i = 0; i < m; ++i) {
-      Wide sum, err;
-      twoSum(x, e[i], sum, err);
-      if (err != 0) e[out++] = err;
-      x = sum;
-    }
-    e[out++] = x;
-    m = out;
-  };
-  for (int i = 0; i < 3; ++i) {
-    const int j = (i + 1) % 3, k = (i + 2) % 3;
-    for (int term = 0; term < 2; ++term) {
-      Wide h, l, h1, l1, h2, l2;
-      twoProduct(term == 0 ? p[j] : -p[k], term == 0 ? q[k] : q[j], h, l);
-      twoProduct(d[i], h, h1, l1);
-      twoProduct(d[i], l, h2, l2);
-      grow(l2), grow(h2), grow(l1), grow(h1);
-    }
-  }
-  for (int i = m - 1; i >= 0; --i)
-    if (e[i] != 0) return predicates::sign(e[i]);
-  return 0;
-}
-
-/// Forward error bound factor of d·(p × q) evaluated in Wide: |computed - exact| <=
-/// kTripleProductErrorBound · Σ |d_i| (|p_j q_k| + |p_k q_j|) (5 roundings deep, rounded up).
-constexpr Wide kTripleProductErrorBound = 4 * std::numeric_limits<Wide>::epsilon();
-
-/// d·(p × q) for an edge (p, q) given relative to the ray origin, with an exact sign: a
-/// static filter accepts the Wide value when it exceeds its error bound, else the sign comes
-/// from exactTripleSign and the value is replaced by a number of that sign. Evaluated in a
-/// canonical vertex order so that the reversed edge gives exactly the negated value whatever
-/// the compiler does with the expression (e.g. FMA contraction). With exact, antisymmetric
-/// signs the test is the exact line–mesh test of the mesh whose vertices are the (rounded)
-/// v - o, which is closed whenever the input mesh is: no ray slips through a shared edge or
-/// vertex.
-Wide edgeFunction(const WVec3& d, const WVec3& p0, const WVec3& q0) {
-  const bool swap =
-      q0.x() < p0.x() || (q0.x() == p0.x() && (q0.y() < p0.y() || (q0.y() == p0.y() && q0.z() < p0.z())));
-  const WVec3& p = swap ? q0 : p0;
-  const WVec3& q = swap ? p0 : q0;
-  const Wide yz = p.y() * q.z(), zy = p.z() * q.y(), zx = p.z() * q.x(), xz = p.x() * q.z(),
-             xy = p.x() * q.y(), yx = p.y() * q.x();
-  Wide value = d.x() * (yz - zy) + d.y() * (zx - xz) + d.z() * (xy - yx);
-  const Wide permanent = std::abs(d.x()) * (std::abs(yz) + std::abs(zy)) +
-                         std::abs(d.y()) * (std::abs(zx) + std::abs(xz)) +
-                         std::abs(d.z()) * (std::abs(xy) + std::abs(yx));
-  if (!(std::abs(value) > kTripleProductErrorBound * permanent) && permanent != 0) {
-    const int s = exactTripleSign(d, p, q);
-    if (predicates::sign(value) != s) value = s == 0 ? Wide(0) : s * std::numeric_limits<Wide>::min();
-  }
-  return swap ? -value : value;
-}
-
 /// First s >= 0 where s*d meets the closed segment [p, q] (all relative to the ray origin).
-std::optional<Fraction> raySegment3D(const WVec3& d, const WVec3& p, const WVec3& q) {
-  const WVec3 w = p.cross(q);
-  if (d.dot(w) != 0) return std::nullopt;  // the ray's line and the segment are skew
-  // Everything lies in one plane through the origin; pick its normal and project.
-  WVec3 n = w;
-  if (n.isZero(0)) n = d.cross(q - p);  // origin on the segment's line
-  if (n.isZero(0)) {                    // all collinear: any plane containing d
-    const WVec3 m = d.cwiseAbs();
+template <class J, class T>
+std::optional<Frac<T>> raySegment3D(J& judge, const V3<T>& d, const V3<T>& p, const V3<T>& q) {
+  const V3<T> w = p.cross(q);
+  if (judge(d.dot(w)) != 0) return std::nullopt;  // the ray's line and the segment are skew
+  // Everything lies in one plane through the origin; find an axis its normal does not vanish on.
+  int drop = predicates::nonzeroAxis(judge, w);
+  if (drop < 0) drop = predicates::nonzeroAxis(judge, d.cross(q - p));  // origin on the segment's line
+  if (drop < 0) {                                                         // all collinear: a plane containing d
+    const WVec3 m = robust::approx(d).cwiseAbs();
     const int k = (m.x() <= m.y() && m.x() <= m.z()) ? 0 : (m.y() <= m.z() ? 1 : 2);
-    n = d.cross(WVec3::Unit(k));
+    V3<T> unit = {T(Wide(0)), T(Wide(0)), T(Wide(0))};
+    unit[k] = T(Wide(1));
+    drop = predicates::nonzeroAxis(judge, d.cross(unit));
+    if (drop < 0) return std::nullopt;  // only under an uncertain filter sign
   }
-  const int drop = predicates::dominantAxis(n);
-  return raySegment2D(project(d, drop), project(p, drop), project(q, drop));
+  return raySegment2D(judge, project(d, drop), project(p, drop), project(q, drop));
 }
 
 /// First s >= 0 where s*d passes through p (relative to the ray origin).
-std::optional<Fraction> rayPoint3D(const WVec3& d, const WVec3& p) {
-  if (!p.cross(d).isZero(0)) return std::nullopt;
-  const Wide dp = p.dot(d);
-  if (dp < 0) return std::nullopt;
-  return Fraction{dp, d.squaredNorm()};
+template <class J, class T>
+std::optional<Frac<T>> rayPoint3D(J& judge, const V3<T>& d, const V3<T>& p) {
+  if (!predicates::crossIsZero(judge, p, d)) return std::nullopt;
+  const T dp = p.dot(d);
+  if (judge(dp) < 0) return std::nullopt;
+  return Frac<T>{dp, d.squaredNorm()};
 }
 
-/// First parameter s >= 0 where o + s*d meets the closed (possibly degenerate) triangle.
-/// `normal` receives a non-unit normal facing the origin for a proper triangle crossed by the
-/// ray, the plane normal (either side) for a ray in the triangle's plane, zero otherwise.
-std::optional<Fraction> firstHit(const WVec3& o, const WVec3& d, const Triangle& tri, WVec3& normal,
-                                 int* crossingSign = nullptr) {
-  normal.setZero();
-  if (crossingSign) *crossingSign = 0;
-  const predicates::TriangleShape shape = predicates::classify(tri);
-  if (shape.kind == TriangleKind::Point) return rayPoint3D(d, shape.p - o);
-  if (shape.kind == TriangleKind::Segment) return raySegment3D(d, shape.p - o, shape.q - o);
+/// The answer of firstHit.
+template <class T>
+struct TriangleHit {
+  std::optional<Frac<T>> s;  ///< first parameter, or none
+  WVec3 normal = WVec3::Zero();
+  int crossing = 0;  ///< sign of d·n when the line crosses the plane of a proper triangle
+};
 
-  const WVec3 A = wide(tri.a), B = wide(tri.b), C = wide(tri.c);
-  const WVec3 a = A - o, b = B - o, c = C - o;
-  // Plücker side products: u weighs a (edge bc), v weighs b (edge ca), w weighs c (edge ab).
-  const Wide u = edgeFunction(d, b, c), v = edgeFunction(d, c, a), w = edgeFunction(d, a, b);
-  if (!((u >= 0 && v >= 0 && w >= 0) || (u <= 0 && v <= 0 && w <= 0))) return std::nullopt;
-  const WVec3 n = (B - A).cross(C - A);
-  const Wide det = u + v + w;  // = d·n; zero only when u = v = w = 0
+/// First parameter s >= 0 where o + s*d meets the closed (possibly degenerate) triangle.
+/// `normal` is a non-unit normal facing the origin for a proper triangle crossed by the ray,
+/// the plane normal (either side) for a ray in the triangle's plane, zero otherwise. The hit
+/// is decided by the signs of the Plücker side products u = d·(b × c), v = d·(c × a),
+/// w = d·(a × b) (a, b, c the corners relative to o), exact and antisymmetric, so the test is
+/// watertight at shared edges and vertices.
+template <class J, class T>
+TriangleHit<T> firstHit(J& judge, const V3<T>& o, const V3<T>& d, const Triangle& tri,
+                        const predicates::TriangleShape& shape) {
+  TriangleHit<T> r;
+  if (shape.kind == TriangleKind::Point) {
+    r.s = rayPoint3D(judge, d, lift<T>(shape.p) - o);
+    return r;
+  }
+  if (shape.kind == TriangleKind::Segment) {
+    r.s = raySegment3D(judge, d, lift<T>(shape.p) - o, lift<T>(shape.q) - o);
+    return r;
+  }
+  const V3<T> A = lift<T>(tri.a), B = lift<T>(tri.b), C = lift<T>(tri.c);
+  const V3<T> a = A - o, b = B - o, c = C - o;
+  const int u = judge(d.dot(b.cross(c))), v = judge(d.dot(c.cross(a))), w = judge(d.dot(a.cross(b)));
+  if (!((u >= 0 && v >= 0 && w >= 0) || (u <= 0 && v <= 0 && w <= 0))) return r;
+  const V3<T> n = (B - A).cross(C - A);
+  const int det = u + v + w > 0 ? 1 : (u + v + w < 0 ? -1 : 0);  // sign of d·n = u + v + w
+  const WVec3 nApprox = robust::approx(n);
   if (det == 0) {
-    // The ray's line lies in the triangle's plane: exact 2-D test in the dominant projection.
-    normal = n;
-    const int drop = predicates::dominantAxis(n);
-    return rayTriangle2D(project(d, drop), project(a, drop), project(b, drop), project(c, drop));
+    // The ray's line lies in the triangle's plane: exact 2-D test in a projection keeping it.
+    r.normal = nApprox;
+    const int drop = predicates::nonzeroAxis(judge, n);
+    if (drop < 0) return r;  // only under an uncertain filter sign
+    r.s = rayTriangle2D(judge, project(d, drop), project(a, drop), project(b, drop), project(c, drop));
+    return r;
   }
-  // Parameter of the plane crossing, s = n·(A - o) / n·d (accurate: error ~ eps |A - o| / cos θ).
-  // n·d equals det; should rounding make their signs differ (a ray nearly parallel to the
-  // plane), use the barycentric form (u a + v b + w c) / det of the hit point instead.
-  // In front or behind is decided by the exact sign of n·a = a·(b × c) (orient3d of the
-  // triangle and the origin): rounding of n·a would otherwise reject rays starting exactly on
-  // a corner or in the plane (found by the world sanity tests: ~15% of general-position rays
-  // from a corner missed).
-  if (crossingSign) *crossingSign = det > 0 ? 1 : -1;
-  const int side = predicates::sign(edgeFunction(a, b, c));
+  r.crossing = det;
+  r.normal = det > 0 ? WVec3(-nApprox) : nApprox;
+  // In front or behind: the sign of n·a = a·(b × c) (orient3d of the triangle and the origin).
+  const int side = judge(a.dot(b.cross(c)));
   if (side == 0) {
-    normal = det > 0 ? WVec3(-n) : n;
-    return Fraction{0, 1};  // the origin lies in the triangle's plane (and the line meets it there)
+    r.s = zeroFraction<T>();  // the origin lies in the triangle's plane (and the line meets it there)
+    return r;
   }
-  if ((side > 0) != (det > 0)) return std::nullopt;  // the plane is behind the origin
-  const Wide nd = n.dot(d);
-  Fraction s = (nd != 0 && (nd > 0) == (det > 0))
-                   ? fraction(n.dot(a), nd)
-                   : fraction(u * a.dot(d) + v * b.dot(d) + w * c.dot(d), det * d.squaredNorm());
-  if (s.num < 0) s.num = 0;  // rounding of a value whose exact sign is known to be >= 0
-  normal = det > 0 ? WVec3(-n) : n;
-  return s;
+  if ((side > 0) != (det > 0)) return r;  // the plane is behind the origin
+  // s = n·a / n·d; n·d has the sign det (a filter that cannot see it falls back to exact).
+  const T nd = n.dot(d);
+  if (judge(nd) != det) return r;
+  r.s = det > 0 ? Frac<T>{n.dot(a), nd} : Frac<T>{-n.dot(a), -nd};
+  return r;
 }
 
 /// True when p lies in the closed (possibly degenerate) triangle.
-bool contains(const Triangle& tri, const WVec3& p) {
-  const predicates::TriangleShape shape = predicates::classify(tri);
-  if (shape.kind == TriangleKind::Point) return p == shape.p;
-  if (shape.kind == TriangleKind::Segment) {
-    const WVec3 a = shape.p - p, b = shape.q - p;
-    return a.cross(b).isZero(0) && a.dot(b) <= 0;
-  }
-  const WVec3 A = wide(tri.a), B = wide(tri.b), C = wide(tri.c);
-  if (predicates::orient3d(A, B, C, p) != 0) return false;
-  const int drop = predicates::dominantAxis((B - A).cross(C - A));
-  return insideTriangle2D(project(p, drop), project(A, drop), project(B, drop), project(C, drop));
+template <class J, class T>
+bool contains(J& judge, const Triangle& tri, const predicates::TriangleShape& shape, const V3<T>& p) {
+  if (shape.kind == TriangleKind::Point) return predicates::nonzeroAxis(judge, p - lift<T>(shape.p)) < 0;
+  if (shape.kind == TriangleKind::Segment) return predicates::pointOnSegment(judge, p, lift<T>(shape.p), lift<T>(shape.q));
+  return predicates::pointOnTriangle(judge, p, lift<T>(tri.a), lift<T>(tri.b), lift<T>(tri.c));
 }
 
 /// Entry parameter of a slab test and the axis whose slab set it (-1: the start point).
@@ -292,11 +274,19 @@ WVec3 toBoxFrame(const Obb& b, const WVec3& v) {
 }  // namespace
 
 std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
-  const WVec3 o = wide(ray.origin), d = wide(ray.dir);
+  const predicates::TriangleShape shape = predicates::classify(t);
+  Wide s = 0;
   WVec3 normal;
-  const auto s = firstHit(o, d, t, normal);
-  if (!s) return std::nullopt;
-  return makeHit(o, d, s->value(), normal, maxT);
+  const bool hit = robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const TriangleHit<T> h = firstHit(judge, lift<T>(ray.origin), lift<T>(ray.dir), t, shape);
+    if (!h.s) return false;
+    s = h.s->value();
+    normal = h.normal;
+    return true;
+  });
+  if (!hit) return std::nullopt;
+  return makeHit(wide(ray.origin), wide(ray.dir), s, normal, maxT);
 }
 
 std::optional<RayHit> raycast(const Ray& ray, const Sphere& sp, Real maxT) {
@@ -347,19 +337,20 @@ std::optional<RayHit> raycast(const Ray& ray, const Plane& p, Real maxT) {
 }
 
 bool intersects(const Segment& seg, const Triangle& t) {
-  const WVec3 o = wide(seg.start), d = wide(seg.end) - o;
-  if (d.isZero(0)) return contains(t, o);
-  WVec3 normal;
-  int crossing = 0;  // sign of d·n when the segment's line crosses the plane, 0 otherwise
-  const auto s = firstHit(o, d, t, normal, &crossing);
-  if (!s) return false;
-  if (crossing == 0 || s->num == 0) return s->num <= s->den;
-  // Does the segment reach the plane? Exact sign of n·(A - E) against d·n, E = o + d (the
-  // end point; exact in float builds, where d = end - start is exact in Wide): s <= 1.
-  const WVec3 e = o + d;
-  const WVec3 A = wide(t.a) - e, B = wide(t.b) - e, C = wide(t.c) - e;
-  const int endSide = predicates::sign(edgeFunction(A, B, C));
-  return endSide == 0 || (endSide > 0) != (crossing > 0);
+  const predicates::TriangleShape shape = predicates::classify(t);
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const V3<T> o = lift<T>(seg.start), e = lift<T>(seg.end);
+    if (seg.start == seg.end) return contains(judge, t, shape, o);
+    const TriangleHit<T> h = firstHit(judge, o, e - o, t, shape);
+    if (!h.s) return false;
+    if (h.crossing == 0 || judge(h.s->num) == 0) return judge(h.s->num - h.s->den) <= 0;
+    // Does the segment reach the plane? The side of the end point: s <= 1 iff the end is on
+    // the plane or on the far side (opposite to the crossing direction's start side).
+    const V3<T> A = lift<T>(t.a) - e, B = lift<T>(t.b) - e, C = lift<T>(t.c) - e;
+    const int endSide = judge(A.dot(B.cross(C)));
+    return endSide == 0 || (endSide > 0) != (h.crossing > 0);
+  });
 }
 
 bool intersects(const Segment& seg, const Sphere& sp) {

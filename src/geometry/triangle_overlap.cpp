@@ -1,10 +1,12 @@
 /// @file triangle_overlap.cpp  Boolean overlap of a triangle with a triangle, sphere, AABB, OBB
 /// and plane.
 ///
-/// Every decision is the sign of a division-free polynomial of the input coordinates evaluated
-/// in Wide (see predicates.hpp): exact for integer inputs of magnitude <= 64. Degenerate
-/// triangles are classified exactly (predicates::classify) and tested as the segment or point
-/// they are.
+/// Every decision is the sign of a division-free polynomial of the input coordinates, read by
+/// a judge (predicates.hpp, expansion.hpp): each test is a template run first with the
+/// forward-error filter and, only when some sign was uncertain, again with exact expansions.
+/// The answers are therefore exact for any finite inputs (float and double builds; see
+/// docs/geometry.md for the range). Degenerate triangles are classified exactly
+/// (predicates::classify) and tested as the segment or point they are.
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
@@ -16,9 +18,16 @@
 namespace crux {
 namespace {
 
-using predicates::dominantAxis;
-using predicates::orient2d;
-using predicates::orient3d;
+using robust::lift;
+using robust::V3;
+using predicates::crossIsZero;
+using predicates::nonzeroAxis;
+using predicates::NumberOf;
+using predicates::orient2dSign;
+using predicates::orient3dSign;
+using predicates::pointInTriangle2d;
+using predicates::pointOnSegment;
+using predicates::pointOnTriangle;
 using predicates::TriangleKind;
 using predicates::TriangleShape;
 
@@ -26,31 +35,11 @@ using predicates::TriangleShape;
 // Low-dimensional pieces: points, segments and triangles as exact point sets.
 // ---------------------------------------------------------------------------------------------
 
-/// Point x on the closed segment [p, q] (p != q): collinear and between the endpoints.
-bool pointOnSegment(const WVec3& x, const WVec3& p, const WVec3& q) {
-  const WVec3 d = q - p;
-  if (!d.cross(x - p).isZero(0)) return false;
-  return (x - p).dot(d) >= 0 && (x - q).dot(d) <= 0;
-}
-
-/// Point x in the closed 2-D triangle abc (non-degenerate after dropping axis `drop`).
-bool pointInTriangle2d(const WVec3& x, const WVec3& a, const WVec3& b, const WVec3& c, int drop) {
-  const Wide o1 = orient2d(a, b, x, drop);
-  const Wide o2 = orient2d(b, c, x, drop);
-  const Wide o3 = orient2d(c, a, x, drop);
-  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
-}
-
-/// Point x on the proper triangle abc: in its plane and inside in the dominant projection.
-bool pointOnTriangle(const WVec3& x, const WVec3& a, const WVec3& b, const WVec3& c) {
-  if (orient3d(a, b, c, x) != 0) return false;
-  return pointInTriangle2d(x, a, b, c, dominantAxis((b - a).cross(c - a)));
-}
-
 /// True when all of xs lie strictly on the right of the directed 2-D line uv.
-bool strictlyRightOf(const WVec3& u, const WVec3& v, const WVec3* xs, int n, int drop) {
+template <class J, class T>
+bool strictlyRightOf(J& judge, const V3<T>& u, const V3<T>& v, const V3<T>* xs, int n, int drop) {
   for (int i = 0; i < n; ++i) {
-    if (orient2d(u, v, xs[i], drop) >= 0) return false;
+    if (orient2dSign(judge, u, v, xs[i], drop) >= 0) return false;
   }
   return true;
 }
@@ -58,40 +47,44 @@ bool strictlyRightOf(const WVec3& u, const WVec3& v, const WVec3* xs, int n, int
 /// 2-D separating-axis test of a counter-clockwise triangle tri[3] against the convex set
 /// spanned by xs[n] (n = 2: a segment, n = 3: a triangle): true when some edge line of tri
 /// has all of xs strictly outside.
-bool separatedByEdges2d(const WVec3* tri, const WVec3* xs, int n, int drop) {
-  return strictlyRightOf(tri[0], tri[1], xs, n, drop) ||
-         strictlyRightOf(tri[1], tri[2], xs, n, drop) ||
-         strictlyRightOf(tri[2], tri[0], xs, n, drop);
+template <class J, class T>
+bool separatedByEdges2d(J& judge, const V3<T>* tri, const V3<T>* xs, int n, int drop) {
+  return strictlyRightOf(judge, tri[0], tri[1], xs, n, drop) || strictlyRightOf(judge, tri[1], tri[2], xs, n, drop) ||
+         strictlyRightOf(judge, tri[2], tri[0], xs, n, drop);
 }
 
 /// Reorders a 2-D non-degenerate triangle counter-clockwise in the projection dropping `drop`.
-void makeCounterClockwise(WVec3* tri, int drop) {
-  if (orient2d(tri[0], tri[1], tri[2], drop) < 0) std::swap(tri[1], tri[2]);
+template <class J, class T>
+void makeCounterClockwise(J& judge, V3<T>* tri, int drop) {
+  if (orient2dSign(judge, tri[0], tri[1], tri[2], drop) < 0) std::swap(tri[1], tri[2]);
 }
 
 /// Coplanar proper triangles: 2-D separating axes are the six edge normals (both are convex
 /// polygons, so the edge normals are complete).
-bool coplanarTriangles(const WVec3& a1, const WVec3& b1, const WVec3& c1, const WVec3& a2,
-                       const WVec3& b2, const WVec3& c2) {
-  const int drop = dominantAxis((b1 - a1).cross(c1 - a1));
-  WVec3 t1[3] = {a1, b1, c1};
-  WVec3 t2[3] = {a2, b2, c2};
-  makeCounterClockwise(t1, drop);
-  makeCounterClockwise(t2, drop);
-  return !separatedByEdges2d(t1, t2, 3, drop) && !separatedByEdges2d(t2, t1, 3, drop);
+template <class J, class T>
+bool coplanarTriangles(J& judge, const V3<T>* t1In, const V3<T>* t2In) {
+  const int drop = nonzeroAxis(judge, (t1In[1] - t1In[0]).cross(t1In[2] - t1In[0]));
+  if (drop < 0) return false;  // only under an uncertain filter sign
+  V3<T> t1[3] = {t1In[0], t1In[1], t1In[2]};
+  V3<T> t2[3] = {t2In[0], t2In[1], t2In[2]};
+  makeCounterClockwise(judge, t1, drop);
+  makeCounterClockwise(judge, t2, drop);
+  return !separatedByEdges2d(judge, t1, t2, 3, drop) && !separatedByEdges2d(judge, t2, t1, 3, drop);
 }
 
 /// Segment [p, q] against the proper triangle abc, both in one plane: the triangle's three
 /// edge lines and the segment's own line are a complete set of 2-D separating axes.
-bool coplanarSegmentTriangle(const WVec3& p, const WVec3& q, const WVec3& a, const WVec3& b,
-                             const WVec3& c) {
-  const int drop = dominantAxis((b - a).cross(c - a));
-  WVec3 tri[3] = {a, b, c};
-  makeCounterClockwise(tri, drop);
-  const WVec3 seg[2] = {p, q};
-  if (separatedByEdges2d(tri, seg, 2, drop)) return false;
-  const Wide sa = orient2d(p, q, a, drop), sb = orient2d(p, q, b, drop),
-             sc = orient2d(p, q, c, drop);
+template <class J, class T>
+bool coplanarSegmentTriangle(J& judge, const V3<T>& p, const V3<T>& q, const V3<T>& a, const V3<T>& b,
+                             const V3<T>& c) {
+  const int drop = nonzeroAxis(judge, (b - a).cross(c - a));
+  if (drop < 0) return false;
+  V3<T> tri[3] = {a, b, c};
+  makeCounterClockwise(judge, tri, drop);
+  const V3<T> seg[2] = {p, q};
+  if (separatedByEdges2d(judge, tri, seg, 2, drop)) return false;
+  const int sa = orient2dSign(judge, p, q, a, drop), sb = orient2dSign(judge, p, q, b, drop),
+            sc = orient2dSign(judge, p, q, c, drop);
   return !((sa > 0 && sb > 0 && sc > 0) || (sa < 0 && sb < 0 && sc < 0));
 }
 
@@ -99,33 +92,38 @@ bool coplanarSegmentTriangle(const WVec3& p, const WVec3& q, const WVec3& a, con
 /// plane at one point, that point is in the triangle iff the line pq passes the three
 /// directed edges on one side (triple products of one weak sign); a segment in the plane is
 /// decided in 2-D.
-bool segmentTriangle(const WVec3& p, const WVec3& q, const WVec3& a, const WVec3& b,
-                     const WVec3& c) {
-  const Wide sp = orient3d(a, b, c, p), sq = orient3d(a, b, c, q);
+template <class J, class T>
+bool segmentTriangle(J& judge, const V3<T>& p, const V3<T>& q, const V3<T>& a, const V3<T>& b, const V3<T>& c) {
+  const int sp = orient3dSign(judge, a, b, c, p), sq = orient3dSign(judge, a, b, c, q);
   if ((sp > 0 && sq > 0) || (sp < 0 && sq < 0)) return false;
-  if (sp == 0 && sq == 0) return coplanarSegmentTriangle(p, q, a, b, c);
-  const Wide e1 = orient3d(p, q, a, b), e2 = orient3d(p, q, b, c), e3 = orient3d(p, q, c, a);
+  if (sp == 0 && sq == 0) return coplanarSegmentTriangle(judge, p, q, a, b, c);
+  const int e1 = orient3dSign(judge, p, q, a, b), e2 = orient3dSign(judge, p, q, b, c),
+            e3 = orient3dSign(judge, p, q, c, a);
   return (e1 >= 0 && e2 >= 0 && e3 >= 0) || (e1 <= 0 && e2 <= 0 && e3 <= 0);
 }
 
 /// Closed segments [p, q] and [r, s] (p != q, r != s) in 3-D: they must be coplanar; then
 /// collinear segments overlap as intervals, parallel ones never meet, and crossing lines meet
 /// inside both segments iff each segment straddles the other's line.
-bool segmentSegment(const WVec3& p, const WVec3& q, const WVec3& r, const WVec3& s) {
-  if (orient3d(p, q, r, s) != 0) return false;
-  const WVec3 d = q - p;
-  const WVec3 n = d.cross(s - r);
-  if (n.isZero(0)) {
-    if (!d.cross(r - p).isZero(0)) return false;  // parallel, distinct lines
-    const int k = dominantAxis(d);                // one line: compare intervals along it
-    const Wide lo1 = std::min(p[k], q[k]), hi1 = std::max(p[k], q[k]);
-    const Wide lo2 = std::min(r[k], s[k]), hi2 = std::max(r[k], s[k]);
-    return lo1 <= hi2 && lo2 <= hi1;
+template <class J, class T>
+bool segmentSegment(J& judge, const V3<T>& p, const V3<T>& q, const V3<T>& r, const V3<T>& s) {
+  if (orient3dSign(judge, p, q, r, s) != 0) return false;
+  const V3<T> d = q - p;
+  const int drop = nonzeroAxis(judge, d.cross(s - r));
+  if (drop < 0) {
+    if (!crossIsZero(judge, d, r - p)) return false;  // parallel, distinct lines
+    const int k = nonzeroAxis(judge, d);              // one line: compare intervals along it
+    if (k < 0) return false;
+    const bool pLow = judge(p[k] - q[k]) <= 0, rLow = judge(r[k] - s[k]) <= 0;
+    const T& lo1 = pLow ? p[k] : q[k];
+    const T& hi1 = pLow ? q[k] : p[k];
+    const T& lo2 = rLow ? r[k] : s[k];
+    const T& hi2 = rLow ? s[k] : r[k];
+    return judge(lo1 - hi2) <= 0 && judge(lo2 - hi1) <= 0;
   }
-  const int drop = dominantAxis(n);
-  const Wide o1 = orient2d(p, q, r, drop), o2 = orient2d(p, q, s, drop);
+  const int o1 = orient2dSign(judge, p, q, r, drop), o2 = orient2dSign(judge, p, q, s, drop);
   if ((o1 > 0 && o2 > 0) || (o1 < 0 && o2 < 0)) return false;
-  const Wide o3 = orient2d(r, s, p, drop), o4 = orient2d(r, s, q, drop);
+  const int o3 = orient2dSign(judge, r, s, p, drop), o4 = orient2dSign(judge, r, s, q, drop);
   return !((o3 > 0 && o4 > 0) || (o3 < 0 && o4 < 0));
 }
 
@@ -173,37 +171,34 @@ void isolateCorner(const int s[3], int& k, bool& flip) {
 /// k <= i and j <= l. The plane through p1, q1, p2 cuts L at i and holds p2, so the side of q2
 /// gives the side of k: k <= i iff orient3d(p1, q1, p2, q2) <= 0; likewise j <= l iff
 /// orient3d(p1, r1, r2, p2) <= 0. Touching configurations (zeros) fall on the closed side.
-bool triangleTriangle(const WVec3 t1In[3], const WVec3 t2In[3]) {
+template <class J, class T>
+bool triangleTriangle(J& judge, const V3<T>* t1In, const V3<T>* t2In) {
   int s1[3], s2[3];
-  for (int i = 0; i < 3; ++i)
-    s1[i] = predicates::sign(orient3d(t2In[0], t2In[1], t2In[2], t1In[i]));
+  for (int i = 0; i < 3; ++i) s1[i] = orient3dSign(judge, t2In[0], t2In[1], t2In[2], t1In[i]);
   if ((s1[0] > 0 && s1[1] > 0 && s1[2] > 0) || (s1[0] < 0 && s1[1] < 0 && s1[2] < 0)) return false;
-  for (int i = 0; i < 3; ++i)
-    s2[i] = predicates::sign(orient3d(t1In[0], t1In[1], t1In[2], t2In[i]));
+  for (int i = 0; i < 3; ++i) s2[i] = orient3dSign(judge, t1In[0], t1In[1], t1In[2], t2In[i]);
   if ((s2[0] > 0 && s2[1] > 0 && s2[2] > 0) || (s2[0] < 0 && s2[1] < 0 && s2[2] < 0)) return false;
   const bool coplanar1 = s1[0] == 0 && s1[1] == 0 && s1[2] == 0;
   const bool coplanar2 = s2[0] == 0 && s2[1] == 0 && s2[2] == 0;
-  if (coplanar1 || coplanar2) {
-    return coplanarTriangles(t1In[0], t1In[1], t1In[2], t2In[0], t2In[1], t2In[2]);
-  }
+  if (coplanar1 || coplanar2) return coplanarTriangles(judge, t1In, t2In);
 
-  WVec3 t2[3] = {t2In[0], t2In[1], t2In[2]};
+  int o2[3] = {0, 1, 2};  // t2's corner order (reversed when flipped)
   int k1 = 0, k2 = 0;
   bool flip1 = false, flip2 = false;
   isolateCorner(s1, k1, flip1);
   if (flip1) {  // reversing t2 reverses the orientation of its plane
-    std::swap(t2[1], t2[2]);
+    std::swap(o2[1], o2[2]);
     std::swap(s2[1], s2[2]);
   }
   isolateCorner(s2, k2, flip2);
-  const WVec3& p1 = t1In[k1];
-  const WVec3* q1 = &t1In[(k1 + 1) % 3];
-  const WVec3* r1 = &t1In[(k1 + 2) % 3];
+  const V3<T>& p1 = t1In[k1];
+  const V3<T>* q1 = &t1In[(k1 + 1) % 3];
+  const V3<T>* r1 = &t1In[(k1 + 2) % 3];
   if (flip2) std::swap(q1, r1);  // reversing t1 reverses the orientation of its plane
-  const WVec3& p2 = t2[k2];
-  const WVec3& q2 = t2[(k2 + 1) % 3];
-  const WVec3& r2 = t2[(k2 + 2) % 3];
-  return orient3d(p1, *q1, p2, q2) <= 0 && orient3d(p1, *r1, r2, p2) <= 0;
+  const V3<T>& p2 = t2In[o2[k2]];
+  const V3<T>& q2 = t2In[o2[(k2 + 1) % 3]];
+  const V3<T>& r2 = t2In[o2[(k2 + 2) % 3]];
+  return orient3dSign(judge, p1, *q1, p2, q2) <= 0 && orient3dSign(judge, p1, *r1, r2, p2) <= 0;
 }
 
 /// Exact bounding-box rejection: disjoint boxes mean disjoint triangles.
@@ -216,40 +211,45 @@ bool boundsDisjoint(const Triangle& a, const Triangle& b) {
   return false;
 }
 
-/// A degenerate-or-proper triangle with its corners promoted to Wide.
+/// A degenerate-or-proper triangle: its exact class and its corners as numbers of type T.
+template <class T>
 struct Simplex {
-  TriangleShape shape;
-  WVec3 v[3];
+  TriangleKind kind;
+  V3<T> v[3];
+  V3<T> p, q;  ///< segment endpoints / the point
 };
 
-Simplex toSimplex(const Triangle& t) {
-  return {predicates::classify(t), {wide(t.a), wide(t.b), wide(t.c)}};
+template <class T>
+Simplex<T> toSimplex(const Triangle& t, const TriangleShape& shape) {
+  return {shape.kind, {lift<T>(t.a), lift<T>(t.b), lift<T>(t.c)}, lift<T>(shape.p), lift<T>(shape.q)};
 }
 
 /// Point x against any simplex.
-bool pointOnSimplex(const WVec3& x, const Simplex& s) {
-  switch (s.shape.kind) {
+template <class J, class T>
+bool pointOnSimplex(J& judge, const V3<T>& x, const Simplex<T>& s) {
+  switch (s.kind) {
     case TriangleKind::Triangle:
-      return pointOnTriangle(x, s.v[0], s.v[1], s.v[2]);
+      return pointOnTriangle(judge, x, s.v[0], s.v[1], s.v[2]);
     case TriangleKind::Segment:
-      return pointOnSegment(x, s.shape.p, s.shape.q);
+      return pointOnSegment(judge, x, s.p, s.q);
     case TriangleKind::Point:
       break;
   }
-  return x == s.shape.p;
+  return nonzeroAxis(judge, x - s.p) < 0;  // x == p
 }
 
 /// Segment [p, q] (p != q) against any simplex.
-bool segmentOnSimplex(const WVec3& p, const WVec3& q, const Simplex& s) {
-  switch (s.shape.kind) {
+template <class J, class T>
+bool segmentOnSimplex(J& judge, const V3<T>& p, const V3<T>& q, const Simplex<T>& s) {
+  switch (s.kind) {
     case TriangleKind::Triangle:
-      return segmentTriangle(p, q, s.v[0], s.v[1], s.v[2]);
+      return segmentTriangle(judge, p, q, s.v[0], s.v[1], s.v[2]);
     case TriangleKind::Segment:
-      return segmentSegment(p, q, s.shape.p, s.shape.q);
+      return segmentSegment(judge, p, q, s.p, s.q);
     case TriangleKind::Point:
       break;
   }
-  return pointOnSegment(s.shape.p, p, q);
+  return pointOnSegment(judge, s.p, p, q);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -258,78 +258,75 @@ bool segmentOnSimplex(const WVec3& p, const WVec3& q, const Simplex& s) {
 
 /// |x - [p, q]|² <= r2 for a segment (p == q allowed): vertex regions by the sign of the
 /// projection parameter, the interior by |(x-p) × d|² <= r2 |d|².
-bool segmentWithinRadius(const WVec3& x, const WVec3& p, const WVec3& q, Wide r2) {
-  const WVec3 d = q - p, w = x - p;
-  const Wide t = w.dot(d);
-  if (t <= 0) return w.squaredNorm() <= r2;
-  const Wide dd = d.squaredNorm();
-  if (t >= dd) return (x - q).squaredNorm() <= r2;
-  return w.cross(d).squaredNorm() <= r2 * dd;
+template <class J, class T>
+bool segmentWithinRadius(J& judge, const V3<T>& x, const V3<T>& p, const V3<T>& q, const T& r2) {
+  const V3<T> d = q - p, w = x - p;
+  const T t = w.dot(d);
+  if (judge(t) <= 0) return judge(w.squaredNorm() - r2) <= 0;
+  const T dd = d.squaredNorm();
+  if (judge(t - dd) >= 0) return judge((x - q).squaredNorm() - r2) <= 0;
+  return judge(w.cross(d).squaredNorm() - r2 * dd) <= 0;
 }
 
 /// Proper triangle abc: |x - T|² <= r2. The distance to a closed triangle is the plane
 /// distance when x projects inside it, else the distance to the nearest edge, so: reject by
-/// the plane distance (h² > r2|n|², a lower bound), accept when x projects inside (exact
-/// orientation signs n·(e_i × (x - v_i))), else test the three edges as segments. Unlike
-/// RTCD 5.1.5's region classification by products of dot products, nothing here cancels
-/// catastrophically on sliver triangles; on the integer grid every sign is exact.
-/// A triangle whose corner angle at a has sin² below this is a sliver whose computed normal is
-/// rounding noise (relative error ~1e-16 / sin): it is measured by its edges alone, which moves
-/// the answer by at most its width (~1e-12 of its edges). Never reached on the integer grid,
-/// where sin² >= 1 / (3·128²)².
-constexpr Wide kSliverSine2 = 1e-24;
-
-bool triangleWithinRadius(const WVec3& x, const WVec3& a, const WVec3& b, const WVec3& c, Wide r2) {
-  const WVec3 ab = b - a, bc = c - b, ca = a - c;
-  const WVec3 n = ab.cross(c - a);
-  if (n.squaredNorm() <= kSliverSine2 * ab.squaredNorm() * ca.squaredNorm())
-    return segmentWithinRadius(x, a, b, r2) || segmentWithinRadius(x, b, c, r2) ||
-           segmentWithinRadius(x, c, a, r2);
-  const Wide h = n.dot(x - a);
-  if (h * h > r2 * n.squaredNorm()) return false;
-  const Wide sa = n.dot(ab.cross(x - a)), sb = n.dot(bc.cross(x - b)), sc = n.dot(ca.cross(x - c));
+/// the plane distance (h² > r2|n|², a lower bound), accept when x projects inside (signs of
+/// n·(e_i × (x - v_i))), else test the three edges as segments. Every sign is exact (degree
+/// <= 6 in the inputs), so no sliver triangle needs special treatment.
+template <class J, class T>
+bool triangleWithinRadius(J& judge, const V3<T>& x, const V3<T>& a, const V3<T>& b, const V3<T>& c, const T& r2) {
+  const V3<T> ab = b - a, bc = c - b, ca = a - c;
+  const V3<T> n = ab.cross(c - a);
+  const T h = n.dot(x - a);
+  if (judge(h * h - r2 * n.squaredNorm()) > 0) return false;
+  const int sa = judge(n.dot(ab.cross(x - a))), sb = judge(n.dot(bc.cross(x - b))), sc = judge(n.dot(ca.cross(x - c)));
   if (sa >= 0 && sb >= 0 && sc >= 0) return true;  // projects inside: the plane distance decides
-  return segmentWithinRadius(x, a, b, r2) || segmentWithinRadius(x, b, c, r2) ||
-         segmentWithinRadius(x, c, a, r2);
+  return segmentWithinRadius(judge, x, a, b, r2) || segmentWithinRadius(judge, x, b, c, r2) ||
+         segmentWithinRadius(judge, x, c, a, r2);
 }
 
 // ---------------------------------------------------------------------------------------------
 // Triangle–box: Akenine-Möller 2001 separating axes, box centred at the origin.
 // ---------------------------------------------------------------------------------------------
 
-/// True when the projections [min(p0, p1), max(p0, p1)] and [-r, r] are disjoint.
-inline bool separated(Wide p0, Wide p1, Wide r) {
-  return std::min(p0, p1) > r || std::max(p0, p1) < -r;
+/// |x| as a number, given the sign of x.
+template <class T>
+T absBySign(const T& x, int s) {
+  return s < 0 ? -x : x;
 }
 
-/// Triangle v[3] (box coordinates) against the box [-h, h]. Axes: the 3 box normals, the 9
-/// products u_j × e_i, and the triangle normal when `proper`. A degenerate triangle (classified
-/// exactly in world coordinates by the caller) skips the normal axis: after mapping into a
-/// rotated box frame its computed normal is rounding noise, not an axis; the remaining axes
-/// (box normals, u_j × segment direction) are complete for a segment or point.
-bool triangleCenteredBox(const WVec3 v[3], const WVec3& h, bool proper) {
-  for (int i = 0; i < 3; ++i) {
-    if (std::min({v[0][i], v[1][i], v[2][i]}) > h[i]) return false;
-    if (std::max({v[0][i], v[1][i], v[2][i]}) < -h[i]) return false;
+/// True when the projections [min(p0, p1), max(p0, p1)] and [-r, r] are disjoint.
+template <class J, class T>
+bool separated(J& judge, const T& p0, const T& p1, const T& r) {
+  return (judge(p0 - r) > 0 && judge(p1 - r) > 0) || (judge(p0 + r) < 0 && judge(p1 + r) < 0);
+}
+
+/// Triangle v[3] (box coordinates, any common positive scale) against the box [-h, h] (same
+/// scale). Axes: the 9 products u_j × e_i and the triangle normal (zero for a degenerate
+/// triangle: then it separates nothing, and the remaining axes are complete for a segment or
+/// point); the 3 box normals are tested by the caller when `boxNormals` is false.
+template <class J, class T>
+bool triangleCenteredBox(J& judge, const V3<T>* v, const V3<T>& h, bool boxNormals) {
+  if (boxNormals) {
+    for (int i = 0; i < 3; ++i) {
+      if (judge(v[0][i] - h[i]) > 0 && judge(v[1][i] - h[i]) > 0 && judge(v[2][i] - h[i]) > 0) return false;
+      if (judge(v[0][i] + h[i]) < 0 && judge(v[1][i] + h[i]) < 0 && judge(v[2][i] + h[i]) < 0) return false;
+    }
   }
   for (int i = 0; i < 3; ++i) {
-    const WVec3& v0 = v[i];            // edge start (the end projects to the same value)
-    const WVec3& v2 = v[(i + 2) % 3];  // the opposite corner
-    const WVec3 e = v[(i + 1) % 3] - v0;
+    const V3<T>& v0 = v[i];            // edge start (the end projects to the same value)
+    const V3<T>& v2 = v[(i + 2) % 3];  // the opposite corner
+    const V3<T> e = v[(i + 1) % 3] - v0;
+    const V3<T> ae = {absBySign(e.x, judge(e.x)), absBySign(e.y, judge(e.y)), absBySign(e.z, judge(e.z))};
     // u_x × e = (0, -e_z, e_y), u_y × e = (e_z, 0, -e_x), u_z × e = (-e_y, e_x, 0).
-    if (separated(e.y() * v0.z() - e.z() * v0.y(), e.y() * v2.z() - e.z() * v2.y(),
-                  h.y() * std::abs(e.z()) + h.z() * std::abs(e.y())))
-      return false;
-    if (separated(e.z() * v0.x() - e.x() * v0.z(), e.z() * v2.x() - e.x() * v2.z(),
-                  h.x() * std::abs(e.z()) + h.z() * std::abs(e.x())))
-      return false;
-    if (separated(e.x() * v0.y() - e.y() * v0.x(), e.x() * v2.y() - e.y() * v2.x(),
-                  h.x() * std::abs(e.y()) + h.y() * std::abs(e.x())))
-      return false;
+    if (separated(judge, e.y * v0.z - e.z * v0.y, e.y * v2.z - e.z * v2.y, h.y * ae.z + h.z * ae.y)) return false;
+    if (separated(judge, e.z * v0.x - e.x * v0.z, e.z * v2.x - e.x * v2.z, h.x * ae.z + h.z * ae.x)) return false;
+    if (separated(judge, e.x * v0.y - e.y * v0.x, e.x * v2.y - e.y * v2.x, h.x * ae.y + h.y * ae.x)) return false;
   }
-  if (!proper) return true;
-  const WVec3 n = (v[1] - v[0]).cross(v[2] - v[0]);
-  return std::abs(n.dot(v[0])) <= h.dot(n.cwiseAbs());
+  const V3<T> n = (v[1] - v[0]).cross(v[2] - v[0]);
+  const V3<T> an = {absBySign(n.x, judge(n.x)), absBySign(n.y, judge(n.y)), absBySign(n.z, judge(n.z))};
+  const T reach = h.dot(an), dist = n.dot(v[0]);
+  return judge(dist - reach) <= 0 && judge(dist + reach) >= 0;
 }
 
 }  // namespace
@@ -347,65 +344,102 @@ bool precedes(const Triangle& x, const Triangle& y) {
 
 bool overlapsOrdered(const Triangle& a, const Triangle& b) {
   if (boundsDisjoint(a, b)) return false;
-  const Simplex sa = toSimplex(a), sb = toSimplex(b);
-  switch (sa.shape.kind) {
-    case TriangleKind::Triangle:
-      if (sb.shape.kind == TriangleKind::Triangle) return triangleTriangle(sa.v, sb.v);
-      break;
-    case TriangleKind::Segment:
-      return segmentOnSimplex(sa.shape.p, sa.shape.q, sb);
-    case TriangleKind::Point:
-      return pointOnSimplex(sa.shape.p, sb);
-  }
-  // a is a proper triangle, b is degenerate.
-  if (sb.shape.kind == TriangleKind::Segment) return segmentOnSimplex(sb.shape.p, sb.shape.q, sa);
-  return pointOnSimplex(sb.shape.p, sa);
+  const TriangleShape shapeA = predicates::classify(a), shapeB = predicates::classify(b);
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const Simplex<T> sa = toSimplex<T>(a, shapeA), sb = toSimplex<T>(b, shapeB);
+    switch (sa.kind) {
+      case TriangleKind::Triangle:
+        if (sb.kind == TriangleKind::Triangle) return triangleTriangle(judge, sa.v, sb.v);
+        break;
+      case TriangleKind::Segment:
+        return segmentOnSimplex(judge, sa.p, sa.q, sb);
+      case TriangleKind::Point:
+        return pointOnSimplex(judge, sa.p, sb);
+    }
+    // a is a proper triangle, b is degenerate.
+    if (sb.kind == TriangleKind::Segment) return segmentOnSimplex(judge, sb.p, sb.q, sa);
+    return pointOnSimplex(judge, sb.p, sa);
+  });
 }
 
 }  // namespace
 
-// Symmetric by construction: the two argument orders evaluate different predicates, which agree
-// exactly on the integer grid but may round differently elsewhere (found by fuzz_geometry,
-// docs/fuzzing.md), so the pair is evaluated in one canonical order.
+// Symmetric by construction: the pair is evaluated in one canonical order (the signs are exact,
+// so both orders agree; the canonical order keeps the filter's work identical too).
 bool overlaps(const Triangle& a, const Triangle& b) {
   return precedes(b, a) ? overlapsOrdered(b, a) : overlapsOrdered(a, b);
 }
 
 bool overlaps(const Triangle& t, const Sphere& s) {
-  const WVec3 x = wide(s.center);
-  const Wide r = s.radius;
-  const Wide r2 = r * r;
-  const TriangleShape shape = predicates::classify(t);
-  switch (shape.kind) {
-    case TriangleKind::Triangle:
-      return triangleWithinRadius(x, wide(t.a), wide(t.b), wide(t.c), r2);
-    case TriangleKind::Segment:
-      return segmentWithinRadius(x, shape.p, shape.q, r2);
-    case TriangleKind::Point:
-      break;
+  // Cheap rejection: the sphere's box misses the triangle's box on some axis, by a margin the
+  // filter certifies (no exact stage here: an uncertain margin just goes on to the full test).
+  for (int i = 0; i < 3; ++i) {
+    const robust::Bounded c(Wide(s.center[i])), r(Wide(s.radius));
+    const robust::Bounded hi(Wide(std::max({t.a[i], t.b[i], t.c[i]}))), lo(Wide(std::min({t.a[i], t.b[i], t.c[i]})));
+    if (((c - hi) - r).certainSign() == 1 || ((lo - c) - r).certainSign() == 1) return false;
   }
-  return (x - shape.p).squaredNorm() <= r2;
+  const TriangleShape shape = predicates::classify(t);
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const V3<T> x = lift<T>(s.center);
+    const T r = T(Wide(s.radius));
+    const T r2 = r * r;
+    switch (shape.kind) {
+      case TriangleKind::Triangle:
+        return triangleWithinRadius(judge, x, lift<T>(t.a), lift<T>(t.b), lift<T>(t.c), r2);
+      case TriangleKind::Segment:
+        return segmentWithinRadius(judge, x, lift<T>(shape.p), lift<T>(shape.q), r2);
+      case TriangleKind::Point:
+        break;
+    }
+    return judge((x - lift<T>(shape.p)).squaredNorm() - r2) <= 0;
+  });
 }
 
 bool overlaps(const Triangle& t, const Aabb& b) {
-  const WVec3 c = (wide(b.min) + wide(b.max)) * Wide(0.5);
-  const WVec3 h = (wide(b.max) - wide(b.min)) * Wide(0.5);
-  const WVec3 v[3] = {wide(t.a) - c, wide(t.b) - c, wide(t.c) - c};
-  return triangleCenteredBox(v, h, predicates::classify(t).kind == TriangleKind::Triangle);
+  // Box normals first, on the inputs themselves (exact comparisons).
+  for (int i = 0; i < 3; ++i) {
+    if (t.a[i] > b.max[i] && t.b[i] > b.max[i] && t.c[i] > b.max[i]) return false;
+    if (t.a[i] < b.min[i] && t.b[i] < b.min[i] && t.c[i] < b.min[i]) return false;
+  }
+  // The remaining axes in box coordinates scaled by 2 (no halving): v = 2x - (min + max),
+  // h = max - min.
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const V3<T> lo = lift<T>(b.min), hi = lift<T>(b.max);
+    const V3<T> mid = lo + hi;
+    const V3<T> a = lift<T>(t.a), bb = lift<T>(t.b), c = lift<T>(t.c);
+    const V3<T> v[3] = {(a + a) - mid, (bb + bb) - mid, (c + c) - mid};
+    return triangleCenteredBox(judge, v, hi - lo, false);
+  });
 }
 
 bool overlaps(const Triangle& t, const Obb& b) {
-  const WVec3 c = wide(b.center);
-  const Eigen::Matrix<Wide, 3, 3> rt = b.axes.cast<Wide>().transpose();
-  const WVec3 v[3] = {rt * (wide(t.a) - c), rt * (wide(t.b) - c), rt * (wide(t.c) - c)};
-  return triangleCenteredBox(v, wide(b.half), predicates::classify(t).kind == TriangleKind::Triangle);
+  // Box coordinates v = axesᵀ (x - center) with the caller's axes as given (exactly).
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const V3<T> c = lift<T>(b.center);
+    V3<T> axis[3];
+    for (int i = 0; i < 3; ++i) axis[i] = lift<T>(Vec3(b.axes.col(i)));
+    const auto toBox = [&](const Vec3& x) {
+      const V3<T> d = lift<T>(x) - c;
+      return V3<T>{axis[0].dot(d), axis[1].dot(d), axis[2].dot(d)};
+    };
+    const V3<T> v[3] = {toBox(t.a), toBox(t.b), toBox(t.c)};
+    return triangleCenteredBox(judge, v, lift<T>(b.half), true);
+  });
 }
 
 bool overlaps(const Triangle& t, const Plane& p) {
-  const WVec3 n = wide(p.normal);
-  const Wide d = p.d;
-  const Wide sa = n.dot(wide(t.a)) - d, sb = n.dot(wide(t.b)) - d, sc = n.dot(wide(t.c)) - d;
-  return std::min({sa, sb, sc}) <= 0 && std::max({sa, sb, sc}) >= 0;
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const V3<T> n = lift<T>(p.normal);
+    const T d = T(Wide(p.d));
+    const int sa = judge(n.dot(lift<T>(t.a)) - d), sb = judge(n.dot(lift<T>(t.b)) - d),
+              sc = judge(n.dot(lift<T>(t.c)) - d);
+    return std::min({sa, sb, sc}) <= 0 && std::max({sa, sb, sc}) >= 0;
+  });
 }
 
 }  // namespace crux

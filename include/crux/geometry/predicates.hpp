@@ -1,25 +1,34 @@
 #pragma once
 /// @file predicates.hpp  Sign-exact orientation predicates and degeneracy classification.
 ///
-/// Method: every predicate is a low-degree polynomial of the input coordinates evaluated in
-/// `Wide` (double) after exact promotion from Real. For integer coordinates of magnitude <= 64
-/// every intermediate value is an integer below 2^53, so the sign is exact (no epsilon). For
-/// general inputs the result is the correctly-signed value up to double rounding of a
-/// degree-3 polynomial, which is far tighter than Real's own precision in float builds.
+/// Every boolean decision of the geometry layer is the sign of a polynomial of the input
+/// coordinates. The `*Sign` templates below take a judge (robust::FilterJudge or
+/// robust::ExactJudge, see expansion.hpp) and points of its number type; run through
+/// robust::filtered they return the exact sign for ANY finite inputs (Shewchuk 1997: a
+/// forward-error filter in Wide, exact floating-point expansions when it cannot decide).
+/// Coordinate differences are never rounded before a sign is taken: the filter bounds their
+/// rounding, the expansions form them exactly.
+///
+/// The plain `orient3d` / `orient2d` values (Wide arithmetic) remain for callers that need a
+/// magnitude or work on the integer grid only (|coordinates| <= 64, where they are exact).
 
+#include <crux/geometry/expansion.hpp>
 #include <crux/geometry/shapes.hpp>
+
+#include <type_traits>
 
 namespace crux::predicates {
 
 /// (b-a)·((c-a)×(d-a)) — six times the signed volume of tetrahedron abcd; positive when d
-/// lies on the side of plane abc that the counter-clockwise normal points to.
+/// lies on the side of plane abc that the counter-clockwise normal points to. Rounded (Wide);
+/// exact on the integer grid. Use orient3dExact for the exact sign of arbitrary inputs.
 inline Wide orient3d(const WVec3& a, const WVec3& b, const WVec3& c, const WVec3& d) {
   return (b - a).cross(c - a).dot(d - a);
 }
 
 /// 2-D orientation of (a, b, c) after dropping coordinate `drop` (0, 1 or 2): twice the
 /// signed area, positive for counter-clockwise order in the (u, v) = remaining axes in
-/// cyclic order ((y,z), (z,x), (x,y)).
+/// cyclic order ((y,z), (z,x), (x,y)). Rounded (Wide); exact on the integer grid.
 inline Wide orient2d(const WVec3& a, const WVec3& b, const WVec3& c, int drop) {
   const int u = (drop + 1) % 3;
   const int v = (drop + 2) % 3;
@@ -36,21 +45,118 @@ inline int dominantAxis(const WVec3& n) {
 /// Sign of x as -1, 0 or +1.
 inline int sign(Wide x) { return (x > 0) - (x < 0); }
 
+// ---------------------------------------------------------------------------------------------
+// Sign templates over a judge (exact when run through robust::filtered).
+// ---------------------------------------------------------------------------------------------
+
+/// Sign of orient3d(a, b, c, d) as read by the judge.
+template <class J, class T>
+int orient3dSign(J& judge, const robust::V3<T>& a, const robust::V3<T>& b, const robust::V3<T>& c,
+                 const robust::V3<T>& d) {
+  return judge((b - a).cross(c - a).dot(d - a));
+}
+
+/// Sign of orient2d(a, b, c, drop) as read by the judge.
+template <class J, class T>
+int orient2dSign(J& judge, const robust::V3<T>& a, const robust::V3<T>& b, const robust::V3<T>& c, int drop) {
+  const int u = (drop + 1) % 3;
+  const int v = (drop + 2) % 3;
+  return judge((b[u] - a[u]) * (c[v] - a[v]) - (b[v] - a[v]) * (c[u] - a[u]));
+}
+
+/// An axis k with n_k != 0 (as read by the judge), preferring the largest |n_k| (by the
+/// approximate value, so the projection dropping k is well conditioned); -1 when n = 0. This is
+/// the exact replacement of dominantAxis: dropping k projects the plane with normal n onto a
+/// coordinate plane bijectively.
+template <class J, class T>
+int nonzeroAxis(J& judge, const robust::V3<T>& n) {
+  const Wide m[3] = {std::abs(robust::approx(n.x)), std::abs(robust::approx(n.y)), std::abs(robust::approx(n.z))};
+  int order[3] = {0, 1, 2};
+  if (m[order[1]] > m[order[0]]) std::swap(order[0], order[1]);
+  if (m[order[2]] > m[order[1]]) std::swap(order[1], order[2]);
+  if (m[order[1]] > m[order[0]]) std::swap(order[0], order[1]);
+  for (const int k : order)
+    if (judge(n[k]) != 0) return k;
+  return -1;
+}
+
+/// True when u × v = 0 (parallel or a zero vector), as read by the judge.
+template <class J, class T>
+bool crossIsZero(J& judge, const robust::V3<T>& u, const robust::V3<T>& v) {
+  return nonzeroAxis(judge, u.cross(v)) < 0;
+}
+
+/// Point x on the closed segment [p, q] (p == q allowed): collinear and between the endpoints.
+template <class J, class T>
+bool pointOnSegment(J& judge, const robust::V3<T>& x, const robust::V3<T>& p, const robust::V3<T>& q) {
+  const robust::V3<T> d = q - p, w = x - p;
+  if (!crossIsZero(judge, d, w)) return false;
+  return judge(w.dot(d)) >= 0 && judge((x - q).dot(d)) <= 0 && (judge(d.x) != 0 || judge(d.y) != 0 || judge(d.z) != 0 || judge(w.squaredNorm()) == 0);
+}
+
+/// Point x in the closed 2-D triangle abc (non-degenerate after dropping axis `drop`).
+template <class J, class T>
+bool pointInTriangle2d(J& judge, const robust::V3<T>& x, const robust::V3<T>& a, const robust::V3<T>& b,
+                       const robust::V3<T>& c, int drop) {
+  const int o1 = orient2dSign(judge, a, b, x, drop);
+  const int o2 = orient2dSign(judge, b, c, x, drop);
+  const int o3 = orient2dSign(judge, c, a, x, drop);
+  return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+}
+
+/// Point x on the proper triangle abc: in its plane and inside in a projection that keeps it
+/// non-degenerate.
+template <class J, class T>
+bool pointOnTriangle(J& judge, const robust::V3<T>& x, const robust::V3<T>& a, const robust::V3<T>& b,
+                     const robust::V3<T>& c) {
+  if (orient3dSign(judge, a, b, c, x) != 0) return false;
+  const int drop = nonzeroAxis(judge, (b - a).cross(c - a));
+  if (drop < 0) return false;  // not proper (only under an uncertain filter sign)
+  return pointInTriangle2d(judge, x, a, b, c, drop);
+}
+
+/// The number type of a judge.
+template <class J>
+using NumberOf = typename std::decay_t<J>::Number;
+
+/// Exact sign of orient3d(a, b, c, d) for any finite inputs.
+inline int orient3dExact(const WVec3& a, const WVec3& b, const WVec3& c, const WVec3& d) {
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    return orient3dSign(judge, robust::lift<T>(a), robust::lift<T>(b), robust::lift<T>(c), robust::lift<T>(d));
+  });
+}
+
+/// Exact sign of orient2d(a, b, c, drop) for any finite inputs.
+inline int orient2dExact(const WVec3& a, const WVec3& b, const WVec3& c, int drop) {
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    return orient2dSign(judge, robust::lift<T>(a), robust::lift<T>(b), robust::lift<T>(c), drop);
+  });
+}
+
 /// What a triangle's corner set really is.
 enum class TriangleKind { Triangle, Segment, Point };
 
 /// A triangle classified exactly: a proper triangle, the segment [p, q] its collinear corners
-/// span (the two farthest corners), or the point p its coincident corners are.
+/// span (two corners extreme along an axis where they differ), or the point p its coincident
+/// corners are. p and q are input corners (exact).
 struct TriangleShape {
   TriangleKind kind = TriangleKind::Triangle;
   WVec3 p, q;  ///< Segment endpoints (Segment), the point (Point, in p).
 };
 
-/// Classifies t exactly: the cross product of its edges is zero iff collinear.
+/// Classifies t exactly for any finite corners: the cross product of its edges is exactly
+/// zero iff the corners are collinear.
 inline TriangleShape classify(const Triangle& t) {
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
   TriangleShape s;
-  if (!(b - a).cross(c - a).isZero(0)) {
+  const bool proper = robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const robust::V3<T> A = robust::lift<T>(a);
+    return !crossIsZero(judge, robust::lift<T>(b) - A, robust::lift<T>(c) - A);
+  });
+  if (proper) {
     s.kind = TriangleKind::Triangle;
     return s;
   }
@@ -60,14 +166,17 @@ inline TriangleShape classify(const Triangle& t) {
     return s;
   }
   s.kind = TriangleKind::Segment;
-  const Wide ab = (b - a).squaredNorm(), bc = (c - b).squaredNorm(), ca = (a - c).squaredNorm();
-  if (ab >= bc && ab >= ca) {
-    s.p = a, s.q = b;
-  } else if (bc >= ca) {
-    s.p = b, s.q = c;
-  } else {
-    s.p = c, s.q = a;
+  // Collinear: the extremes along an axis where the corners differ span the set.
+  const WVec3* v[3] = {&a, &b, &c};
+  int k = 0;
+  while (a[k] == b[k] && b[k] == c[k]) ++k;
+  int lo = 0, hi = 0;
+  for (int i = 1; i < 3; ++i) {
+    if ((*v[i])[k] < (*v[lo])[k]) lo = i;
+    if ((*v[i])[k] > (*v[hi])[k]) hi = i;
   }
+  s.p = *v[lo];
+  s.q = *v[hi];
   return s;
 }
 
