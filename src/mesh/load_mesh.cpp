@@ -13,12 +13,21 @@
 /// clipping in their Newell-normal projection (a fan when no ear is found: self-intersecting or
 /// zero-area polygons); faces of one or two vertices (points, lines) are skipped.
 ///
+/// Every other format goes to assimp, by default in a forked child process that sends the
+/// triangles back through a pipe (LoadMeshOptions, mesh_io.hpp): assimp 5.2 crashes (SEGV in the
+/// ASE importer), aborts (ai_assert in TriangulateProcess on malformed PLY) or runs for minutes
+/// on some malformed files (docs/fuzzing.md), and only a process boundary contains that. A
+/// signal, a non-zero exit or the time limit (10 s + 2 s per MB by default) become an
+/// InvalidInput naming the file. The memory estimate (estimateMeshMemory) is checked before
+/// any mesh-sized array is allocated.
+///
 /// Both paths then merge vertices with identical positions and drop unreferenced vertices, so
 /// the mesh's edges (and MeshStats' manifoldness) do not depend on how the file split vertices
 /// by normals, UVs or sub-meshes. Degenerate triangles are kept (crux gives them meaning), so
 /// assimp's aiProcess_FindDegenerates is NOT used: it would drop or turn them into lines.
 
 #include <crux/mesh/mesh.hpp>
+#include <crux/mesh/mesh_io.hpp>
 
 #include <crux/geometry/predicates.hpp>
 
@@ -28,6 +37,9 @@
 #include <cstddef>
 #include <cerrno>
 #include <charconv>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -37,6 +49,28 @@
 #include <string_view>
 #include <system_error>
 #include <unordered_map>
+
+#if defined(__unix__)
+#define CRUX_POSIX_IMPORT 1
+#include <fcntl.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#else
+#define CRUX_POSIX_IMPORT 0
+#endif
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define CRUX_UNDER_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#define CRUX_UNDER_SANITIZER 1
+#endif
+#endif
+#ifndef CRUX_UNDER_SANITIZER
+#define CRUX_UNDER_SANITIZER 0
+#endif
 
 #if defined(CRUX_HAVE_ASSIMP)
 #include <assimp/Importer.hpp>
@@ -99,30 +133,62 @@ struct OffLine {
   std::vector<std::string_view> tokens;
 };
 
-std::vector<OffLine> offContentLines(std::string_view text) {
-  std::vector<OffLine> lines;
-  std::size_t number = 0, pos = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
-    ++number;
-    if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
-    OffLine out;
-    out.number = number;
-    std::size_t i = 0;
-    while (i < line.size()) {
-      while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-      std::size_t j = i;
-      while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
-      if (j > i) out.tokens.push_back(line.substr(i, j - i));
-      i = j;
+/// Walks the content lines of OFF text one at a time, reusing one token array (a 10M-triangle
+/// file is never split into millions of line objects).
+class OffCursor {
+ public:
+  explicit OffCursor(std::string_view text) : text_(text) {}
+
+  /// The next line with content (comment stripped, at least one token); false at the end.
+  bool next(OffLine& out) {
+    while (pos_ < text_.size()) {
+      std::string_view line = take();
+      out.number = number_;
+      out.tokens.clear();
+      std::size_t i = 0;
+      while (i < line.size()) {
+        while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        std::size_t j = i;
+        while (j < line.size() && !std::isspace(static_cast<unsigned char>(line[j]))) ++j;
+        if (j > i) out.tokens.push_back(line.substr(i, j - i));
+        i = j;
+      }
+      if (!out.tokens.empty()) return true;
     }
-    if (!out.tokens.empty()) lines.push_back(std::move(out));
+    return false;
   }
-  return lines;
-}
+
+  /// How many content lines are left (a scan; does not move the cursor).
+  std::size_t remaining() const {
+    OffCursor copy = *this;
+    std::size_t count = 0;
+    while (copy.pos_ < copy.text_.size()) {
+      const std::string_view line = copy.take();
+      for (const char c : line)
+        if (!std::isspace(static_cast<unsigned char>(c))) {
+          ++count;
+          break;
+        }
+    }
+    return count;
+  }
+
+ private:
+  /// The next raw line without its comment.
+  std::string_view take() {
+    std::size_t end = text_.find('\n', pos_);
+    if (end == std::string_view::npos) end = text_.size();
+    std::string_view line = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    ++number_;
+    if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    return line;
+  }
+
+  std::string_view text_;
+  std::size_t pos_ = 0;
+  std::size_t number_ = 0;
+};
 
 /// Is `token` a Geomview OFF keyword, [ST][C][N][4][n]OFF? (4OFF/nOFF are recognised here so
 /// that they are rejected as unsupported rather than as garbage.)
@@ -195,49 +261,54 @@ void triangulatePolygon(const std::vector<Vec3>& vertices, const std::vector<std
   for (std::size_t i = 1; i + 1 < rest.size(); ++i) out.push_back({rest[0], rest[i], rest[i + 1]});
 }
 
-RawMesh readOff(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) fail(path, "read error");
-  const std::string text = buffer.str();
-  const std::vector<OffLine> lines = offContentLines(text);
-  if (lines.empty()) fail(path, "OFF file has no content (only comments or whitespace)");
+RawMesh readOff(const std::string& path, std::size_t memoryLimitBytes) {
+  // One read into one buffer of the file's size (a stringstream would hold the text twice).
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) fail(path, "cannot be opened for reading");
+  const std::streamoff size = in.tellg();
+  if (size < 0) fail(path, "read error");
+  std::string text(std::size_t(size), '\0');
+  in.seekg(0);
+  in.read(text.data(), size);
+  if (in.gcount() != size) fail(path, "read error (the file changed while it was read?)");
+  OffCursor cursor(text);
+  OffLine first;
+  if (!cursor.next(first)) fail(path, "OFF file has no content (only comments or whitespace)");
 
   auto where = [&](const OffLine& line) { return "line " + std::to_string(line.number) + ": "; };
-  std::size_t countLine = 0;  // index of the content line holding "nv nf [ne]"
-  std::vector<std::string_view> counts = lines[0].tokens;
+  OffLine countLine = first;  // the content line holding "nv nf [ne]"
+  std::vector<std::string_view> counts = first.tokens;
   if (isOffKeyword(counts[0])) {  // the keyword is optional in the OFF specification
     const std::string_view keyword = counts[0];
     if (keyword.find('4') != std::string_view::npos || keyword.find('n') != std::string_view::npos)
-      fail(path, where(lines[0]) + "'" + std::string(keyword) + "' (4-D or n-D OFF) is not supported");
+      fail(path, where(first) + "'" + std::string(keyword) + "' (4-D or n-D OFF) is not supported");
     counts.erase(counts.begin());
-    if (!counts.empty() && counts[0] == "BINARY") fail(path, where(lines[0]) + "binary OFF is not supported");
+    if (!counts.empty() && counts[0] == "BINARY") fail(path, where(first) + "binary OFF is not supported");
     if (counts.empty()) {
-      if (lines.size() < 2) fail(path, where(lines[0]) + "OFF keyword without vertex and face counts");
-      countLine = 1;
-      counts = lines[1].tokens;
+      if (!cursor.next(countLine)) fail(path, where(first) + "OFF keyword without vertex and face counts");
+      counts = countLine.tokens;
     }
   }
-  std::size_t next = countLine + 1;  // next unread content line
   std::uint64_t nv = 0, nf = 0, ne = 0;
   if (counts.size() < 2 || counts.size() > 3 || !parseInteger(counts[0], nv) || !parseInteger(counts[1], nf) ||
       (counts.size() == 3 && !parseInteger(counts[2], ne)))
-    fail(path,
-         where(lines[countLine]) + "expected the OFF header counts 'vertices faces [edges]' (non-negative integers)");
+    fail(path, where(countLine) + "expected the OFF header counts 'vertices faces [edges]' (non-negative integers)");
   if (nv > kMaxMeshElements || nf > kMaxMeshElements)
-    fail(path, where(lines[countLine]) + "header declares " + std::to_string(nv) + " vertices and " +
-                   std::to_string(nf) + " faces; at most " + std::to_string(kMaxMeshElements) +
-                   " of each are supported");
-  const std::size_t available = lines.size() - next;
+    fail(path, where(countLine) + "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                   " faces; at most " + std::to_string(kMaxMeshElements) + " of each are supported");
+  const std::size_t available = cursor.remaining();
   if (nv + nf > available)
-    fail(path, where(lines[countLine]) + "header declares " + std::to_string(nv) + " vertices and " +
-                   std::to_string(nf) + " faces, but only " + std::to_string(available) + " lines follow");
+    fail(path, where(countLine) + "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                   " faces, but only " + std::to_string(available) + " lines follow");
+  // Before the arrays are allocated: a face is at least one triangle (polygons are checked
+  // again once triangulated, in loadMesh).
+  requireMeshMemory(std::size_t(nv), std::size_t(nf), memoryLimitBytes, path);
 
   RawMesh raw;
   raw.vertices.resize(nv);
+  OffLine line;
   for (std::size_t v = 0; v < nv; ++v) {
-    const OffLine& line = lines[next++];
+    cursor.next(line);  // exists: counted above
     if (line.tokens.size() < 3)
       fail(path, where(line) + "vertex " + std::to_string(v) + " has " + std::to_string(line.tokens.size()) +
                      " values, expected x y z");
@@ -251,7 +322,7 @@ RawMesh readOff(const std::string& path) {
   raw.triangles.reserve(nf);
   std::vector<std::uint32_t> poly;
   for (std::size_t f = 0; f < nf; ++f) {
-    const OffLine& line = lines[next++];
+    cursor.next(line);
     const std::string face = "face " + std::to_string(f);
     std::uint64_t k = 0;
     if (!parseInteger(line.tokens[0], k) || k == 0)
@@ -277,9 +348,8 @@ RawMesh readOff(const std::string& path) {
       triangulatePolygon(raw.vertices, poly, raw.triangles);
     }
   }
-  if (next < lines.size())
-    fail(path,
-         where(lines[next]) + "unexpected content after the " + std::to_string(nf) + " faces the header declares");
+  if (cursor.next(line))
+    fail(path, where(line) + "unexpected content after the " + std::to_string(nf) + " faces the header declares");
   return raw;
 }
 
@@ -291,8 +361,9 @@ bool isOffFile(const std::string& path) {
   std::string head(4096, '\0');
   in.read(head.data(), std::streamsize(head.size()));
   head.resize(std::size_t(in.gcount()));
-  const std::vector<OffLine> lines = offContentLines(head);
-  return !lines.empty() && isOffKeyword(lines[0].tokens[0]);
+  OffCursor cursor(head);
+  OffLine first;
+  return cursor.next(first) && isOffKeyword(first.tokens[0]);
 }
 
 // ---- assimp ---------------------------------------------------------------------------------
@@ -355,51 +426,287 @@ RawMesh readWithAssimp(const std::string& path) {
 }
 #endif
 
-// ---- common ---------------------------------------------------------------------------------
+// ---- assimp in a child process ----------------------------------------------------------------
 
-struct PositionHash {
-  std::size_t operator()(const std::array<Real, 3>& p) const {
-    std::size_t h = 0;
-    for (const Real x : p) h = h * 0x9E3779B97F4A7C15ull ^ std::hash<Real>()(x);
-    return h;
-  }
+#if defined(CRUX_HAVE_ASSIMP) && CRUX_POSIX_IMPORT
+/// The child's answer on the pipe: a header, then the vertex and triangle arrays (same binary,
+/// so the parent reads them as written), or the header and an error message.
+struct ImportHeader {
+  std::uint64_t ok = 0;  ///< 1: arrays follow; 0: `messageBytes` of message follow
+  std::uint64_t vertices = 0, triangles = 0, skipped = 0, messageBytes = 0;
 };
 
+bool writeAll(int fd, const void* data, std::size_t size) {
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, p, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    p += n;
+    size -= std::size_t(n);
+  }
+  return true;
+}
+
+/// Runs in the forked child: imports, writes the answer, and leaves with _exit (no atexit
+/// handlers, no leak check of assimp's leaks, nothing of the parent's state flushed twice).
+[[noreturn]] void importChild(const std::string& path, int fd, std::size_t memoryLimitBytes) {
+  // A crash must kill the child plainly, not run the parent's handlers (a sanitizer's or
+  // libFuzzer's would report the parent's input as a crash).
+  for (const int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGTRAP}) ::signal(sig, SIG_DFL);
+  ::signal(SIGPIPE, SIG_IGN);
+#if !CRUX_UNDER_SANITIZER  // sanitizers reserve terabytes of address space: RLIMIT_AS would break them
+  if (memoryLimitBytes != 0) {
+    std::size_t size = 0;
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+      if (line.rfind("VmSize:", 0) == 0) size = std::size_t(std::stoull(line.substr(7))) * 1024;
+    const rlimit limit{rlim_t(size + memoryLimitBytes), rlim_t(size + memoryLimitBytes)};
+    ::setrlimit(RLIMIT_AS, &limit);
+  }
+#else
+  (void)memoryLimitBytes;
+#endif
+  ImportHeader header;
+  std::string message;
+  RawMesh raw;
+  try {
+    raw = readWithAssimp(path);
+    header.ok = 1;
+  } catch (const InvalidInput& e) {
+    message = e.what();
+  } catch (const std::bad_alloc&) {
+    message = path + ": assimp ran out of memory importing the file";
+  } catch (const std::exception& e) {
+    message = path + ": assimp failed: " + e.what();
+  } catch (...) {
+    message = path + ": assimp failed with an unknown exception";
+  }
+  header.vertices = raw.vertices.size();
+  header.triangles = raw.triangles.size();
+  header.skipped = raw.skippedPrimitives;
+  header.messageBytes = message.size();
+  bool ok = writeAll(fd, &header, sizeof header);
+  if (ok && header.ok) {
+    ok = writeAll(fd, raw.vertices.data(), raw.vertices.size() * sizeof(Vec3)) &&
+         writeAll(fd, raw.triangles.data(), raw.triangles.size() * sizeof(TriangleIndices));
+  } else if (ok) {
+    ok = writeAll(fd, message.data(), message.size());
+  }
+  ::_exit(ok ? 0 : 3);
+}
+
+const char* signalName(int sig) {
+  switch (sig) {
+    case SIGSEGV: return "SIGSEGV";
+    case SIGBUS: return "SIGBUS";
+    case SIGILL: return "SIGILL";
+    case SIGFPE: return "SIGFPE";
+    case SIGABRT: return "SIGABRT (an assertion or abort in assimp)";
+    case SIGKILL: return "SIGKILL (out of memory?)";
+    default: return "a signal";
+  }
+}
+
+/// The parent's side: reads the child's answer within the deadline, then reaps the child.
+class ChildImport {
+ public:
+  ChildImport(const std::string& path, pid_t pid, int fd, double seconds)
+      : path_(path), pid_(pid), fd_(fd), seconds_(seconds),
+        deadline_(std::chrono::steady_clock::now() +
+                  std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds))) {}
+  ChildImport(const ChildImport&) = delete;
+  ChildImport& operator=(const ChildImport&) = delete;
+  ~ChildImport() {  // on every path (including exceptions): no zombie, no leaked descriptor
+    if (fd_ >= 0) ::close(fd_);
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      int status = 0;
+      while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+      }
+    }
+  }
+
+  /// Reads exactly `size` bytes; false at end of file (the child died or closed early).
+  bool read(void* data, std::size_t size) {
+    char* p = static_cast<char*>(data);
+    while (size > 0) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline_ - std::chrono::steady_clock::now());
+      if (left.count() <= 0) timeout();
+      pollfd pfd{fd_, POLLIN, 0};
+      const int ready = ::poll(&pfd, 1, int(std::min<long long>(left.count(), 1000)));
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready < 0) fail(path_, std::string("poll on the import pipe failed: ") + std::strerror(errno));
+      if (ready == 0) continue;
+      const ssize_t n = ::read(fd_, p, size);
+      if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+      if (n < 0) fail(path_, std::string("reading the import pipe failed: ") + std::strerror(errno));
+      if (n == 0) return false;
+      p += n;
+      size -= std::size_t(n);
+    }
+    return true;
+  }
+
+  /// Waits for the child to exit (it has written everything or died) and throws if it did
+  /// not exit cleanly.
+  void finish() {
+    int status = 0;
+    while (::waitpid(pid_, &status, 0) < 0) {
+      if (errno != EINTR) fail(path_, std::string("waiting for the import process failed: ") + std::strerror(errno));
+    }
+    pid_ = -1;
+    if (WIFSIGNALED(status))
+      fail(path_, std::string("assimp crashed importing the file (the import process died of ") +
+                      signalName(WTERMSIG(status)) + "); the file is malformed or not supported");
+    // A non-zero exit: a sanitizer's report (it exits instead of re-raising the signal) or a
+    // failed write of the answer.
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+      fail(path_, "assimp crashed importing the file (the import process exited with status " +
+                      std::to_string(WEXITSTATUS(status)) + "); the file is malformed or not supported");
+  }
+
+  /// The child died before answering: report how.
+  [[noreturn]] void died() {
+    finish();
+    fail(path_, "the import process ended without an answer");
+  }
+
+ private:
+  [[noreturn]] void timeout() {
+    std::ostringstream os;
+    os << "assimp did not finish importing the file within " << seconds_
+       << " s (LoadMeshOptions::timeLimitSeconds); the import was stopped";
+    fail(path_, os.str());
+  }
+
+  const std::string& path_;
+  pid_t pid_;
+  int fd_;
+  double seconds_;
+  std::chrono::steady_clock::time_point deadline_;
+};
+
+RawMesh readWithAssimpInChild(const std::string& path, const LoadMeshOptions& options) {
+  double seconds = options.timeLimitSeconds;
+  if (!(seconds > 0)) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    seconds = 10 + 2 * (ec ? 0 : double(size) / 1e6);
+  }
+  seconds = std::min(seconds, 1e6);  // about 11 days: keeps the deadline representable
+  // The child's address space grows by at most the budget the parent checks meshes against
+  // (at least 256 MB: assimp's own working set is not the mesh's, and a tiny budget must be
+  // refused by the parent's estimate, with its clear message, not by a failed allocation).
+  std::size_t memoryBudget = options.memoryLimitBytes != 0 ? options.memoryLimitBytes : availableMemoryBytes();
+  if (memoryBudget != 0) memoryBudget = std::max<std::size_t>(memoryBudget, 256'000'000);
+  int fds[2];
+  if (::pipe2(fds, O_CLOEXEC) != 0) fail(path, std::string("cannot create the import pipe: ") + std::strerror(errno));
+  std::fflush(nullptr);  // nothing buffered is written twice
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    const int error = errno;
+    ::close(fds[0]);
+    ::close(fds[1]);
+    fail(path, std::string("cannot start the import process (fork): ") + std::strerror(error));
+  }
+  if (pid == 0) {
+    ::close(fds[0]);
+    importChild(path, fds[1], memoryBudget);
+  }
+  ::close(fds[1]);
+  ChildImport child(path, pid, fds[0], seconds);
+  ImportHeader header;
+  if (!child.read(&header, sizeof header)) child.died();
+  RawMesh raw;
+  if (!header.ok) {
+    if (header.messageBytes > (1u << 20)) child.died();
+    std::string message(header.messageBytes, '\0');
+    if (!child.read(message.data(), message.size())) child.died();
+    child.finish();
+    throw InvalidInput(message);
+  }
+  if (header.vertices > kMaxMeshElements || header.triangles > kMaxMeshElements)
+    fail(path, "more than " + std::to_string(kMaxMeshElements) + " vertices or triangles");
+  requireMeshMemory(std::size_t(header.vertices), std::size_t(header.triangles), options.memoryLimitBytes, path);
+  raw.vertices.resize(header.vertices);
+  raw.triangles.resize(header.triangles);
+  raw.skippedPrimitives = header.skipped;
+  if (!child.read(raw.vertices.data(), raw.vertices.size() * sizeof(Vec3)) ||
+      !child.read(raw.triangles.data(), raw.triangles.size() * sizeof(TriangleIndices)))
+    child.died();
+  child.finish();
+  return raw;
+}
+#endif
+
+// ---- common ---------------------------------------------------------------------------------
+
 /// Merges vertices with identical positions (+0 == -0) and drops unreferenced ones, keeping
-/// the first occurrence's order.
+/// the first occurrence's order. By sorting the used vertices' indices by position (ties by
+/// index), so each run of equal positions is represented by its first index: O(V log V) with
+/// 12 bytes per vertex of scratch (a hash map took 40+ bytes per vertex and, at 5M vertices,
+/// most of a 10M-triangle load in cache misses).
 void mergeIdenticalVertices(RawMesh& raw) {
-  std::vector<char> used(raw.vertices.size(), 0);
+  const std::size_t n = raw.vertices.size();
+  std::vector<std::uint32_t> rep(n, 0);  // first: used flags; then each vertex's representative
   for (const TriangleIndices& t : raw.triangles)
-    for (const std::uint32_t i : t) used[i] = 1;
-  std::unordered_map<std::array<Real, 3>, std::uint32_t, PositionHash> index;
-  index.reserve(raw.vertices.size());
-  std::vector<std::uint32_t> remap(raw.vertices.size(), 0);
+    for (const std::uint32_t i : t) rep[i] = 1;
+  std::vector<std::uint32_t> order;
+  for (std::size_t i = 0; i < n; ++i)
+    if (rep[i]) order.push_back(std::uint32_t(i));
+  auto key = [&](std::uint32_t i, int k) {
+    const Real x = raw.vertices[i][k];
+    return x == 0 ? Real(0) : x;  // -0 sorts and compares as +0
+  };
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    for (int k = 0; k < 3; ++k) {
+      const Real ka = key(a, k), kb = key(b, k);
+      if (ka != kb) return ka < kb;
+    }
+    return a < b;
+  });
+  for (std::size_t j = 0; j < order.size(); ++j) {
+    const std::uint32_t i = order[j];
+    const bool sameAsPrevious = j > 0 && key(order[j - 1], 0) == key(i, 0) && key(order[j - 1], 1) == key(i, 1) &&
+                                key(order[j - 1], 2) == key(i, 2);
+    rep[i] = sameAsPrevious ? rep[order[j - 1]] : i;
+  }
+  order = {};
+  std::vector<std::uint32_t> newIndex(n, 0);
   std::vector<Vec3> merged;
-  merged.reserve(raw.vertices.size());
-  for (std::size_t i = 0; i < raw.vertices.size(); ++i) {
-    if (!used[i]) continue;
-    const Vec3& p = raw.vertices[i];
-    const std::array<Real, 3> key = {p.x() == 0 ? Real(0) : p.x(), p.y() == 0 ? Real(0) : p.y(),
-                                     p.z() == 0 ? Real(0) : p.z()};
-    const auto [it, inserted] = index.emplace(key, std::uint32_t(merged.size()));
-    if (inserted) merged.push_back(p);
-    remap[i] = it->second;
+  std::size_t count = 0;
+  for (const TriangleIndices& t : raw.triangles)  // rep[] is meaningless for unused vertices
+    for (const std::uint32_t i : t) newIndex[i] = 1;
+  for (std::size_t i = 0; i < n; ++i)
+    if (newIndex[i] && rep[i] == i) ++count;
+  merged.reserve(count);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!newIndex[i] || rep[i] != i) continue;
+    newIndex[i] = std::uint32_t(merged.size());
+    merged.push_back(raw.vertices[i]);
   }
   for (TriangleIndices& t : raw.triangles)
-    for (std::uint32_t& i : t) i = remap[i];
+    for (std::uint32_t& i : t) i = newIndex[rep[i]];
   raw.vertices = std::move(merged);
 }
 
 }  // namespace
 
-Mesh loadMesh(const std::string& path, const BvhBuildOptions& options) {
+Mesh loadMesh(const std::string& path, const LoadMeshOptions& options) {
   requireReadableFile(path);
   RawMesh raw;
   if (isOffFile(path)) {
-    raw = readOff(path);
+    raw = readOff(path, options.memoryLimitBytes);
   } else {
 #if defined(CRUX_HAVE_ASSIMP)
-    raw = readWithAssimp(path);
+#if CRUX_POSIX_IMPORT
+    if (options.isolation == MeshImportIsolation::Subprocess)
+      raw = readWithAssimpInChild(path, options);
+    else
+#endif
+      raw = readWithAssimp(path);
 #else
     fail(path, "crux was built without assimp, so only OFF files can be loaded");
 #endif
@@ -408,8 +715,18 @@ Mesh loadMesh(const std::string& path, const BvhBuildOptions& options) {
     fail(path, raw.skippedPrimitives > 0
                    ? "no triangles (only " + std::to_string(raw.skippedPrimitives) + " points/lines, which are ignored)"
                    : std::string("no triangles"));
+  for (const TriangleIndices& t : raw.triangles)  // the child's arrays are checked again here
+    for (const std::uint32_t i : t)
+      if (i >= raw.vertices.size()) fail(path, "a triangle has vertex index " + std::to_string(i) + ", out of range");
   mergeIdenticalVertices(raw);
-  return Mesh(std::move(raw.vertices), std::move(raw.triangles), path, options);
+  requireMeshMemory(raw.vertices.size(), raw.triangles.size(), options.memoryLimitBytes, path);
+  return Mesh(std::move(raw.vertices), std::move(raw.triangles), path, options.bvh);
+}
+
+Mesh loadMesh(const std::string& path, const BvhBuildOptions& options) {
+  LoadMeshOptions full;
+  full.bvh = options;
+  return loadMesh(path, full);
 }
 
 }  // namespace crux

@@ -1,5 +1,7 @@
 #include <crux/scene/scene.hpp>
 
+#include <sstream>
+
 #include "box_tests.hpp"
 
 #include <algorithm>
@@ -97,22 +99,60 @@ Scene::Scene(std::unique_ptr<BroadPhase> broadPhase) : broadPhase_(std::move(bro
   if (broadPhase_->size() != 0) throw InvalidInput("Scene: the broad phase is not empty");
 }
 
+namespace {
+
+/// The broad-phase box of model `id`; throws InvalidInput when the placement carries the mesh
+/// beyond the largest Real (docs/limits.md), before anything is stored.
+Aabb checkedSceneBounds(const ModelHierarchy& hierarchy, ModelId id) {
+  const Aabb box = sceneBounds(hierarchy.placed(id));
+  if (!box.min.allFinite() || !box.max.allFinite()) {
+    std::ostringstream os;
+    os.precision(17);
+    const Vec3& t = hierarchy.world(id).translation;
+    os << "Scene: model " << id << " placed beyond the representable range: its world bounds overflow (world "
+       << "translation [" << t.x() << ", " << t.y() << ", " << t.z() << "]); the change was not applied";
+    throw InvalidInput(os.str());
+  }
+  return box;
+}
+
+}  // namespace
+
 void Scene::upsert(ModelId id) {
-  const Aabb box = sceneBounds(hierarchy_.placed(id));
+  const Aabb box = checkedSceneBounds(hierarchy_, id);
   if (broadPhase_->contains(id)) broadPhase_->update(id, box);
   else broadPhase_->insert(id, box);
 }
 
 void Scene::sync() {
-  for (const ModelId id : hierarchy_.takeMoved()) {
-    if (hierarchy_.contains(id)) upsert(id);
-    else if (broadPhase_->contains(id)) broadPhase_->remove(id);
+  // Every box first, so that an overflowing placement throws before the broad phase changes
+  // (the callers then restore the hierarchy).
+  const std::vector<ModelId> moved = hierarchy_.takeMoved();
+  std::vector<Aabb> boxes;
+  boxes.reserve(moved.size());
+  for (const ModelId id : moved)
+    if (hierarchy_.contains(id)) boxes.push_back(checkedSceneBounds(hierarchy_, id));
+  std::size_t next = 0;
+  for (const ModelId id : moved) {
+    if (hierarchy_.contains(id)) {
+      const Aabb& box = boxes[next++];
+      if (broadPhase_->contains(id)) broadPhase_->update(id, box);
+      else broadPhase_->insert(id, box);
+    } else if (broadPhase_->contains(id)) {
+      broadPhase_->remove(id);
+    }
   }
 }
 
 ModelId Scene::add(std::shared_ptr<const Mesh> mesh, const Transform& local, ModelId parent) {
   const ModelId id = hierarchy_.add(std::move(mesh), local, parent);
-  upsert(id);
+  try {
+    upsert(id);
+  } catch (const InvalidInput&) {  // not added: hierarchy and broad phase stay in step
+    hierarchy_.remove(id);
+    (void)hierarchy_.takeMoved();
+    throw;
+  }
   sync();
   return id;
 }
@@ -124,16 +164,36 @@ void Scene::remove(ModelId id) {
 }
 
 void Scene::setTransform(ModelId id, const Transform& local) {
+  const Transform old = hierarchy_.local(id);
   hierarchy_.setLocal(id, local);
-  sync();
+  try {
+    sync();
+  } catch (const InvalidInput&) {  // a descendant overflowed: undo (same inputs, same world transforms)
+    hierarchy_.setLocal(id, old);
+    sync();
+    throw;
+  }
 }
 
 void Scene::setTransforms(const std::vector<std::pair<ModelId, Transform>>& moves) {
   for (const auto& move : moves)
     if (!hierarchy_.contains(move.first))
       throw InvalidInput("Scene::setTransforms: no model with id " + std::to_string(move.first));
-  for (const auto& [id, local] : moves) hierarchy_.setLocal(id, local);
-  sync();
+  std::vector<Transform> old;
+  old.reserve(moves.size());
+  std::size_t applied = 0;
+  try {
+    for (const auto& [id, local] : moves) {
+      old.push_back(hierarchy_.local(id));
+      hierarchy_.setLocal(id, local);
+      ++applied;
+    }
+    sync();
+  } catch (const InvalidInput&) {  // an invalid transform or an overflow: undo in reverse order
+    for (std::size_t k = applied; k-- > 0;) hierarchy_.setLocal(moves[k].first, old[k]);
+    sync();
+    throw;
+  }
 }
 
 void Scene::setParent(ModelId id, ModelId parent) {

@@ -1,6 +1,11 @@
 /// @file fuzz_load_mesh.cpp  libFuzzer target fuzz_load_mesh: arbitrary bytes into
 /// crux::loadMesh (crux's OFF reader, assimp for every other format).
 ///
+/// assimp runs in a child process (MeshImportIsolation::Subprocess, limited here to 3 s and
+/// 1 GB so that the fuzzer's own -timeout and -rss_limit_mb never fire on assimp's behalf):
+/// its crashes and hangs become InvalidInput. With CRUX_FUZZ_IN_PROCESS=1 the import runs in
+/// the fuzzer's process instead, to hunt for new assimp crashes (docs/fuzzing.md).
+///
 /// The first byte chooses the file extension (kExtensions), the rest is written to a temporary
 /// file of that name and loaded. Checked: no crash, hang or UB; loadMesh either throws
 /// crux::InvalidInput (any other exception escapes and is a crash) or returns a mesh whose
@@ -9,10 +14,11 @@
 #include "fuzz_input.hpp"
 
 #include <crux/error.hpp>
-#include <crux/mesh/mesh.hpp>
+#include <crux/mesh/mesh_io.hpp>
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
@@ -43,8 +49,16 @@ void run(const std::uint8_t* data, std::size_t size) {
     file.write(reinterpret_cast<const char*>(data + 1), std::streamsize(size - 1));
     if (!file) fail("cannot write " + path);
   }
+  static const bool inProcess = [] {
+    const char* env = std::getenv("CRUX_FUZZ_IN_PROCESS");
+    return env && *env && *env != '0';
+  }();
+  LoadMeshOptions options;
+  options.isolation = inProcess ? MeshImportIsolation::InProcess : MeshImportIsolation::Subprocess;
+  options.timeLimitSeconds = 3;
+  options.memoryLimitBytes = 1'000'000'000;
   try {
-    const Mesh mesh = loadMesh(path);
+    const Mesh mesh = loadMesh(path, options);
     const auto& vertices = mesh.vertices();
     for (const Vec3& v : vertices)
       if (!v.allFinite()) fail("loadMesh returned a non-finite vertex from " + path);
