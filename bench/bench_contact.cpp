@@ -1,20 +1,30 @@
 /// @file bench_contact.cpp  crux's convex narrow phase (GJK distance, EPA depth, contact manifold)
 /// against libccd (ccdGJKPenetration, ccdMPRPenetration, ccdGJKIntersect) and FCL's
-/// fcl::distance, on the same seeded pairs: box–box, capsule–box, hull–hull.
+/// fcl::distance, on the same seeded pairs: box–box, capsule–box, hull–hull; and mesh–mesh
+/// distance (mesh_distance.hpp) against fcl::distance on BVHModel<OBBRSSd> with nearest points:
+/// a real mesh (bunny00) and a rotated copy at several separations (Bullet has no mesh–mesh
+/// distance: btGjkPairDetector is convex-only, so it is reported unsupported).
 ///
 /// Each workload first compares answers (crux distance vs FCL distance on separated pairs, crux
-/// depth vs libccd EPA depth on overlapping pairs) and prints the number of disagreements; then
-/// times every engine (median of 5 runs, each repeating the pair set for ~0.2 s) and prints
-/// ns/query and the ratio peer / crux. Options: --quick.
+/// depth vs libccd EPA depth on overlapping pairs, crux mesh distance vs FCL) and prints the
+/// number of disagreements; then times every engine (median of 5 runs, each repeating the pair
+/// set for ~0.2 s) and prints ns/query and the ratio peer / crux.
+/// Options: --quick, --json FILE (every figure, schema in docs/bench.md), --mesh PATH, --mesh-only
+/// (skip the convex workloads).
 
 #include <crux/geometry/contact.hpp>
+#include <crux/mesh/mesh_distance.hpp>
+
+#include "bench_output.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -28,10 +38,15 @@
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
 #include <fcl/geometry/shape/convex.h>
+#include <fcl/geometry/bvh/BVH_model.h>
+#include <fcl/math/bv/OBBRSS.h>
 #endif
 
 #ifndef CRUX_BENCH_BUILD_TYPE
 #define CRUX_BENCH_BUILD_TYPE "unknown"
+#endif
+#ifndef CRUX_BENCH_DEFAULT_MESH
+#define CRUX_BENCH_DEFAULT_MESH "data/meshes/bunny00.off"
 #endif
 
 namespace {
@@ -54,6 +69,40 @@ struct Workload {
 
 double seconds = 0.2;
 int runs = 5;
+bool quick = false;
+
+/// Per-run seconds/query of the last timeIt (for --json).
+std::vector<double> lastRuns;
+std::size_t lastQueries = 0;
+
+/// One engine's figures in a workload (JSON "engines" entry).
+struct EngineRow {
+  std::string name, config;
+  std::vector<double> runs;  // seconds per query, one per run
+  double median = 0;         // seconds per query
+  std::string agreement = "ref", detail;
+};
+/// One query kind on one pair set (JSON "workloads" entry); engines.front() is crux.
+struct WorkloadRow {
+  std::string key, title;
+  std::size_t queries = 0;
+  std::vector<std::string> notes;
+  std::vector<EngineRow> engines;
+};
+std::vector<WorkloadRow> rows;
+
+/// Starts a JSON workload row.
+WorkloadRow& beginRow(const std::string& key, const std::string& title, std::size_t queries) {
+  rows.push_back({key, title, queries, {}, {}});
+  return rows.back();
+}
+/// Adds the engine just timed (lastRuns) to the current row.
+void addEngine(const std::string& name, const std::string& config, double ns, const std::string& agreement = "ref",
+               const std::string& detail = "") {
+  EngineRow e{name, config, {}, ns * 1e-9, agreement, detail};
+  for (double r : lastRuns) e.runs.push_back(r * 1e-9);
+  rows.back().engines.push_back(e);
+}
 
 /// Median ns per query of `body` (one pass over n queries), repeated to last `seconds`.
 double timeIt(std::size_t n, const std::function<double()>& body) {
@@ -70,6 +119,8 @@ double timeIt(std::size_t n, const std::function<double()>& body) {
     } while (elapsed < seconds);
     samples.push_back(elapsed * 1e9 / double(reps * n));
   }
+  lastRuns = samples;
+  lastQueries = n;
   std::sort(samples.begin(), samples.end());
   return samples[samples.size() / 2];
 }
@@ -156,6 +207,9 @@ void run(Workload& w) {
   }
   std::printf("check vs fcl::distance: %d of %zu differ by > 1e-4 (worst %.3g)\n", fclDisagree, w.separated.size(),
               fclWorst);
+  const std::string fclAgreement = fclDisagree == 0 ? "agree" : "DISAGREE";
+  const std::string fclDetail = std::to_string(fclDisagree) + " of " + std::to_string(w.separated.size()) +
+                                " differ by > 1e-4, worst " + bench::jsonNumber(fclWorst);
 #endif
 #if CRUX_HAVE_CCD_ORACLE
   int ccdDisagree = 0, ccdFail = 0;
@@ -173,14 +227,24 @@ void run(Workload& w) {
   }
   std::printf("check vs libccd EPA depth: %d of %zu differ by > 1e-4 (worst %.3g), libccd failures %d\n", ccdDisagree,
               w.overlapping.size(), ccdWorst, ccdFail);
+  const std::string ccdAgreement = ccdDisagree == 0 ? "agree" : "DISAGREE";
+  const std::string ccdDetail = std::to_string(ccdDisagree) + " of " + std::to_string(w.overlapping.size()) +
+                                " EPA depths differ by > 1e-4, worst " + bench::jsonNumber(ccdWorst) +
+                                ", libccd failures " + std::to_string(ccdFail);
 #endif
   // ---- timings.
   std::printf("%-34s %12s %10s\n", "query", "ns/query", "peer/crux");
-  auto report = [](const char* what, double ns, double base) {
-    if (base > 0)
+  // Prints a row; a crux row (base 0) starts a JSON workload, a peer row joins it.
+  auto report = [&](const char* what, double ns, double base, const std::string& agreement = "ref",
+                    const std::string& detail = "") {
+    if (base > 0) {
       std::printf("%-34s %12.1f %10.2f\n", what, ns, ns / base);
-    else
+      addEngine(what, "", ns, agreement, detail);
+    } else {
       std::printf("%-34s %12.1f %10s\n", what, ns, "-");
+      beginRow(w.name + ": " + what, w.name + ": " + what, lastQueries);
+      addEngine(what, sizeof(Real) == 8 ? "double" : "float", ns);
+    }
   };
   const double tDist = timeIt(w.separated.size(), [&] {
     double s = 0;
@@ -200,7 +264,7 @@ void run(Workload& w) {
     }
     return s;
   });
-  report("fcl::distance (nearest points)", tFcl, tDist);
+  report("fcl::distance (nearest points)", tFcl, tDist, fclAgreement, fclDetail);
 #endif
   const double tEpa = timeIt(w.overlapping.size(), [&] {
     double s = 0;
@@ -215,14 +279,14 @@ void run(Workload& w) {
              s += oracle_ccd::gjkPenetration(S[std::size_t(p.a)], p.ta, S[std::size_t(p.b)], p.tb).depth;
            return s;
          }),
-         tEpa);
+         tEpa, ccdAgreement, ccdDetail);
   report("libccd ccdMPRPenetration", timeIt(w.overlapping.size(), [&] {
            double s = 0;
            for (const Pair& p : w.overlapping)
              s += oracle_ccd::mprPenetration(S[std::size_t(p.a)], p.ta, S[std::size_t(p.b)], p.tb).depth;
            return s;
          }),
-         tEpa);
+         tEpa, "differs", "MPR is not a minimum-depth method");
 #endif
   const double tMan = timeIt(w.overlapping.size(), [&] {
     double s = 0;
@@ -252,16 +316,203 @@ void run(Workload& w) {
 #endif
 }
 
+
+// ---- mesh–mesh distance ----------------------------------------------------------------------
+
+/// A placement of the copy b relative to a (a at the identity).
+struct MeshPlacement {
+  Transform tb;
+  double crux = 0;  // crux's distance (setup answer)
+};
+
+/// Placements of a rotated copy at gap ≈ target·R (R: bounding radius), found by bisection on
+/// the translation along a random direction; target <= 0 gives crossing placements.
+std::vector<MeshPlacement> placeCopies(const Mesh& m, double target, int count, std::mt19937_64& rng) {
+  const Aabb box = m.bounds();
+  const double R = 0.5 * double((box.max - box.min).norm());
+  std::normal_distribution<double> g;
+  std::vector<MeshPlacement> out;
+  while (int(out.size()) < count) {
+    Transform tb;
+    tb.rotation = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().cast<Real>();
+    const Eigen::Vector3d dir = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    auto at = [&](double lambda) {
+      Transform t = tb;
+      t.translation = (box.center().cast<double>() - (tb.rotation.cast<double>() * box.center().cast<double>()) +
+                       dir * lambda).cast<Real>();
+      return t;
+    };
+    if (target <= 0) {
+      tb = at(0.5 * R);  // centres half a radius apart: crossing surfaces
+    } else {
+      double lo = 0, hi = 4 * R + target * R;
+      for (int it = 0; it < 24; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        (double(distance(m, Transform::identity(), m, at(mid)).distance) < target * R ? lo : hi) = mid;
+      }
+      tb = at(hi);
+    }
+    out.push_back({tb, double(distance(m, Transform::identity(), m, tb).distance)});
+  }
+  return out;
+}
+
+#if CRUX_BENCH_HAVE_FCL
+using FclMesh = fcl::BVHModel<fcl::OBBRSSd>;
+std::shared_ptr<FclMesh> fclMesh(const Mesh& m) {
+  std::vector<fcl::Vector3d> points;
+  for (const Vec3& v : m.vertices()) points.push_back(v.cast<double>());
+  std::vector<fcl::Triangle> tris;
+  for (const TriangleIndices& t : m.triangles()) tris.emplace_back(t[0], t[1], t[2]);
+  auto model = std::make_shared<FclMesh>();
+  model->beginModel(int(tris.size()), int(points.size()));
+  model->addSubModel(points, tris);
+  model->endModel();
+  return model;
+}
+#endif
+
+void runMeshDistance(const std::string& path, int perSeparation) {
+  std::printf("\n== mesh-mesh distance: %s vs a rotated copy\n", path.c_str());
+  const Mesh m = loadMesh(path);
+  const Aabb box = m.bounds();
+  const double R = 0.5 * double((box.max - box.min).norm());
+  std::printf("%zu triangles, bounding radius R = %.4g; Bullet: unsupported (btGjkPairDetector is convex-only, "
+              "no mesh-mesh distance)\n",
+              m.triangleCount(), R);
+  const auto a0 = std::chrono::steady_clock::now();
+  const MeshDistanceAccel accel(m);
+  const double accelSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a0).count();
+  MeshDistanceOptions withAccel;
+  withAccel.accelA = withAccel.accelB = &accel;
+  std::printf("MeshDistanceAccel (oriented boxes per node) built in %.3f s (once per mesh)\n", accelSeconds);
+#if CRUX_BENCH_HAVE_FCL
+  const std::shared_ptr<FclMesh> fm = fclMesh(m);
+#endif
+  std::mt19937_64 rng(7);
+  for (const double target : {0.0, 0.01, 0.1, 0.5}) {
+    const std::vector<MeshPlacement> ps = placeCopies(m, target, perSeparation, rng);
+    char title[128];
+    if (target > 0) std::snprintf(title, sizeof title, "mesh-mesh distance: gap %.2gR", target);
+    else std::snprintf(title, sizeof title, "mesh-mesh distance: crossing");
+    std::printf("-- %s (%zu placements)\n", title, ps.size());
+    std::string agreement = "ref", detail;
+#if CRUX_BENCH_HAVE_FCL
+    int disagree = 0;
+    double worst = 0;
+    for (const MeshPlacement& p : ps) {
+      fcl::DistanceRequestd req(true);
+      fcl::DistanceResultd res;
+      fcl::distance(fm.get(), toFcl(Transform::identity()), fm.get(), toFcl(p.tb), req, res);
+      const double f = std::max(0.0, res.min_distance);
+      const double diff = std::abs(f - p.crux);
+      worst = std::max(worst, diff);
+      if (diff > 1e-6 * p.crux + 64 * double(std::numeric_limits<Real>::epsilon()) * 2 * R) ++disagree;
+    }
+    std::printf("check vs fcl::distance: %d of %zu differ beyond 1e-6 relative + 64 ulps·2R (worst %.3g)\n", disagree,
+                ps.size(), worst);
+    agreement = disagree == 0 ? "agree" : "DISAGREE";
+    detail = std::to_string(disagree) + " of " + std::to_string(ps.size()) + " differ, worst " + bench::jsonNumber(worst);
+#endif
+    std::printf("%-34s %12s %10s\n", "query", "us/query", "peer/crux");
+    const double tc = timeIt(ps.size(), [&] {
+      double s = 0;
+      for (const MeshPlacement& p : ps) s += distance(m, Transform::identity(), m, p.tb).distance;
+      return s;
+    });
+    std::printf("%-34s %12.1f %10s\n", "crux distance (BVH vs BVH)", tc * 1e-3, "-");
+    const std::vector<double> plainRuns = lastRuns;
+    const double ta = timeIt(ps.size(), [&] {
+      double s = 0;
+      for (const MeshPlacement& p : ps) s += distance(m, Transform::identity(), m, p.tb, withAccel).distance;
+      return s;
+    });
+    std::printf("%-34s %12.1f %10.2f\n", "crux distance + MeshDistanceAccel", ta * 1e-3, ta / tc);
+    const std::vector<double> accelRuns = lastRuns;
+    WorkloadRow& row = beginRow(std::string("mesh_distance/") + (target > 0 ? bench::jsonNumber(target) + "R" : "crossing"),
+                                title, ps.size());
+    row.notes.push_back(path + ", " + std::to_string(m.triangleCount()) + " triangles, R = " + bench::jsonNumber(R));
+    row.notes.push_back("bullet: unsupported (btGjkPairDetector is convex-only; no mesh-mesh distance)");
+    row.notes.push_back("crux + MeshDistanceAccel: oriented boxes per BVH node, built once in " +
+                        bench::jsonNumber(accelSeconds) + " s");
+    lastRuns = accelRuns;
+    addEngine("crux distance + MeshDistanceAccel", sizeof(Real) == 8 ? "double" : "float", ta);
+    lastRuns = plainRuns;
+    addEngine("crux distance (BVH vs BVH, no accelerator)", sizeof(Real) == 8 ? "double" : "float", tc, "agree");
+#if CRUX_BENCH_HAVE_FCL
+    const double tf = timeIt(ps.size(), [&] {
+      double s = 0;
+      for (const MeshPlacement& p : ps) {
+        fcl::DistanceRequestd req(true);
+        fcl::DistanceResultd res;
+        fcl::distance(fm.get(), toFcl(Transform::identity()), fm.get(), toFcl(p.tb), req, res);
+        s += res.min_distance;
+      }
+      return s;
+    });
+    std::printf("%-34s %12.1f %10.2f (vs crux + accel %.2f)\n", "fcl::distance (OBBRSS, nearest)", tf * 1e-3, tf / tc,
+                tf / ta);
+    addEngine("fcl::distance (OBBRSS, nearest)", "BVHModel<OBBRSSd>, enable_nearest_points", tf, agreement, detail);
+#endif
+  }
+}
+
+void writeJson(const std::string& path) {
+  std::ofstream out(path);
+  if (!out) {
+    std::fprintf(stderr, "bench_contact: cannot write %s\n", path.c_str());
+    return;
+  }
+  using bench::jsonNumber;
+  using bench::jsonString;
+  out << "{\n  \"bench\": \"bench_contact\",\n  \"quick\": " << (quick ? "true" : "false") << ",\n  \"runs\": " << runs
+      << ",\n  \"seconds_per_run\": " << jsonNumber(seconds) << ",\n  \"reported_clock\": \"wall\",\n  \"info\": {"
+      << "\"build_type\": " << jsonString(CRUX_BENCH_BUILD_TYPE)
+      << ", \"crux_real\": " << jsonString(sizeof(Real) == 8 ? "double" : "float") << "},\n  \"workloads\": [";
+  for (std::size_t wi = 0; wi < rows.size(); ++wi) {
+    const WorkloadRow& w = rows[wi];
+    out << (wi ? "," : "") << "\n    {\"key\": " << jsonString(w.key) << ", \"title\": " << jsonString(w.title)
+        << ", \"unit\": \"query\", \"queries\": " << w.queries << ", \"notes\": [";
+    for (std::size_t i = 0; i < w.notes.size(); ++i) out << (i ? ", " : "") << jsonString(w.notes[i]);
+    out << "], \"engines\": [";
+    const double crux = w.engines.empty() ? 0 : w.engines.front().median;
+    for (std::size_t ei = 0; ei < w.engines.size(); ++ei) {
+      const EngineRow& e = w.engines[ei];
+      out << (ei ? "," : "") << "\n      {\"name\": " << jsonString(e.name) << ", \"config\": " << jsonString(e.config)
+          << ", \"wall_seconds_per_query_runs\": [";
+      for (std::size_t i = 0; i < e.runs.size(); ++i) out << (i ? ", " : "") << jsonNumber(e.runs[i]);
+      out << "], \"wall_seconds_per_query_median\": " << jsonNumber(e.median)
+          << ", \"ratio_to_crux\": " << jsonNumber(crux > 0 ? e.median / crux : NAN)
+          << ", \"agreement\": " << jsonString(e.agreement) << ", \"detail\": " << jsonString(e.detail) << "}";
+    }
+    out << "]}";
+  }
+  out << "\n  ]\n}\n";
+}
 }  // namespace
 
 int main(int argc, char** argv) {
-  int perKind = 1000;
-  for (int i = 1; i < argc; ++i)
+  int perKind = 1000, perSeparation = 8;
+  std::string jsonPath, meshPath = CRUX_BENCH_DEFAULT_MESH;
+  bool meshOnly = false;
+  for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
+      quick = true;
       perKind = 100;
+      perSeparation = 3;
       seconds = 0.05;
       runs = 3;
+    } else if (!std::strcmp(argv[i], "--json") && i + 1 < argc) {
+      jsonPath = argv[++i];
+    } else if (!std::strcmp(argv[i], "--mesh") && i + 1 < argc) {
+      meshPath = argv[++i];
+    } else if (!std::strcmp(argv[i], "--mesh-only")) {
+      meshOnly = true;
+    } else {
+      std::fprintf(stderr, "usage: bench_contact [--quick] [--json FILE] [--mesh PATH] [--mesh-only]\n");
+      return 2;
     }
+  }
   std::printf("bench_contact (%s build, Real = %s)\n", CRUX_BENCH_BUILD_TYPE,
               sizeof(Real) == 8 ? "double" : "float");
 #if !CRUX_HAVE_CCD_ORACLE
@@ -271,6 +522,7 @@ int main(int argc, char** argv) {
   std::printf("FCL not found: its rows are skipped\n");
 #endif
   std::mt19937_64 rng(2026);
+  if (!meshOnly) {
   Workload boxBox{"box-box"};
   addBox(boxBox, Vec3(1, Real(0.5), Real(0.75)));
   fillPairs(boxBox, rng, perKind, 0, 0);
@@ -285,5 +537,15 @@ int main(int argc, char** argv) {
   addHull(hullHull, rng, 32);
   fillPairs(hullHull, rng, perKind, 0, 1);
   run(hullHull);
+  }
+  try {
+    runMeshDistance(meshPath, perSeparation);
+  } catch (const std::exception& e) {
+    std::printf("mesh-mesh distance skipped: %s\n", e.what());
+  }
+  if (!jsonPath.empty()) {
+    writeJson(jsonPath);
+    std::printf("wrote %s\n", jsonPath.c_str());
+  }
   return 0;
 }

@@ -2,6 +2,7 @@
 
 #include "cli/json_codec.hpp"
 #include "cli/mesh_ops.hpp"
+#include "cli/narrowphase_ops.hpp"
 #include "cli/primitive_ops.hpp"
 #include "cli/scene_ops.hpp"
 
@@ -154,6 +155,7 @@ OpTable buildTable() {
   addPrimitiveOps(table);
   addMeshOps(table);
   addSceneOps(table);
+  addNarrowPhaseOps(table);
   return table;
 }
 
@@ -340,7 +342,9 @@ const std::vector<std::string_view>& protocolOps() {
         "add_model", "set_transform", "set_parent", "remove_model", "model_ray", "model_segment",
         "model_sphere", "model_aabb", "model_obb", "model_plane", "model_triangle", "children",
         // scene
-        "scene_ray", "scene_query", "scene_pairs"};
+        "scene_ray", "scene_query", "scene_pairs",
+        // narrow phase and volumes (issue 6; beyond the shared contract, see docs/batch.md)
+        "contacts", "distance", "mesh_distance", "model_distance", "point_inside"};
     std::sort(v.begin(), v.end());
     return v;
   }();

@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -134,16 +135,32 @@ bool touches(CollisionWorld& world, MeshHandle mesh, const Shape& s) {
   return world.overlaps(mesh, s);
 }
 
+/// Volume mode (CollisionWorld::overlapsVolume) for the shapes that have it.
+template <class Shape>
+constexpr bool kHasVolumeMode = std::is_same_v<Shape, Sphere> || std::is_same_v<Shape, Aabb> ||
+                                std::is_same_v<Shape, Obb> || std::is_same_v<Shape, Triangle>;
+
 /// mesh_<shape>: `hit`; with "triangles": true also the touching triangle indices (when the
-/// backend lists them; otherwise the extension is ignored).
+/// backend lists them; otherwise the extension is ignored); with "volume": true (sphere, aabb,
+/// obb, triangle) the closed mesh is a solid: a shape wholly inside hits.
 template <class Shape>
 OpHandler meshShape(std::string key) {
   return [key](const Json& request, Answer& answer, BatchState& state) {
     const std::string meshName = readMeshName(request, "mesh");
     const auto shape = readField<Shape>(request, key);
     const bool listTriangles = readFlag(request, "triangles");
+    const bool volume = readFlag(request, "volume");
+    if (volume && listTriangles) fail("volume", "cannot be combined with \"triangles\" (they list surface contacts)");
     const MeshHandle mesh = findMesh(state, "mesh", meshName);
     validate(shape, key);
+    if (volume) {
+      if constexpr (kHasVolumeMode<Shape>) {
+        answer["hit"] = state.world->overlapsVolume(mesh, shape);
+        return;
+      } else {
+        fail("volume", "volume mode is defined for mesh_sphere, mesh_aabb, mesh_obb and mesh_triangle only");
+      }
+    }
     if (listTriangles) {
       if (const auto touching = state.world->touchingTriangles(mesh, shape)) {
         answer["hit"] = !touching->empty();

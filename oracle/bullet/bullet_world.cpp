@@ -122,6 +122,77 @@ struct MinDistance : btCollisionWorld::ContactResultCallback {
   bool touching() const { return reported && minDistance <= 0; }
 };
 
+/// Collects every point contactPairTest(objectA, objectB) reports, in crux's convention: A and B as
+/// passed (Bullet may hand the pair over swapped), normal from B to A (Bullet's normal on B points
+/// towards A: ptA = ptB + distance·normalOnB), depth = −distance; the triangle index for a mesh
+/// object (index0/index1 of the wrapper that is the mesh).
+struct ContactCollector : btCollisionWorld::ContactResultCallback {
+  const btCollisionObject* objectA = nullptr;
+  bool aIsMesh = false, bIsMesh = false;
+  std::vector<WorldContact> contacts;
+  btScalar addSingleResult(btManifoldPoint& cp, const btCollisionObjectWrapper* w0, int, int index0,
+                           const btCollisionObjectWrapper*, int, int index1) override {
+    const bool swapped = w0->getCollisionObject() != objectA;
+    WorldContact c;
+    const Vec3d p0 = toD(cp.getPositionWorldOnA()), p1 = toD(cp.getPositionWorldOnB());
+    const Vec3d n = toD(cp.m_normalWorldOnB);
+    c.pointA = swapped ? p1 : p0;
+    c.pointB = swapped ? p0 : p1;
+    c.normal = swapped ? Vec3d(-n) : n;
+    c.depth = -double(cp.getDistance());
+    const int indexA = swapped ? index1 : index0, indexB = swapped ? index0 : index1;
+    if (aIsMesh && indexA >= 0) c.featureA = std::uint32_t(indexA);
+    if (bIsMesh && indexB >= 0) c.featureB = std::uint32_t(indexB);
+    contacts.push_back(c);
+    return 0;
+  }
+};
+
+/// A convex operand as a Bullet shape (margins 0; the sphere and capsule are all margin, i.e.
+/// exact) and the pose placing it in the operand's frame.
+struct BulletConvex {
+  std::unique_ptr<btCollisionShape> shape;
+  btTransform local = btTransform::getIdentity();
+};
+
+BulletConvex bulletConvex(const OperandShape& s) {
+  BulletConvex out;
+  if (const auto* sphere = std::get_if<Sphere>(&s)) {
+    out.shape = std::make_unique<btSphereShape>(btScalar(sphere->radius));
+    out.local.setOrigin(toBt(sphere->center));
+  } else if (const auto* b = std::get_if<Obb>(&s)) {
+    auto box = std::make_unique<btBoxShape>(toBt(b->half));
+    box->setMargin(0);
+    Mat3 a = b->axes;
+    if (a.cast<double>().determinant() < 0) a.col(2) = -a.col(2);  // the same box, as a rotation
+    out.local.setBasis(btMatrix3x3(btScalar(a(0, 0)), btScalar(a(0, 1)), btScalar(a(0, 2)), btScalar(a(1, 0)),
+                                   btScalar(a(1, 1)), btScalar(a(1, 2)), btScalar(a(2, 0)), btScalar(a(2, 1)),
+                                   btScalar(a(2, 2))));
+    out.local.setOrigin(toBt(b->center));
+    out.shape = std::move(box);
+  } else if (const auto* c = std::get_if<Capsule>(&s)) {
+    // btCapsuleShape: along its local y, centred, `height` between the sphere centres.
+    const Vec3d a = c->a.cast<double>(), b2 = c->b.cast<double>(), axis = b2 - a;
+    out.shape = std::make_unique<btCapsuleShape>(btScalar(c->radius), btScalar(axis.norm()));
+    if (axis.norm() > 0) {
+      const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(Vec3d::UnitY(), axis);
+      out.local.setRotation(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())));
+    }
+    out.local.setOrigin(toBt(Vec3d(0.5 * (a + b2))));
+  } else if (const auto* t = std::get_if<Triangle>(&s)) {
+    auto tri = std::make_unique<btTriangleShape>(toBt(t->a), toBt(t->b), toBt(t->c));
+    tri->setMargin(0);
+    out.shape = std::move(tri);
+  } else {
+    auto hull = std::make_unique<btConvexHullShape>();
+    for (const Vec3& v : std::get<ConvexHull>(s).vertices()) hull->addPoint(toBt(v), false);
+    hull->recalcLocalAabb();
+    hull->setMargin(0);
+    out.shape = std::move(hull);
+  }
+  return out;
+}
+
 /// Feeds Bullet's ray hits to a RayHitCollector. Closest: returns the hit's fraction so Bullet
 /// only looks for nearer ones; Any: returns 0 after the first hit; All: keeps the full segment.
 struct CollectingRay : btCollisionWorld::RayResultCallback {
@@ -229,7 +300,10 @@ class BulletWorld final : public CollisionWorld {
   }
   bool supports(WorldOp op) const override {
     // No Bullet algorithm for a static plane against a static mesh: mesh_plane, model_plane.
-    return op != WorldOp::MeshPlane && op != WorldOp::ModelPlane;
+    // Of the narrow-phase ops (issue 6) only contacts (contactPairTest): Bullet has no
+    // closed-volume mode, and its distances are convex-only (btGjkPairDetector).
+    if (op == WorldOp::Contacts) return true;
+    return isContractOp(op) && op != WorldOp::MeshPlane && op != WorldOp::ModelPlane;
   }
   WorldTolerance tolerance() const override { return kBulletTolerance; }
 
@@ -436,6 +510,39 @@ class BulletWorld final : public CollisionWorld {
       found.emplace(std::move(na), std::move(nb));
     }
     return {found.begin(), found.end()};
+  }
+
+  /// contacts: btCollisionWorld::contactPairTest of the two operands' objects (a mesh: its
+  /// btBvhTriangleMeshShape, margin 0, at the operand's pose), every reported point with
+  /// distance <= margin (m_closestDistanceThreshold = margin asks Bullet for the speculative
+  /// ones). Bullet does not reduce: a convex shape across several triangles gets a point per
+  /// triangle (crux keeps at most 4).
+  std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin) override {
+    BulletConvex ca, cb;
+    btCollisionObject oa, ob;
+    const auto setUp = [&](const WorldOperand& o, BulletConvex& c, btCollisionObject& object) {
+      const btTransform pose = toBt(o.pose);
+      if (const auto* m = std::get_if<MeshHandle>(&o.shape)) {
+        object.setCollisionShape(mesh(*m).shape.get());
+        object.setWorldTransform(pose);
+      } else {
+        c = bulletConvex(o.shape);
+        object.setCollisionShape(c.shape.get());
+        object.setWorldTransform(pose * c.local);
+      }
+    };
+    setUp(a, ca, oa);
+    setUp(b, cb, ob);
+    ContactCollector collector;
+    collector.objectA = &oa;
+    collector.aIsMesh = a.isMesh();
+    collector.bIsMesh = b.isMesh();
+    collector.m_closestDistanceThreshold = btScalar(margin);
+    meshMesh_.world.contactPairTest(&oa, &ob, collector);
+    std::vector<WorldContact> out;
+    for (const WorldContact& c : collector.contacts)
+      if (-c.depth <= margin) out.push_back(c);
+    return out;
   }
 
  private:

@@ -6,6 +6,7 @@
 #include "exact/exact.hpp"
 #include "exact/exact_kernel.hpp"
 #include "exact/exact_rigid.hpp"
+#include "exact/exact_volume.hpp"
 
 #include "common/model_table.hpp"
 
@@ -15,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <string>
 #include <utility>
@@ -118,12 +120,26 @@ class ExactWorld final : public CollisionWorld {
   std::string description() const override {
     return "CGAL " CGAL_VERSION_STR " Epeck (exact rationals), brute force over triangles";
   }
-  bool supports(WorldOp op) const override { return op <= WorldOp::ScenePairs; }
+  /// Every contract op, and volume mode (CGAL::Side_of_triangle_mesh); no contacts or distances
+  /// (an exact oracle of those would need exact closest points between convex shapes).
+  bool supports(WorldOp op) const override {
+    return isContractOp(op) || op == WorldOp::PointInside || isVolumeVariant(op);
+  }
   WorldTolerance tolerance() const override { return kExactTolerance; }
 
  protected:
   void onMeshAdded(MeshHandle, const Mesh&) override {}
-  void onMeshRemoved(MeshHandle) override {}
+  void onMeshRemoved(MeshHandle h) override { solids_.erase(h.index); }
+
+  // ---- volume mode: CGAL::Side_of_triangle_mesh (exact_volume.hpp); the base has checked that
+  // the mesh is closed. A connected shape that does not touch the surface is wholly inside or
+  // wholly outside, so surface overlap or one of its points inside decides.
+
+  bool doPointInside(MeshHandle m, const Vec3& p) override { return solid(m).contains(p); }
+  bool doOverlapsVolume(MeshHandle m, const Sphere& s) override { return doOverlaps(m, s) || solid(m).contains(s.center); }
+  bool doOverlapsVolume(MeshHandle m, const Aabb& b) override { return doOverlaps(m, b) || solid(m).contains(b.min); }
+  bool doOverlapsVolume(MeshHandle m, const Obb& b) override { return doOverlaps(m, b) || solid(m).contains(b.center); }
+  bool doOverlapsVolume(MeshHandle m, const Triangle& t) override { return doOverlaps(m, t) || solid(m).contains(t.a); }
 
   Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return exact::closestPoint(t, p); }
   bool doOverlaps(const Triangle& t, const Sphere& s) override { return exact::overlaps(t, s); }
@@ -263,6 +279,14 @@ class ExactWorld final : public CollisionWorld {
   }
 
  private:
+  /// The exact solid of a closed mesh, built on first use.
+  const ExactSolid& solid(MeshHandle m) {
+    std::unique_ptr<ExactSolid>& s = solids_[m.index];
+    if (!s) s = std::make_unique<ExactSolid>(mesh(m));
+    return *s;
+  }
+  std::map<std::uint32_t, std::unique_ptr<ExactSolid>> solids_;
+
   /// Per model: its exact world transform and its mesh placed by it, built on demand and
   /// forgotten when the model or an ancestor moves.
   struct ModelCache {

@@ -9,6 +9,8 @@
 #include <fcl/config.h>
 #include <fcl/geometry/bvh/BVH_model.h>
 #include <fcl/geometry/shape/box.h>
+#include <fcl/geometry/shape/capsule.h>
+#include <fcl/geometry/shape/convex.h>
 #include <fcl/geometry/shape/plane.h>
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
@@ -106,6 +108,66 @@ const fcl::Transform3d& identity() {
   return id;
 }
 
+/// A contacts/distance operand as FCL geometry at its world pose (meshes: the mesh's shared
+/// BVHModel).
+struct FclOperand {
+  std::shared_ptr<const fcl::CollisionGeometryd> geometry;
+  fcl::Transform3d pose;
+};
+
+/// A crux capsule (segment a–b ⊕ ball) as an fcl::Capsule (centred, along its local z) and the
+/// pose putting it in the operand's frame.
+FclOperand capsuleOperand(const Vec3& a, const Vec3& b, double radius) {
+  const fcl::Vector3d pa = toFcl(a), pb = toFcl(b), axis = pb - pa;
+  const double length = axis.norm();
+  fcl::Transform3d tf = fcl::Transform3d::Identity();
+  tf.translation() = 0.5 * (pa + pb);
+  if (length > 0) tf.linear() = Eigen::Quaterniond::FromTwoVectors(fcl::Vector3d::UnitZ(), axis).toRotationMatrix();
+  return {std::make_shared<fcl::Capsuled>(radius, length), tf};
+}
+
+/// A crux hull as an fcl::Convex from its polygonal faces (ConvexHull::faces: counter-clockwise
+/// loops); a point or segment hull (no faces) as a zero-radius sphere or capsule.
+FclOperand hullOperand(const ConvexHull& h) {
+  if (h.dimension() == 0) return {std::make_shared<fcl::Sphered>(0.0), translation(h.vertices()[0])};
+  if (h.dimension() == 1) return capsuleOperand(h.vertices()[0], h.vertices()[1], 0.0);
+  auto vertices = std::make_shared<std::vector<fcl::Vector3d>>();
+  for (const Vec3& v : h.vertices()) vertices->push_back(toFcl(v));
+  auto faces = std::make_shared<std::vector<int>>();
+  for (const HullFace& f : h.faces()) {
+    faces->push_back(int(f.count));
+    for (std::uint32_t k = 0; k < f.count; ++k) faces->push_back(int(h.faceVertices()[f.first + k]));
+  }
+  return {std::make_shared<fcl::Convexd>(vertices, int(h.faces().size()), faces), identity()};
+}
+
+/// GJK stopping tolerance of FCL's distance requests (DistanceRequest::distance_tolerance,
+/// default 1e-6, an absolute length in libccd's GJK: at that default a hull–sphere distance of 2
+/// comes back 4.6e-7 long with nearest points 7e-4 off). 1e-12 brings both to rounding level on
+/// the sanity cases.
+constexpr double kFclGjkTolerance = 1e-12;
+
+/// fcl::distance with nearest points (world coordinates) and signed distance requested.
+fcl::DistanceResultd signedDistance(const FclOperand& a, const FclOperand& b) {
+  fcl::DistanceRequestd request(true, true, 0.0, 0.0, kFclGjkTolerance);
+  fcl::DistanceResultd result;
+  fcl::distance(a.geometry.get(), a.pose, b.geometry.get(), b.pose, request, result);
+  return result;
+}
+
+/// A DistanceResult as the world reports it; triangles for the operands that are meshes.
+WorldDistance toWorld(const fcl::DistanceResultd& r, bool aIsMesh, bool bIsMesh) {
+  WorldDistance w;
+  w.distance = r.min_distance;
+  w.pointA = r.nearest_points[0];
+  w.pointB = r.nearest_points[1];
+  const Vec3d gap = w.pointA - w.pointB;
+  if (gap.norm() > 0) w.normal = (r.min_distance < 0 ? -gap : gap).normalized();
+  if (aIsMesh && r.b1 >= 0) w.triangleA = std::uint32_t(r.b1);
+  if (bIsMesh && r.b2 >= 0) w.triangleB = std::uint32_t(r.b2);
+  return w;
+}
+
 /// A model in FCL: a CollisionObjectd over its mesh's shared BVHModel at the model's world pose,
 /// registered in the scene's broad phase. The object's user data points back here.
 struct FclModel {
@@ -194,6 +256,9 @@ class FclWorld final : public CollisionWorld {
       case WorldOp::ModelTriangle:
       case WorldOp::SceneQuery:
       case WorldOp::ScenePairs:
+      case WorldOp::Distance:
+      case WorldOp::MeshDistance:
+      case WorldOp::ModelDistance:
         return true;
       default:
         return false;
@@ -254,6 +319,27 @@ class FclWorld final : public CollisionWorld {
   }
   bool doOverlaps(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) override {
     return collide({model(a), toFcl(ta)}, {model(b), toFcl(tb)});
+  }
+
+  // ---- distances: fcl::distance with enable_nearest_points and enable_signed_distance --------
+  // (docs/batch.md "Backends": FCL's sign convention for penetration and its bounds.)
+
+  WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
+    return toWorld(signedDistance(operand(a), operand(b)), a.isMesh(), b.isMesh());
+  }
+  std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
+                                              double maxDistance) override {
+    const fcl::DistanceResultd r = signedDistance({models_.at(a.index), toFcl(ta)}, {models_.at(b.index), toFcl(tb)});
+    if (r.min_distance > maxDistance) return std::nullopt;  // FCL has no bound: filtered afterwards
+    return toWorld(r, true, true);
+  }
+  std::optional<WorldDistance> doModelDistance(ModelHandle a, ModelHandle b, double maxDistance) override {
+    const fcl::CollisionObjectd& oa = object(a, "a");
+    const fcl::CollisionObjectd& ob = object(b, "b");
+    const fcl::DistanceResultd r =
+        signedDistance({oa.collisionGeometry(), oa.getTransform()}, {ob.collisionGeometry(), ob.getTransform()});
+    if (r.min_distance > maxDistance) return std::nullopt;
+    return toWorld(r, true, true);
   }
 
   // ---- models and the scene ----------------------------------------------------------------
@@ -352,9 +438,29 @@ class FclWorld final : public CollisionWorld {
  private:
   const Model& model(MeshHandle h) const { return *models_.at(h.index); }
 
+  /// An operand as FCL geometry in the world: convex shapes are placed by the operand's pose
+  /// composed with the shape's own placement (box centre and axes, capsule axis).
+  FclOperand operand(const WorldOperand& o) const {
+    const fcl::Transform3d where = toFcl(o.pose);
+    if (const auto* m = std::get_if<MeshHandle>(&o.shape)) return {models_.at(m->index), where};
+    FclOperand local;
+    if (const auto* s = std::get_if<Sphere>(&o.shape)) {
+      local = {std::make_shared<fcl::Sphered>(double(s->radius)), translation(s->center)};
+    } else if (const auto* b = std::get_if<Obb>(&o.shape)) {
+      local = {std::make_shared<fcl::Boxd>(box(*b)), pose(*b)};
+    } else if (const auto* c = std::get_if<Capsule>(&o.shape)) {
+      local = capsuleOperand(c->a, c->b, double(c->radius));
+    } else if (const auto* t = std::get_if<Triangle>(&o.shape)) {
+      local = {buildModel(*t), identity()};
+    } else {
+      local = hullOperand(std::get<ConvexHull>(o.shape));
+    }
+    return {local.geometry, where * local.pose};
+  }
+
   /// The model's FCL object; InvalidInput naming the field for an unknown handle.
-  fcl::CollisionObjectd& object(ModelHandle m) const {
-    if (!table_.contains(m)) throw InvalidInput("model: unknown model handle " + std::to_string(m.index));
+  fcl::CollisionObjectd& object(ModelHandle m, const char* field = "model") const {
+    if (!table_.contains(m)) throw InvalidInput(std::string(field) + ": unknown model handle " + std::to_string(m.index));
     return *objects_.at(m.index)->object;
   }
   /// The model's geometry at its world pose.

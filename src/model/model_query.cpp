@@ -111,6 +111,18 @@ bool overlaps(const PlacedMesh& a, const PlacedMesh& b) {
   return overlaps(*a.mesh, Transform::identity(), *b.mesh, rel);
 }
 
+MeshMeshDistanceResult distance(const PlacedMesh& a, const PlacedMesh& b, const MeshDistanceOptions& options) {
+  const bool same = a.world.rotation.coeffs() == b.world.rotation.coeffs() && a.world.translation == b.world.translation;
+  const Transform rel = same ? Transform::identity() : model_detail::relative(a.world, b.world);
+  MeshMeshDistanceResult r = distance(*a.mesh, Transform::identity(), *b.mesh, rel, options);
+  if (r.found) {
+    const RigidFrame f(a.world);
+    r.pointA = f.toWorld(r.pointA);
+    r.pointB = f.toWorld(r.pointB);
+  }
+  return r;
+}
+
 Aabb worldBounds(const PlacedMesh& m) {
   const Aabb& local = m.mesh->bounds();
   const RigidFrame f(m.world);

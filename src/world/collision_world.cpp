@@ -4,6 +4,9 @@
 
 #include <crux/world/collision_world.hpp>
 
+#include <crux/geometry/contact.hpp>
+#include <crux/mesh/mesh_volume.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -16,7 +19,8 @@ constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
     "triangle_triangle", "ray_triangle", "segment_triangle", "mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere",
     "mesh_aabb", "mesh_obb", "mesh_plane", "mesh_triangle", "mesh_mesh", "add_model", "set_transform",
     "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
-    "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs"};
+    "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs", "contacts", "distance", "mesh_distance", "model_distance",
+    "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume"};
 
 std::array<WorldOp, kWorldOpCount> makeOpList() {
   std::array<WorldOp, kWorldOpCount> ops{};
@@ -33,6 +37,16 @@ void validateTransform(const Transform& t, const std::string& name) {
     std::ostringstream os;
     os.precision(17);
     os << name << ".rotation: not a unit quaternion (|q| = " << norm << ")";
+    throw InvalidInput(os.str());
+  }
+}
+
+/// A distance bound ("max"): >= 0 (infinity allowed), not NaN.
+void validateMaxDistance(double maxDistance) {
+  if (std::isnan(maxDistance) || maxDistance < 0) {
+    std::ostringstream os;
+    os.precision(17);
+    os << "max: must be >= 0, got " << maxDistance;
     throw InvalidInput(os.str());
   }
 }
@@ -151,7 +165,7 @@ MeshHandle CollisionWorld::addMesh(const std::string& name, std::shared_ptr<cons
   guarded(WorldOp::Mesh, [&] { onMeshAdded(handle, *mesh); });
   ++nextMesh_;
   if (const auto old = meshNames_.find(name); old != meshNames_.end()) removeMesh(MeshHandle{old->second});
-  meshes_.emplace(handle.index, MeshEntry{name, std::move(mesh)});
+  meshes_.emplace(handle.index, MeshEntry{name, std::move(mesh), std::make_shared<ClosedVerdict>()});
   meshNames_.emplace(name, handle.index);
   return handle;
 }
@@ -377,6 +391,126 @@ std::vector<std::string> CollisionWorld::sceneQuery(const SceneQueryShape& shape
 std::vector<std::pair<std::string, std::string>> CollisionWorld::scenePairs() {
   return guarded(WorldOp::ScenePairs, [&] { return doScenePairs(); });
 }
+
+// ---- narrow phase and volumes ---------------------------------------------------------------------
+
+void CollisionWorld::validateOperand(const WorldOperand& o, const std::string& field) const {
+  validateTransform(o.pose, field + ".transform");
+  std::visit(
+      [&](const auto& s) {
+        using S = std::decay_t<decltype(s)>;
+        if constexpr (std::is_same_v<S, Sphere>) validate(s, field + ".sphere");
+        if constexpr (std::is_same_v<S, Obb>) validate(s, field + ".box");
+        if constexpr (std::is_same_v<S, Capsule>) validate(s, field + ".capsule");
+        if constexpr (std::is_same_v<S, Triangle>) validate(s, field + ".triangle");
+        if constexpr (std::is_same_v<S, ConvexHull>) {
+          if (s.vertices().empty()) throw InvalidInput(field + ".hull.points: the hull has no points");
+        }
+        if constexpr (std::is_same_v<S, MeshHandle>) entry(s, field + ".mesh");
+      },
+      o.shape);
+}
+
+void CollisionWorld::requireClosed(MeshHandle mesh, const std::string& field) const {
+  const MeshEntry& e = entry(mesh, field);
+  std::call_once(e.closed->once, [&] { e.closed->notClosed = closedness(*e.mesh).reason(e.name); });
+  if (!e.closed->notClosed.empty()) throw InvalidInput(field + ": " + e.closed->notClosed);
+}
+
+std::vector<WorldContact> CollisionWorld::contacts(const WorldOperand& a, const WorldOperand& b, double margin) {
+  validateOperand(a, "a");
+  validateOperand(b, "b");
+  if (!(std::isfinite(margin) && margin >= 0)) {
+    std::ostringstream os;
+    os.precision(17);
+    os << "margin: must be finite and >= 0, got " << margin;
+    throw InvalidInput(os.str());
+  }
+  if (a.isMesh() && b.isMesh())
+    throw InvalidInput("b: contacts need at least one convex operand (a and b are both meshes; mesh_distance "
+                       "measures two meshes)");
+  return guarded(WorldOp::Contacts, [&] { return doContacts(a, b, margin); });
+}
+
+WorldDistance CollisionWorld::distance(const WorldOperand& a, const WorldOperand& b) {
+  validateOperand(a, "a");
+  validateOperand(b, "b");
+  if (a.isMesh() && b.isMesh())
+    throw InvalidInput("b: distance needs at least one convex operand (a and b are both meshes; use mesh_distance)");
+  return guarded(WorldOp::Distance, [&] { return doDistance(a, b); });
+}
+
+std::optional<WorldDistance> CollisionWorld::meshDistance(MeshHandle a, const Transform& ta, MeshHandle b,
+                                                          const Transform& tb, double maxDistance) {
+  entry(a, "a");
+  entry(b, "b");
+  validateTransform(ta, "transform_a");
+  validateTransform(tb, "transform_b");
+  validateMaxDistance(maxDistance);
+  return guarded(WorldOp::MeshDistance, [&] { return doMeshDistance(a, ta, b, tb, maxDistance); });
+}
+
+std::optional<WorldDistance> CollisionWorld::modelDistance(ModelHandle a, ModelHandle b, double maxDistance) {
+  validateMaxDistance(maxDistance);
+  return guarded(WorldOp::ModelDistance, [&] { return doModelDistance(a, b, maxDistance); });
+}
+
+bool CollisionWorld::pointInside(MeshHandle mesh, const Vec3& p) {
+  entry(mesh, "mesh");
+  validatePoint(p, "point");
+  if (!supports(WorldOp::PointInside)) unsupported(WorldOp::PointInside);
+  requireClosed(mesh, "mesh");
+  return guarded(WorldOp::PointInside, [&] { return doPointInside(mesh, p); });
+}
+
+bool CollisionWorld::overlapsVolume(MeshHandle mesh, const Sphere& s) {
+  entry(mesh, "mesh");
+  validate(s, "sphere");
+  if (!supports(WorldOp::MeshSphereVolume)) unsupported(WorldOp::MeshSphereVolume);
+  requireClosed(mesh, "mesh");
+  return guarded(WorldOp::MeshSphereVolume, [&] { return doOverlapsVolume(mesh, s); });
+}
+
+bool CollisionWorld::overlapsVolume(MeshHandle mesh, const Aabb& b) {
+  entry(mesh, "mesh");
+  validate(b, "aabb");
+  if (!supports(WorldOp::MeshAabbVolume)) unsupported(WorldOp::MeshAabbVolume);
+  requireClosed(mesh, "mesh");
+  return guarded(WorldOp::MeshAabbVolume, [&] { return doOverlapsVolume(mesh, b); });
+}
+
+bool CollisionWorld::overlapsVolume(MeshHandle mesh, const Obb& b) {
+  entry(mesh, "mesh");
+  validate(b, "obb");
+  if (!supports(WorldOp::MeshObbVolume)) unsupported(WorldOp::MeshObbVolume);
+  requireClosed(mesh, "mesh");
+  return guarded(WorldOp::MeshObbVolume, [&] { return doOverlapsVolume(mesh, b); });
+}
+
+bool CollisionWorld::overlapsVolume(MeshHandle mesh, const Triangle& t) {
+  entry(mesh, "mesh");
+  validate(t, "triangle");
+  if (!supports(WorldOp::MeshTriangleVolume)) unsupported(WorldOp::MeshTriangleVolume);
+  requireClosed(mesh, "mesh");
+  return guarded(WorldOp::MeshTriangleVolume, [&] { return doOverlapsVolume(mesh, t); });
+}
+
+std::vector<WorldContact> CollisionWorld::doContacts(const WorldOperand&, const WorldOperand&, double) {
+  unsupported(WorldOp::Contacts);
+}
+WorldDistance CollisionWorld::doDistance(const WorldOperand&, const WorldOperand&) { unsupported(WorldOp::Distance); }
+std::optional<WorldDistance> CollisionWorld::doMeshDistance(MeshHandle, const Transform&, MeshHandle,
+                                                            const Transform&, double) {
+  unsupported(WorldOp::MeshDistance);
+}
+std::optional<WorldDistance> CollisionWorld::doModelDistance(ModelHandle, ModelHandle, double) {
+  unsupported(WorldOp::ModelDistance);
+}
+bool CollisionWorld::doPointInside(MeshHandle, const Vec3&) { unsupported(WorldOp::PointInside); }
+bool CollisionWorld::doOverlapsVolume(MeshHandle, const Sphere&) { unsupported(WorldOp::MeshSphereVolume); }
+bool CollisionWorld::doOverlapsVolume(MeshHandle, const Aabb&) { unsupported(WorldOp::MeshAabbVolume); }
+bool CollisionWorld::doOverlapsVolume(MeshHandle, const Obb&) { unsupported(WorldOp::MeshObbVolume); }
+bool CollisionWorld::doOverlapsVolume(MeshHandle, const Triangle&) { unsupported(WorldOp::MeshTriangleVolume); }
 
 // ---- extensions -----------------------------------------------------------------------------------
 

@@ -5,6 +5,10 @@
 #include <crux/world/native_world.hpp>
 
 #include <crux/geometry/closest_point.hpp>
+#include <crux/geometry/contact.hpp>
+#include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_volume.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
 #include <crux/mesh/mesh_query.hpp>
@@ -13,6 +17,8 @@
 
 #include <algorithm>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,6 +71,58 @@ void collectHits(const MeshLike& mesh, const Ray& r, RayHitCollector& hits, cons
   }
 }
 
+/// The convex view of an operand's shape (not a mesh). Points into `o` (hulls are not copied).
+ConvexShape convexOf(const WorldOperand& o) {
+  return std::visit(
+      [](const auto& s) -> ConvexShape {
+        if constexpr (std::is_same_v<std::decay_t<decltype(s)>, MeshHandle>)
+          return ConvexShape();  // not reached: callers pass convex operands only
+        else
+          return ConvexShape(s);
+      },
+      o.shape);
+}
+
+WorldDistance toWorld(const DistanceResult& d) {
+  WorldDistance w;
+  w.distance = double(d.distance);
+  w.pointA = d.pointA.cast<double>();
+  w.pointB = d.pointB.cast<double>();
+  w.normal = d.normal.cast<double>();
+  return w;
+}
+
+/// A mesh–mesh result; nothing when no pair is within the bound.
+std::optional<WorldDistance> toWorld(const MeshMeshDistanceResult& d) {
+  if (!d.found) return std::nullopt;
+  WorldDistance w;
+  w.distance = double(d.distance);
+  w.pointA = d.pointA.cast<double>();
+  w.pointB = d.pointB.cast<double>();
+  const Vec3d gap = w.pointA - w.pointB;
+  const double n = gap.norm();
+  if (n > 0) w.normal = gap / n;
+  w.triangleA = d.triangleA;
+  w.triangleB = d.triangleB;
+  return w;
+}
+
+/// A distance bound in Real: beyond the largest finite Real it is no limit (a plain conversion
+/// would be undefined behaviour there).
+Real toRealBound(double bound) {
+  return bound >= double(std::numeric_limits<Real>::max()) ? kNoLimit : Real(bound);
+}
+
+/// Per-mesh structures of the narrow phase and volume mode, built on first use (std::call_once,
+/// so concurrent queries may race to it safely): the edge adjacency that removes ghost contacts
+/// on internal edges (mesh_contact.hpp), and the closed-solid view (mesh_volume.hpp).
+struct NativeMeshExtras {
+  std::once_flag adjacencyOnce;
+  std::unique_ptr<MeshAdjacency> adjacency;
+  std::once_flag volumeOnce;
+  std::unique_ptr<MeshVolume> volume;
+};
+
 class NativeWorld final : public CollisionWorld {
  public:
   std::string_view backend() const override { return "native"; }
@@ -81,9 +139,10 @@ class NativeWorld final : public CollisionWorld {
   // stands.
 
  protected:
-  // The base class keeps the crux::Mesh, which carries its own BVH: nothing else to build.
-  void onMeshAdded(MeshHandle, const Mesh&) override {}
-  void onMeshRemoved(MeshHandle) override {}
+  // The base class keeps the crux::Mesh, which carries its own BVH; the adjacency and volume
+  // view are built lazily (NativeMeshExtras).
+  void onMeshAdded(MeshHandle h, const Mesh&) override { extras_[h.index] = std::make_unique<NativeMeshExtras>(); }
+  void onMeshRemoved(MeshHandle h) override { extras_.erase(h.index); }
 
   Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return crux::closestPoint(t, p).cast<double>(); }
   bool doOverlaps(const Triangle& t, const Sphere& s) override { return crux::overlaps(t, s); }
@@ -117,6 +176,83 @@ class NativeWorld final : public CollisionWorld {
       MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) override {
     return crux::touchingTrianglePairs(mesh(a), ta, mesh(b), tb);
   }
+
+  // ---- narrow phase and volumes --------------------------------------------------------------------
+
+  std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin) override {
+    const Real m = Real(margin);
+    std::vector<WorldContact> out;
+    if (!a.isMesh() && !b.isMesh()) {
+      ContactManifold manifold;
+      crux::contacts(convexOf(a), a.pose, convexOf(b), b.pose, m, manifold);
+      for (int i = 0; i < manifold.count; ++i) {
+        const ContactPoint& p = manifold.points[i];
+        out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), manifold.normal.cast<double>(),
+                       -double(p.separation), p.featureA, p.featureB});
+      }
+      return out;
+    }
+    // The mesh layer takes the mesh as A; a convex A is answered swapped and swapped back.
+    const bool meshIsA = a.isMesh();
+    const WorldOperand& meshOperand = meshIsA ? a : b;
+    const WorldOperand& shape = meshIsA ? b : a;
+    const MeshHandle h = std::get<MeshHandle>(meshOperand.shape);
+    MeshContactManifold manifold;
+    crux::contacts(mesh(h), meshOperand.pose, convexOf(shape), shape.pose, m, manifold, &adjacency(h));
+    for (int i = 0; i < manifold.count; ++i) {
+      const MeshContactPoint& p = manifold.points[i];
+      if (meshIsA)
+        out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), p.normal.cast<double>(),
+                       -double(p.separation), p.triangle, p.featureB});
+      else
+        out.push_back({p.pointB.cast<double>(), p.pointA.cast<double>(), -p.normal.cast<double>(),
+                       -double(p.separation), p.featureB, p.triangle});
+    }
+    return out;
+  }
+
+  WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
+    if (!a.isMesh() && !b.isMesh()) return toWorld(crux::distance(convexOf(a), a.pose, convexOf(b), b.pose));
+    const bool meshIsA = a.isMesh();
+    const WorldOperand& meshOperand = meshIsA ? a : b;
+    const WorldOperand& shape = meshIsA ? b : a;
+    const MeshHandle h = std::get<MeshHandle>(meshOperand.shape);
+    const MeshDistanceResult d = crux::distance(mesh(h), meshOperand.pose, convexOf(shape), shape.pose);
+    WorldDistance w;
+    w.distance = double(d.distance);
+    if (meshIsA) {
+      w.pointA = d.pointA.cast<double>();
+      w.pointB = d.pointB.cast<double>();
+      w.normal = d.normal.cast<double>();
+      w.triangleA = d.triangle;
+    } else {
+      w.pointA = d.pointB.cast<double>();
+      w.pointB = d.pointA.cast<double>();
+      w.normal = -d.normal.cast<double>();
+      w.triangleB = d.triangle;
+    }
+    return w;
+  }
+
+  std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
+                                              double maxDistance) override {
+    MeshDistanceOptions options;
+    options.maxDistance = toRealBound(maxDistance);
+    return toWorld(crux::distance(mesh(a), ta, mesh(b), tb, options));
+  }
+
+  std::optional<WorldDistance> doModelDistance(ModelHandle a, ModelHandle b, double maxDistance) override {
+    const PlacedMesh pa = placed(a, "a"), pb = placed(b, "b");
+    MeshDistanceOptions options;
+    options.maxDistance = toRealBound(maxDistance);
+    return toWorld(crux::distance(*pa.mesh, pa.world, *pb.mesh, pb.world, options));
+  }
+
+  bool doPointInside(MeshHandle m, const Vec3& p) override { return volume(m).contains(p); }
+  bool doOverlapsVolume(MeshHandle m, const Sphere& s) override { return volume(m).overlaps(s); }
+  bool doOverlapsVolume(MeshHandle m, const Aabb& b) override { return volume(m).overlaps(b); }
+  bool doOverlapsVolume(MeshHandle m, const Obb& b) override { return volume(m).overlaps(b); }
+  bool doOverlapsVolume(MeshHandle m, const Triangle& t) override { return volume(m).overlaps(t); }
 
   // ---- models -----------------------------------------------------------------------------------
 
@@ -212,8 +348,23 @@ class NativeWorld final : public CollisionWorld {
                          " in this world");
     return model.index;
   }
-  PlacedMesh placed(ModelHandle model) const { return scene_.placed(require(model, "model")); }
+  PlacedMesh placed(ModelHandle model, const char* field = "model") const {
+    return scene_.placed(require(model, field));
+  }
+  NativeMeshExtras& extras(MeshHandle m) const { return *extras_.at(m.index); }
+  const MeshAdjacency& adjacency(MeshHandle m) const {
+    NativeMeshExtras& e = extras(m);
+    std::call_once(e.adjacencyOnce, [&] { e.adjacency = std::make_unique<MeshAdjacency>(mesh(m)); });
+    return *e.adjacency;
+  }
+  /// The closed-solid view (the base checked closedness before any volume hook runs).
+  const MeshVolume& volume(MeshHandle m) const {
+    NativeMeshExtras& e = extras(m);
+    std::call_once(e.volumeOnce, [&] { e.volume = std::make_unique<MeshVolume>(mesh(m)); });
+    return *e.volume;
+  }
 
+  std::map<std::uint32_t, std::unique_ptr<NativeMeshExtras>> extras_;  ///< by mesh handle
   Scene scene_;                                          ///< dynamic AABB tree broad phase
   std::vector<std::string> names_;                       ///< by ModelId; empty for free ids
   std::map<std::string, ModelId, std::less<>> byName_;  ///< live model names

@@ -441,9 +441,11 @@ TEST(BatchErrors, SemanticValidationNamesTheField) {
 // ---------------------------------------------------------------------------------------------
 // Unsupported ops and backends.
 
-TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThree) {
+TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeAndTheFiveNarrowPhaseOps) {
   const auto& ops = protocolOps();
-  EXPECT_EQ(ops.size(), 33u);
+  EXPECT_EQ(ops.size(), 38u);
+  for (const char* name : {"contacts", "distance", "mesh_distance", "model_distance", "point_inside"})
+    EXPECT_TRUE(std::binary_search(ops.begin(), ops.end(), std::string_view(name))) << name;
   EXPECT_TRUE(std::is_sorted(ops.begin(), ops.end()));
   for (const char* name : {"closest_point_triangle", "segment_triangle", "mesh", "load_mesh", "mesh_mesh",
                            "set_parent", "children", "scene_ray", "scene_query", "scene_pairs", "model_triangle"})
@@ -452,7 +454,7 @@ TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThree) {
 
 TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   const OpTable& native = opTable(Backend::Native);
-  EXPECT_EQ(native.size(), 33u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
+  EXPECT_EQ(native.size(), 38u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
   for (const char* name : {"mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb",
                            "mesh_plane", "mesh_triangle", "mesh_mesh"})
     EXPECT_EQ(native.count(name), 1u) << name;

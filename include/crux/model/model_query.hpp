@@ -25,6 +25,7 @@
 /// they never throw and (except raycastAll) never allocate.
 
 #include <crux/geometry/axis_aligned.hpp>
+#include <crux/mesh/mesh_distance.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
 #include <limits>
@@ -91,6 +92,10 @@ bool overlaps(const PlacedMesh& m, const Triangle& t);
 /// transform (it is exact in turn when that relative rotation has quaternion components in
 /// {0, ±½, ±1}: the identity, half turns about axes, third turns about cube diagonals).
 bool overlaps(const PlacedMesh& a, const PlacedMesh& b);
+/// Model vs model distance: mesh–mesh distance (mesh_distance.hpp, BVH vs BVH) with b in a's
+/// frame by the same exact-when-axis-aligned relative transform as overlaps(a, b); points are
+/// returned in world space. Throws InvalidInput for NaN/negative option bounds.
+MeshMeshDistanceResult distance(const PlacedMesh& a, const PlacedMesh& b, const MeshDistanceOptions& options = {});
 
 /// Relative pad of the world bounds under a rotation that is not axis-aligned: the bounds grow
 /// by kWorldBoundsPad·(max |mesh bound| + max |t|), 64 ulps, above the rounding of R·c + t and

@@ -17,6 +17,7 @@
 /// back in double so a peer's answers are not rounded again on the way out.
 
 #include <crux/error.hpp>
+#include <crux/geometry/convex.hpp>
 #include <crux/geometry/shapes.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
@@ -27,6 +28,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -81,14 +83,34 @@ enum class WorldOp : std::uint8_t {
   SceneRay,
   SceneQuery,
   ScenePairs,
+  // narrow phase for engines (issue 6): convex shapes and meshes under rigid transforms
+  Contacts,
+  Distance,
+  MeshDistance,
+  ModelDistance,
+  // closed meshes as volumes (opt-in; the mesh must be closed)
+  PointInside,
+  MeshSphereVolume,    ///< mesh_sphere with "volume": true (op name "mesh_sphere volume")
+  MeshAabbVolume,      ///< mesh_aabb with "volume": true
+  MeshObbVolume,       ///< mesh_obb with "volume": true
+  MeshTriangleVolume,  ///< mesh_triangle with "volume": true
 };
 
 /// Number of WorldOp values.
-inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::ScenePairs) + 1;
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::MeshTriangleVolume) + 1;
+/// The ops of the original protocol contract (closest_point_triangle ... scene_pairs); those after
+/// it are the narrow-phase and volume extensions of docs/batch.md.
+inline constexpr bool isContractOp(WorldOp op) { return op <= WorldOp::ScenePairs; }
+/// Whether `op` is one of the volume-mode variants (mesh_<shape> with "volume": true): they are
+/// not protocol op names of their own, only ops a world may or may not support.
+inline constexpr bool isVolumeVariant(WorldOp op) {
+  return op >= WorldOp::MeshSphereVolume && op <= WorldOp::MeshTriangleVolume;
+}
 
 /// The protocol name of an op ("closest_point_triangle", "mesh_mesh", ...). Mesh and LoadMesh
 /// ("mesh", "load_mesh") both arrive as CollisionWorld::addMesh (the file is loaded by
-/// crux::loadMesh first).
+/// crux::loadMesh first). The volume variants are named "<op> volume" ("mesh_sphere volume"), so
+/// that an unsupported one says "unsupported: mesh_sphere volume on fcl".
 std::string_view opName(WorldOp op);
 /// The op with protocol name `name`, or nothing.
 std::optional<WorldOp> parseOp(std::string_view name);
@@ -210,11 +232,55 @@ struct WorldTolerance {
   double at(double s) const { return relative * s + absolute; }
 };
 
+/// Whether a mesh is closed, decided once (see CollisionWorld::pointInside).
+struct ClosedVerdict {
+  std::once_flag once;
+  std::string notClosed;  ///< empty when closed, else MeshClosedness::reason
+};
+
 /// Shapes a scene query accepts.
 using SceneQueryShape = std::variant<Sphere, Aabb, Obb>;
 
 /// Shapes a mesh query accepts (mesh_segment ... mesh_triangle), for touchingTriangles.
 using MeshQueryShape = std::variant<Segment, Sphere, Aabb, Obb, Plane, Triangle>;
+
+/// A convex shape of the contacts and distance ops (include/crux/geometry/convex.hpp), or a mesh
+/// of the world. Convex shapes are in their own frame; WorldOperand::pose places them.
+using OperandShape = std::variant<Sphere, Obb, Capsule, Triangle, ConvexHull, MeshHandle>;
+
+/// One operand of contacts / distance: a convex shape or a mesh, placed in the world by `pose`
+/// (a point x of the shape is at R·x + t).
+struct WorldOperand {
+  OperandShape shape;
+  Transform pose = Transform::identity();
+  bool isMesh() const { return std::holds_alternative<MeshHandle>(shape); }
+};
+
+/// One contact point of a pair (A, B), world space. Convention of docs/narrowphase.md: `normal`
+/// is the unit direction from B to A, pointA − pointB = −depth·normal (depth > 0: penetration;
+/// depth < 0: a speculative contact within the margin, separated by −depth).
+struct WorldContact {
+  Vec3d pointA = Vec3d::Zero();
+  Vec3d pointB = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitZ();
+  double depth = 0;
+  /// The feature of each operand the point lies on: for a mesh its triangle index, for a convex
+  /// shape crux's packed featureId (contact.hpp); nothing when the backend does not say.
+  std::optional<std::uint32_t> featureA, featureB;
+};
+
+/// Signed distance of a pair (A, B) and the points realising it, world space: distance > 0
+/// separated, < 0 minus the penetration depth (for a mesh operand: the minimum over its
+/// triangles, i.e. the deepest triangle, not the depth into the enclosed volume).
+/// pointA − pointB = distance·normal, normal unit from B to A (when distance ≠ 0).
+struct WorldDistance {
+  double distance = 0;
+  Vec3d pointA = Vec3d::Zero();
+  Vec3d pointB = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitZ();
+  /// Triangle realising the distance when the operand is a mesh.
+  std::optional<std::uint32_t> triangleA, triangleB;
+};
 
 /// A world of meshes, models and a scene, answering every query of the batch protocol through
 /// one collision library. Changes are exclusive; queries may run on several threads at once only
@@ -331,6 +397,32 @@ class CollisionWorld {
   /// scene_pairs: sorted name pairs (a < b) of models whose triangles touch.
   std::vector<std::pair<std::string, std::string>> scenePairs();
 
+  // ---- narrow phase (issue 6; docs/batch.md "Contacts, distance and volumes") ---------------------
+
+  /// contacts: up to 4 contact points of A and B whose separation is <= margin (>= 0, finite),
+  /// at least one operand convex (two meshes: InvalidInput). Empty when farther apart than margin.
+  std::vector<WorldContact> contacts(const WorldOperand& a, const WorldOperand& b, double margin = 0);
+  /// distance: signed distance of A and B (at least one convex).
+  WorldDistance distance(const WorldOperand& a, const WorldOperand& b);
+  /// mesh_distance: the smallest distance between the triangles of a (placed by ta) and b (by
+  /// tb), 0 when the surfaces touch or cross, with the points and triangles realising it; nothing
+  /// when it exceeds maxDistance (>= 0; the early-out bound).
+  std::optional<WorldDistance> meshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
+                                            double maxDistance = std::numeric_limits<double>::infinity());
+  /// model_distance: the same between two models in world space.
+  std::optional<WorldDistance> modelDistance(ModelHandle a, ModelHandle b,
+                                             double maxDistance = std::numeric_limits<double>::infinity());
+
+  /// point_inside: is p in the closed solid bounded by the mesh (surface included)? A mesh that
+  /// is not closed (crux::closedness) throws InvalidInput naming it and the first bad edge.
+  bool pointInside(MeshHandle mesh, const Vec3& p);
+  /// mesh_<shape> with "volume": true: the shape touches the closed solid (its surface, or lies
+  /// wholly inside). Not closed: InvalidInput as pointInside.
+  bool overlapsVolume(MeshHandle mesh, const Sphere& s);
+  bool overlapsVolume(MeshHandle mesh, const Aabb& b);
+  bool overlapsVolume(MeshHandle mesh, const Obb& b);
+  bool overlapsVolume(MeshHandle mesh, const Triangle& t);
+
   // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
 
   /// mesh_<shape> with "triangles": true: the ascending indices of the mesh's triangles the
@@ -405,6 +497,19 @@ class CollisionWorld {
   virtual std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly);
   virtual std::vector<std::pair<std::string, std::string>> doScenePairs();
 
+  /// Narrow phase; operands validated, handles resolved, margin/max checked.
+  virtual std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin);
+  virtual WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b);
+  virtual std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b,
+                                                      const Transform& tb, double maxDistance);
+  virtual std::optional<WorldDistance> doModelDistance(ModelHandle a, ModelHandle b, double maxDistance);
+  /// Volume mode; the base has checked that the mesh is closed (the verdict is cached per mesh).
+  virtual bool doPointInside(MeshHandle mesh, const Vec3& p);
+  virtual bool doOverlapsVolume(MeshHandle mesh, const Sphere& s);
+  virtual bool doOverlapsVolume(MeshHandle mesh, const Aabb& b);
+  virtual bool doOverlapsVolume(MeshHandle mesh, const Obb& b);
+  virtual bool doOverlapsVolume(MeshHandle mesh, const Triangle& t);
+
   /// Extensions; the defaults return nothing (triangles not listed).
   virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
   virtual std::optional<std::vector<std::pair<std::uint32_t, std::uint32_t>>> doTouchingTrianglePairs(
@@ -414,7 +519,14 @@ class CollisionWorld {
   struct MeshEntry {
     std::string name;
     std::shared_ptr<const Mesh> mesh;
+    /// Empty when the mesh is closed, else why not (MeshClosedness::reason); computed on the
+    /// first volume query (O(n log n), std::call_once: safe under concurrent queries).
+    std::shared_ptr<ClosedVerdict> closed;
   };
+  /// Validates an operand of contacts/distance named `field` ("a", "b").
+  void validateOperand(const WorldOperand& o, const std::string& field) const;
+  /// Throws InvalidInput("mesh: <reason>") unless the mesh is closed.
+  void requireClosed(MeshHandle mesh, const std::string& field) const;
   /// Runs a hook, letting crux's own exceptions through and wrapping any other.
   template <class F>
   auto guarded(WorldOp op, F&& f) -> decltype(f());

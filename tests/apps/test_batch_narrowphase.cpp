@@ -1,0 +1,276 @@
+// `crux batch`: the narrow-phase and volume ops (apps/cli/narrowphase_ops.cpp, the "volume" flag
+// of apps/cli/mesh_ops.cpp; docs/batch.md "Contacts, distance and volumes"): round trips of every
+// op on hand-checked cases, the operand encodings, errors naming their field, unsupported ops per
+// backend, and the same answers through the world API.
+
+#include "apps/batch_test_util.hpp"
+#include "cli/batch.hpp"
+
+#include <crux/world/collision_world.hpp>
+#include <world_factory.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace crux::cli {
+namespace {
+
+using test::errorOf;
+using test::isPoint;
+
+/// The unit cube [0,1]^3, 12 outward counter-clockwise triangles (top face: triangles 2, 3).
+const std::string kCube =
+    R"({"op":"mesh","name":"cube","vertices":[[0,0,0],[1,0,0],[1,1,0],[0,1,0],[0,0,1],[1,0,1],[1,1,1],[0,1,1]],)"
+    R"("triangles":[[0,2,1],[0,3,2],[4,5,6],[4,6,7],[0,1,5],[0,5,4],[1,2,6],[1,6,5],[2,3,7],[2,7,6],[3,0,4],[3,4,7]]})";
+const std::string kQuad =
+    R"({"op":"mesh","name":"quad","vertices":[[0,0,0],[1,0,0],[1,1,0],[0,1,0]],"triangles":[[0,1,2],[0,2,3]]})";
+const std::string kAxes = R"("axes":[[1,0,0],[0,1,0],[0,0,1]])";
+
+/// A batch with the cube and the open quad defined.
+struct Batch {
+  BatchState state;
+  explicit Batch(Backend backend = Backend::Native) : state(BatchOptions{backend, 1}) {
+    EXPECT_EQ(errorOf(answerLine(kCube, state)), "");
+    EXPECT_EQ(errorOf(answerLine(kQuad, state)), "");
+  }
+  Answer ask(const std::string& line) { return answerLine(line, state); }
+};
+
+bool built(std::string_view backend) {
+  const auto& b = builtBackends();
+  return std::find(b.begin(), b.end(), backend) != b.end();
+}
+
+TEST(BatchNarrowPhase, ContactsOfABoxOnTheCube) {
+  Batch b;
+  // A box of half extents 0.25, 0.25, 0.5 whose bottom face is 0.125 inside the cube's top.
+  const std::string box = R"({"box":{"center":[0.5,0.5,1.375],"half":[0.25,0.25,0.5],)" + kAxes + "}}";
+  const Answer a = b.ask(R"({"id":"c","op":"contacts","a":{"mesh":"cube"},"b":)" + box + "}");
+  ASSERT_EQ(errorOf(a), "") << a.dump();
+  EXPECT_EQ(a["id"], "c");
+  ASSERT_EQ(a["contacts"].size(), 4u) << a.dump();
+  for (const auto& c : a["contacts"]) {
+    EXPECT_TRUE(isPoint(c["normal"], 0, 0, -1)) << c.dump();  // from B (the box, above) to A
+    EXPECT_NEAR(c["depth"].get<double>(), 0.125, 1e-6);
+    EXPECT_NEAR(c["point_a"][2].get<double>(), 1, 1e-6);
+    EXPECT_NEAR(c["point_b"][2].get<double>(), 0.875, 1e-6);
+    const auto triangle = c["feature_a"].get<int>();
+    EXPECT_TRUE(triangle == 2 || triangle == 3) << c.dump();
+    EXPECT_TRUE(c["feature_b"].is_number_integer()) << c.dump();
+  }
+  // Swapped: same points swapped, normal up.
+  const Answer s = b.ask(R"({"op":"contacts","a":)" + box + R"(,"b":{"mesh":"cube"}})");
+  ASSERT_EQ(s["contacts"].size(), 4u) << s.dump();
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(s["contacts"][i]["point_a"], a["contacts"][i]["point_b"]);
+    EXPECT_TRUE(isPoint(s["contacts"][i]["normal"], 0, 0, 1));
+    EXPECT_EQ(s["contacts"][i]["feature_b"], a["contacts"][i]["feature_a"]);
+  }
+  // A transform on the mesh operand: the cube lifted by 2 no longer touches the box ...
+  EXPECT_EQ(b.ask(R"({"op":"contacts","a":{"mesh":"cube","transform":{"translation":[0,0,2]}},"b":)" + box + "}")
+                ["contacts"]
+                .size(),
+            0u);
+  // ... and a margin reports speculative contacts (depth < 0) 0.125 apart.
+  const std::string above = R"({"box":{"center":[0.5,0.5,1.625],"half":[0.25,0.25,0.5],)" + kAxes + "}}";
+  EXPECT_EQ(b.ask(R"({"op":"contacts","a":{"mesh":"cube"},"b":)" + above + "}")["contacts"].size(), 0u);
+  const Answer m = b.ask(R"({"op":"contacts","a":{"mesh":"cube"},"b":)" + above + R"(,"margin":0.25})");
+  ASSERT_EQ(m["contacts"].size(), 4u) << m.dump();
+  EXPECT_NEAR(m["contacts"][0]["depth"].get<double>(), -0.125, 1e-6);
+}
+
+TEST(BatchNarrowPhase, ConvexConvexContactsAndDistances) {
+  Batch b;
+  const std::string unitBox = R"({"box":{"center":[0,0,0],"half":[1,1,1],)" + kAxes + "}}";
+  // A sphere of radius 0.5 centred 0.25 above the box's top face (z = 1): 0.25 deep.
+  const Answer c = b.ask(R"({"op":"contacts","a":)" + unitBox + R"(,"b":{"sphere":{"center":[0,0,1.25],"radius":0.5}}})");
+  ASSERT_EQ(c["contacts"].size(), 1u) << c.dump();
+  EXPECT_NEAR(c["contacts"][0]["depth"].get<double>(), 0.25, 1e-6);
+  EXPECT_TRUE(isPoint(c["contacts"][0]["point_a"], 0, 0, 1));
+  EXPECT_TRUE(isPoint(c["contacts"][0]["point_b"], 0, 0, 0.75));
+  // Distance: negative when penetrating, the points, the normal from B to A.
+  const Answer d = b.ask(R"({"op":"distance","a":)" + unitBox + R"(,"b":{"sphere":{"center":[0,0,1.25],"radius":0.5}}})");
+  EXPECT_NEAR(d["distance"].get<double>(), -0.25, 1e-6) << d.dump();
+  EXPECT_TRUE(isPoint(d["normal"], 0, 0, -1));
+  EXPECT_FALSE(d.contains("triangle_a"));
+  // Separated capsule (along x at height 3, radius 0.5) and a rotated box: distance 1.5.
+  const Answer e = b.ask(
+      R"({"op":"distance","a":{"capsule":{"a":[-1,0,0],"b":[1,0,0],"radius":0.5},"transform":{"translation":[0,0,3]}},)"
+      R"("b":)" + unitBox + "}");
+  EXPECT_NEAR(e["distance"].get<double>(), 1.5, 1e-6) << e.dump();
+  EXPECT_NEAR(e["point_a"][2].get<double>(), 2.5, 1e-6);
+  EXPECT_NEAR(e["point_b"][2].get<double>(), 1, 1e-6);
+  EXPECT_TRUE(isPoint(e["normal"], 0, 0, 1));
+  // A hull (tetrahedron) moved by 3 along x, vertex (3,0,0) nearest a unit sphere at the origin.
+  const Answer h = b.ask(
+      R"({"op":"distance","a":{"hull":{"points":[[0,0,0],[1,0,0],[0,1,0],[0,0,1]]},"transform":{"translation":[3,0,0]}},)"
+      R"("b":{"sphere":{"center":[0,0,0],"radius":1}}})");
+  EXPECT_NEAR(h["distance"].get<double>(), 2, 1e-6) << h.dump();
+  EXPECT_TRUE(isPoint(h["point_a"], 3, 0, 0));
+  EXPECT_TRUE(isPoint(h["point_b"], 1, 0, 0));
+  // A triangle operand against the mesh: 2 above its top face.
+  const Answer t = b.ask(R"({"op":"distance","a":{"triangle":[[0,0,3],[1,0,3],[0,1,3]]},"b":{"mesh":"cube"}})");
+  EXPECT_NEAR(t["distance"].get<double>(), 2, 1e-6) << t.dump();
+  EXPECT_TRUE(t["triangle_b"] == 2 || t["triangle_b"] == 3) << t.dump();
+}
+
+TEST(BatchNarrowPhase, MeshAndModelDistance) {
+  Batch b;
+  const Answer a = b.ask(R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[3,0.5,0]}})");
+  ASSERT_EQ(errorOf(a), "") << a.dump();
+  EXPECT_EQ(a["found"], true);
+  EXPECT_NEAR(a["distance"].get<double>(), 2, 1e-6);
+  EXPECT_NEAR(a["point_a"][0].get<double>(), 1, 1e-6);
+  EXPECT_NEAR(a["point_b"][0].get<double>(), 3, 1e-6);
+  EXPECT_TRUE(a["triangle_a"].is_number_integer() && a["triangle_b"].is_number_integer());
+  EXPECT_EQ(b.ask(R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[3,0,0]},"max":1.5})")
+                .dump(),
+            R"({"op":"mesh_distance","found":false})");
+  // Overlapping surfaces: distance 0.
+  EXPECT_EQ(b.ask(R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[0.5,0.5,0.5]}})")
+                ["distance"]
+                .get<double>(),
+            0.0);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"m1","mesh":"cube"})")), "");
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"m2","mesh":"cube","transform":{"translation":[0,0,5]}})")),
+            "");
+  const Answer m = b.ask(R"({"op":"model_distance","a":"m1","b":"m2"})");
+  EXPECT_NEAR(m["distance"].get<double>(), 4, 1e-6) << m.dump();
+  EXPECT_NEAR(m["point_b"][2].get<double>(), 5, 1e-6);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"model_distance","a":"m1","b":"zz"})")),
+            R"(b: no model named "zz" (add it first with add_model))");
+}
+
+TEST(BatchNarrowPhase, PointInsideAndVolumeMode) {
+  Batch b;
+  const auto inside = [&](const std::string& point) {
+    return b.ask(R"({"op":"point_inside","mesh":"cube","point":)" + point + "}")["inside"];
+  };
+  EXPECT_EQ(inside("[0.5,0.5,0.5]"), true);
+  EXPECT_EQ(inside("[1,1,1]"), true);  // a corner: surface points are inside (closed set)
+  EXPECT_EQ(inside("[1,0.5,0.5]"), true);
+  EXPECT_EQ(inside("[1.5,0.5,0.5]"), false);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"point_inside","mesh":"quad","point":[0,0,0]})")),
+            R"(mesh: mesh "quad" is not closed: edge (0,1) is used by 1 triangle (4 boundary, 0 non-manifold, 0 )"
+            R"(inconsistently oriented edges))");
+  // A small sphere inside: the surface test says no, volume mode says yes.
+  const std::string sphere = R"("sphere":{"center":[0.5,0.5,0.5],"radius":0.1})";
+  EXPECT_EQ(b.ask(R"({"op":"mesh_sphere","mesh":"cube",)" + sphere + "}")["hit"], false);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_sphere","mesh":"cube",)" + sphere + R"(,"volume":true})")["hit"], true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_sphere","mesh":"cube","sphere":{"center":[2.5,0.5,0.5],"radius":0.1},"volume":true})")
+                ["hit"],
+            false);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_aabb","mesh":"cube","aabb":{"min":[0.2,0.2,0.2],"max":[0.3,0.3,0.3]},"volume":true})")
+                ["hit"],
+            true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_obb","mesh":"cube","obb":{"center":[0.5,0.5,0.5],"half":[0.1,0.1,0.1],)" + kAxes +
+                  R"(},"volume":true})")["hit"],
+            true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_triangle","mesh":"cube","triangle":[[0.2,0.2,0.2],[0.3,0.2,0.2],[0.2,0.3,0.2]],)"
+                  R"("volume":true})")["hit"],
+            true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_sphere","mesh":"cube",)" + sphere + R"(,"volume":false})")["hit"], false);
+  // Errors.
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_sphere","mesh":"quad",)" + sphere + R"(,"volume":true})")).rfind(
+                R"(mesh: mesh "quad" is not closed)", 0),
+            0u);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_sphere","mesh":"cube",)" + sphere + R"(,"volume":1})")),
+            "volume: expected true or false, got number");
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_sphere","mesh":"cube",)" + sphere + R"(,"volume":true,"triangles":true})"))
+                .rfind("volume: cannot be combined", 0),
+            0u);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_plane","mesh":"cube","plane":{"normal":[0,0,1],"d":0.5},"volume":true})"))
+                .rfind("volume: volume mode is defined for", 0),
+            0u);
+}
+
+TEST(BatchNarrowPhase, ErrorsNameTheField) {
+  Batch b;
+  const std::string s = R"({"sphere":{"center":[0,0,3],"radius":1}})";
+  const auto err = [&](const std::string& line) { return errorOf(b.ask(line)); };
+  const auto startsWith = [](const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; };
+  EXPECT_EQ(err(R"({"op":"contacts","a":{"mesh":"cube"},"b":{"mesh":"cube"}})"),
+            "b: contacts need at least one convex operand (a and b are both meshes; mesh_distance measures two "
+            "meshes)");
+  EXPECT_EQ(err(R"({"op":"contacts","a":{"sphere":{"center":[0,0,0],"radius":-1}},"b":{"mesh":"cube"}})"),
+            "a.sphere.radius is negative: -1");
+  EXPECT_EQ(err(R"({"op":"contacts","a":)" + s + R"(,"b":{"mesh":"cube"},"margin":-1})"),
+            "margin: must be finite and >= 0, got -1");
+  EXPECT_EQ(err(R"({"op":"contacts","a":)" + s + R"(,"b":{"mesh":"cube"},"margin":"x"})"),
+            "margin: expected a number, got string");
+  EXPECT_EQ(err(R"({"op":"contacts","a":{"hull":{"points":[]}},"b":{"mesh":"cube"}})"),
+            "a.hull.points is empty: a convex hull needs at least one point");
+  EXPECT_EQ(err(R"({"op":"contacts","a":{"hull":{"points":[[0,0]]}},"b":)" + s + "}"),
+            "a.hull.points[0]: expected [x, y, z], got an array of 2 elements");
+  EXPECT_EQ(err(R"({"op":"contacts","a":{"sphere":{"center":[0,0,0],"radius":1},"box":{}},"b":)" + s + "}"),
+            R"(a: expected exactly one shape, got both "sphere" and "box")");
+  EXPECT_EQ(err(R"({"op":"distance","a":{"cone":{}},"b":)" + s + "}"),
+            R"(a: expected one of "sphere", "box", "capsule", "hull", "triangle", "mesh")");
+  EXPECT_EQ(err(R"({"op":"distance","a":[1,2],"b":)" + s + "}").rfind("a: expected an operand", 0), 0u);
+  EXPECT_EQ(err(R"({"op":"distance","a":)" + s + "}"), "b: missing field");
+  EXPECT_EQ(err(R"({"op":"distance","a":{"mesh":"nope"},"b":)" + s + "}"),
+            R"(a.mesh: no mesh named "nope" (define it first with mesh or load_mesh))");
+  EXPECT_EQ(err(R"({"op":"distance","a":{"capsule":{"a":[0,0,0],"b":[1,0,0]}},"b":)" + s + "}"),
+            "a.capsule.radius: missing field");
+  EXPECT_TRUE(startsWith(err(R"({"op":"distance","a":{"capsule":{"a":[0,0,0],"b":[1,0,0],"radius":-2}},"b":)" + s +
+                             "}"),
+                         "a.capsule"));
+  EXPECT_TRUE(startsWith(
+      err(R"({"op":"distance","a":{"mesh":"cube","transform":{"rotation":[2,0,0,0]}},"b":)" + s + "}"),
+      "a.transform.rotation: not a unit quaternion"));
+  EXPECT_EQ(err(R"({"op":"distance","a":{"sphere":{"center":[0,0,1e400],"radius":1}},"b":)" + s + "}"),
+            "a.sphere.center[2]: number 1e400 overflows double");
+  EXPECT_EQ(err(R"({"op":"mesh_distance","a":"cube","b":"cube","max":-1})"), "max: must be >= 0, got -1.0");
+  EXPECT_EQ(err(R"({"op":"mesh_distance","a":"cube","b":"x"})"),
+            R"(b: no mesh named "x" (define it first with mesh or load_mesh))");
+  EXPECT_EQ(err(R"({"op":"point_inside","mesh":"cube"})"), "point: missing field");
+  EXPECT_EQ(err(R"({"op":"point_inside","mesh":"cube","point":[0,0]})"),
+            "point: expected [x, y, z], got an array of 2 elements");
+}
+
+/// Each backend answers exactly the narrow-phase ops its world supports(), and the peers that
+/// answer agree with native on these clear cases.
+TEST(BatchNarrowPhase, PeersAnswerWhatTheySupportAndAgreeOnClearCases) {
+  const std::vector<std::string> lines = {
+      R"({"op":"point_inside","mesh":"cube","point":[0.5,0.25,0.75]})",
+      R"({"op":"point_inside","mesh":"cube","point":[1.5,0.25,0.75]})",
+      R"({"op":"mesh_sphere","mesh":"cube","sphere":{"center":[0.5,0.5,0.5],"radius":0.2},"volume":true})",
+      R"({"op":"mesh_aabb","mesh":"cube","aabb":{"min":[2,2,2],"max":[3,3,3]},"volume":true})",
+      R"({"op":"distance","a":{"mesh":"cube"},"b":{"box":{"center":[0.5,0.5,3],"half":[0.5,0.5,0.5],)" + kAxes +
+          "}}}",
+      R"({"op":"distance","a":{"capsule":{"a":[-1,0,0],"b":[1,0,0],"radius":0.5}},"b":{"sphere":{"center":[0,3,0],"radius":1}}})",
+      R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[0,0,3]}})",
+  };
+  Batch native;
+  std::vector<Answer> want;
+  for (const std::string& l : lines) want.push_back(native.ask(l));
+  for (const std::string_view name : builtBackends()) {
+    if (name == "native") continue;
+    Batch peer(*parseBackend(name));
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const Answer got = peer.ask(lines[i]);
+      const std::string op = Json::parse(lines[i])["op"];
+      const bool volume = lines[i].find("\"volume\":true") != std::string::npos;
+      WorldOp worldOp = *parseOp(op);
+      if (volume) worldOp = op == "mesh_sphere" ? WorldOp::MeshSphereVolume : WorldOp::MeshAabbVolume;
+      if (!peer.state.world->supports(worldOp)) {
+        EXPECT_EQ(errorOf(got), "unsupported: " + std::string(opName(worldOp)) + " on " + std::string(name));
+        continue;
+      }
+      ASSERT_EQ(errorOf(got), "") << name << ": " << lines[i];
+      if (got.contains("inside")) EXPECT_EQ(got["inside"], want[i]["inside"]) << name << ": " << lines[i];
+      if (got.contains("hit")) EXPECT_EQ(got["hit"], want[i]["hit"]) << name << ": " << lines[i];
+      if (got.contains("distance"))
+        EXPECT_NEAR(got["distance"].get<double>(), want[i]["distance"].get<double>(), 1e-5)
+            << name << ": " << lines[i] << " -> " << got.dump();
+    }
+  }
+  if (built("exact")) EXPECT_TRUE(makeWorld("exact")->supports(WorldOp::PointInside));
+  if (built("fcl")) EXPECT_TRUE(makeWorld("fcl")->supports(WorldOp::MeshDistance));
+}
+
+}  // namespace
+}  // namespace crux::cli

@@ -1,0 +1,354 @@
+// Mesh–mesh and model–model distance (src/mesh/mesh_distance.cpp, model_query.cpp) against
+// brute force: the BVH path against the BruteForce path (same triangle routine: equal minima),
+// and both against an independent reference — the exact CGAL distance over every triangle pair
+// (triangles mapped into a's frame in double by the test) — on small seeded meshes; the
+// maxDistance / stopDistance contract; exact zero for touching and crossing integer-grid meshes
+// (agreeing with the exact mesh–mesh overlap test); a real mesh (blob.off) against brute force.
+
+#include <crux/error.hpp>
+#include <crux/geometry/closest_point.hpp>
+#include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query.hpp>
+#include <crux/model/model_query.hpp>
+
+#include <exact/exact.hpp>
+#include <exact/exact_kernel.hpp>
+
+#include <gtest/gtest.h>
+
+#include <support/scene_fixtures.hpp>
+#include <support/test_scale.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <limits>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace crux {
+namespace {
+
+using Rng = std::mt19937_64;
+using crux::test::randomPose;
+
+constexpr double kRelative = 1e-6;
+constexpr double kAbsolute = 1e-12;
+/// Mapping b into a's frame rounds in Real: a few ulps of Real × the coordinate scale.
+constexpr double kMapUlps = 16 * double(std::numeric_limits<Real>::epsilon());
+
+std::string show(const Transform& t) {
+  std::ostringstream s;
+  s << std::setprecision(17) << "q=(" << t.rotation.w() << "," << t.rotation.x() << "," << t.rotation.y() << ","
+    << t.rotation.z() << ") t=(" << t.translation.transpose() << ")";
+  return s.str();
+}
+
+/// A random triangle soup of n triangles of size ~0.6 in [-1, 1]^3.
+std::shared_ptr<const Mesh> soup(Rng& rng, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), e(-0.3, 0.3);
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d c(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 3; ++k) v.push_back((c + Eigen::Vector3d(e(rng), e(rng), e(rng))).cast<Real>());
+    t.push_back({std::uint32_t(3 * i), std::uint32_t(3 * i + 1), std::uint32_t(3 * i + 2)});
+  }
+  return std::make_shared<const Mesh>(std::move(v), std::move(t), "soup");
+}
+
+/// Exact reference: min over all pairs of the exact distance between a's triangles and b's
+/// triangles mapped into a's frame in double (then rounded to double coordinates).
+double exactReference(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb) {
+  using namespace crux::exact::detail;
+  const Eigen::Quaterniond qa = ta.rotation.cast<double>().normalized(), qb = tb.rotation.cast<double>().normalized();
+  const Eigen::Matrix3d R = (qa.conjugate() * qb).toRotationMatrix();
+  const Eigen::Vector3d t = qa.conjugate() * (tb.translation.cast<double>() - ta.translation.cast<double>());
+  auto map = [&](const Vec3& p) { const Eigen::Vector3d x = R * p.cast<double>() + t; return Point(x.x(), x.y(), x.z()); };
+  std::vector<Simplex> sb;
+  for (std::uint32_t j = 0; j < b.triangleCount(); ++j) {
+    const Triangle tr = b.triangle(j);
+    sb.push_back(simplexOf(map(tr.a), map(tr.b), map(tr.c)));
+  }
+  FT best = -1;
+  for (std::uint32_t i = 0; i < a.triangleCount(); ++i) {
+    const Simplex sa = toSimplex(a.triangle(i));
+    const Triangle3* ta3 = std::get_if<Triangle3>(&sa);
+    for (const Simplex& s : sb) {
+      const Triangle3* tb3 = std::get_if<Triangle3>(&s);
+      if (!ta3 || !tb3) continue;  // the soups and spheres here have no degenerate triangles
+      const FT d = CGAL::do_intersect(*ta3, *tb3) ? FT(0) : CGAL::squared_distance(*ta3, *tb3);
+      if (best < 0 || d < best) best = d;
+    }
+  }
+  return std::sqrt(CGAL::to_double(best));
+}
+
+double scaleOf(const Mesh& a, const Mesh& b, const Transform& ta, const Transform& tb) {
+  auto mx = [](const Aabb& box) { return std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()); };
+  return double(std::max(mx(a.bounds()), mx(b.bounds())) + (tb.translation - ta.translation).cwiseAbs().maxCoeff());
+}
+
+/// The answer's own consistency: points on the reported triangles (world), gap = distance.
+void checkPoints(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb, const MeshMeshDistanceResult& r,
+                 double tol, const std::string& what) {
+  const Vec3 pa = ta.inverse().apply(r.pointA), pb = tb.inverse().apply(r.pointB);
+  EXPECT_LE(std::sqrt(double(squaredDistance(a.triangle(r.triangleA), pa))), tol) << what;
+  EXPECT_LE(std::sqrt(double(squaredDistance(b.triangle(r.triangleB), pb))), tol) << what;
+  EXPECT_NEAR(double((r.pointA - r.pointB).norm()), double(r.distance), tol) << what;
+}
+
+TEST(MeshDistance, BvhEqualsBruteForceAndExactOnSoups) {
+  Rng rng(11);
+  const int cases = crux::test::scaledCases(60, 20);
+  int separated = 0, touching = 0;
+  double worst = 0;
+  for (int c = 0; c < cases; ++c) {
+    const auto a = soup(rng, 24), b = soup(rng, 30);
+    const Transform ta = randomPose(rng, 0.5), tb = randomPose(rng, 1.6);
+    const MeshMeshDistanceResult bvh = distance(*a, ta, *b, tb);
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(*a, ta, *b, tb, brute);
+    const double exact = exactReference(*a, ta, *b, tb);
+    const double scale = scaleOf(*a, *b, ta, tb);
+    const std::string what = "case " + std::to_string(c) + " ta " + show(ta) + " tb " + show(tb);
+    ASSERT_TRUE(bvh.found && ref.found) << what;
+    EXPECT_EQ(bvh.distance, ref.distance) << what;
+    // The oriented-box accelerators only prune: same minimum, on either or both sides.
+    const MeshDistanceAccel accA(*a), accB(*b);
+    MeshDistanceOptions withAccel;
+    withAccel.accelA = &accA;
+    EXPECT_EQ(distance(*a, ta, *b, tb, withAccel).distance, ref.distance) << what;
+    withAccel.accelB = &accB;
+    EXPECT_EQ(distance(*a, ta, *b, tb, withAccel).distance, ref.distance) << what;
+    EXPECT_NEAR(double(bvh.distance), exact, kRelative * exact + kAbsolute * scale + kMapUlps * scale) << what;
+    checkPoints(*a, ta, *b, tb, bvh, kMapUlps * scale + kRelative * exact, what);
+    EXPECT_EQ(bvh.distance == 0, overlaps(*a, ta, *b, tb)) << what;
+    if (exact > 0) worst = std::max(worst, std::fabs(double(bvh.distance) - exact) / exact);
+    (bvh.distance > 0 ? separated : touching)++;
+  }
+  std::printf("soups: %d separated, %d intersecting, worst relative error vs exact %.3g\n", separated, touching, worst);
+  EXPECT_GT(separated, cases / 5);
+  EXPECT_GT(touching, cases / 10);
+}
+
+TEST(MeshDistance, MaxDistanceAndStopDistanceContract) {
+  Rng rng(12);
+  const auto a = test::bumpySphere(8, 12), b = test::bumpySphere(6, 10);
+  const int cases = crux::test::scaledCases(40, 20);
+  for (int c = 0; c < cases; ++c) {
+    const Transform ta = randomPose(rng, 1), tb = randomPose(rng, 4);
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(*a, ta, *b, tb, brute);
+    const std::string what = "case " + std::to_string(c) + " ta " + show(ta) + " tb " + show(tb);
+    ASSERT_TRUE(ref.found);
+    std::uniform_real_distribution<double> f(0.2, 1.8);
+    for (const QueryPath path : {QueryPath::Bvh, QueryPath::BruteForce}) {
+      MeshDistanceOptions o;
+      o.path = path;
+      o.maxDistance = Real(double(ref.distance) * f(rng));
+      const MeshMeshDistanceResult r = distance(*a, ta, *b, tb, o);
+      EXPECT_EQ(r.found, ref.distance <= o.maxDistance) << what;
+      if (r.found) EXPECT_EQ(r.distance, ref.distance) << what;
+      MeshDistanceOptions s;
+      s.path = path;
+      s.stopDistance = Real(double(ref.distance) * f(rng));
+      const MeshMeshDistanceResult e = distance(*a, ta, *b, tb, s);
+      ASSERT_TRUE(e.found) << what;
+      EXPECT_GE(e.distance, ref.distance) << what;
+      if (ref.distance <= s.stopDistance) EXPECT_LE(e.distance, s.stopDistance) << what;
+      else EXPECT_EQ(e.distance, ref.distance) << what;
+      EXPECT_EQ(e.stoppedEarly, e.distance > 0 && e.distance <= s.stopDistance) << what;
+    }
+  }
+}
+
+TEST(MeshDistance, IntegerGridTouchingAndCrossingGiveExactZero) {
+  // Grid meshes under integer translations and axis-aligned quarter turns: distance 0 exactly
+  // when (and only when) the exact overlap test says the surfaces touch.
+  Rng rng(13);
+  std::uniform_int_distribution<int> g(-3, 3), turn(0, 3);
+  auto gridSoup = [&](int n) {
+    std::vector<Vec3> v;
+    std::vector<TriangleIndices> t;
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) v.emplace_back(Real(g(rng)), Real(g(rng)), Real(g(rng)));
+      t.push_back({std::uint32_t(3 * i), std::uint32_t(3 * i + 1), std::uint32_t(3 * i + 2)});
+    }
+    return Mesh(std::move(v), std::move(t), "grid");
+  };
+  int zero = 0, positive = 0;
+  const int cases = crux::test::scaledCases(1500, 300);
+  for (int c = 0; c < cases; ++c) {
+    const Mesh a = gridSoup(4), b = gridSoup(4);
+    Transform tb;
+    tb.rotation = quatFromEulerDegrees(0, 0, Real(90 * turn(rng)));
+    tb.translation = Vec3(Real(g(rng) * 2), Real(g(rng) * 2), Real(g(rng) * 2));
+    const bool exactOverlap = overlaps(a, Transform::identity(), b, tb);
+    const MeshMeshDistanceResult r = distance(a, Transform::identity(), b, tb);
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(a, Transform::identity(), b, tb, brute);
+    EXPECT_EQ(r.distance == 0, exactOverlap) << "case " << c << " tb " << show(tb) << " d=" << r.distance;
+    EXPECT_EQ(r.distance, ref.distance) << "case " << c;
+    (r.distance == 0 ? zero : positive)++;
+  }
+  std::printf("grid: %d touching/crossing, %d apart\n", zero, positive);
+  EXPECT_GT(zero, cases / 10);
+  EXPECT_GT(positive, cases / 10);
+}
+
+TEST(MeshDistance, RealMeshAgainstBruteForce) {
+  const Mesh blob = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/blob.off");
+  Rng rng(14);
+  const Aabb box = blob.bounds();
+  const double size = double((box.max - box.min).norm());
+  for (int c = 0; c < 6; ++c) {
+    Transform tb = randomPose(rng, 0);
+    std::uniform_real_distribution<double> sep(0.2, 1.5);
+    const Eigen::Vector3d dir = Eigen::Vector3d::Random().normalized();
+    tb.translation = (dir * sep(rng) * size).cast<Real>();
+    const MeshDistanceAccel acc(blob);
+    MeshDistanceOptions withAccel;
+    withAccel.accelA = withAccel.accelB = &acc;
+    const MeshMeshDistanceResult r = distance(blob, Transform::identity(), blob, tb, withAccel);
+    EXPECT_EQ(distance(blob, Transform::identity(), blob, tb).distance, r.distance) << "case " << c;
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(blob, Transform::identity(), blob, tb, brute);
+    EXPECT_EQ(r.distance, ref.distance) << "case " << c << " " << show(tb);
+    checkPoints(blob, Transform::identity(), blob, tb, r, kMapUlps * 4 * size + 1e-6 * double(r.distance), "blob");
+  }
+}
+
+TEST(MeshDistance, ParallelGridsWithManyTiedPairsEqualBruteForce) {
+  // Two flat grids facing each other: thousands of node pairs have nearly the same bound, so the
+  // best-first heap overflows and its depth-first fallback runs.
+  auto grid = [](int n) {
+    std::vector<Vec3> v;
+    std::vector<TriangleIndices> t;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n; ++j) v.emplace_back(Real(i) / Real(n), Real(j) / Real(n), 0);
+    auto at = [n](int i, int j) { return std::uint32_t(i * (n + 1) + j); };
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+    return Mesh(std::move(v), std::move(t), "grid");
+  };
+  const Mesh a = grid(24);
+  const MeshDistanceAccel acc(a);
+  Rng rng(16);
+  for (int c = 0; c < 3; ++c) {
+    Transform tb;
+    if (c > 0) tb.rotation = Quat(Eigen::AngleAxis<Real>(Real(0.002 * c), Vec3(Real(0.3), 1, 0).normalized()));
+    tb.translation = Vec3(Real(0.013 * c), Real(0.007), Real(0.05));
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(a, Transform::identity(), a, tb, brute);
+    MeshDistanceOptions withAccel;
+    withAccel.accelA = withAccel.accelB = &acc;
+    EXPECT_EQ(distance(a, Transform::identity(), a, tb).distance, ref.distance) << "case " << c;
+    EXPECT_EQ(distance(a, Transform::identity(), a, tb, withAccel).distance, ref.distance) << "case " << c;
+  }
+}
+
+TEST(MeshDistance, ConcentricSpheresOverflowTheBestFirstHeapAndStayExact) {
+  // A sphere inside a sphere: every part of one is about equally far from the other, so the
+  // pending node pairs outgrow the fixed best-first heap and its depth-first fallback runs.
+  auto sphere = [](int rings, double radius) {
+    const int segments = 2 * rings;
+    std::vector<Vec3> v;
+    std::vector<TriangleIndices> t;
+    for (int i = 0; i <= rings; ++i)
+      for (int j = 0; j < segments; ++j) {
+        const double th = M_PI * i / rings, ph = 2 * M_PI * j / segments;
+        v.emplace_back(Real(radius * std::sin(th) * std::cos(ph)), Real(radius * std::sin(th) * std::sin(ph)),
+                       Real(radius * std::cos(th)));
+      }
+    auto at = [&](int i, int j) { return std::uint32_t(i * segments + (j % segments)); };
+    for (int i = 0; i < rings; ++i)
+      for (int j = 0; j < segments; ++j) {
+        t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+        t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+      }
+    return Mesh(std::move(v), std::move(t), "sphere");
+  };
+  const Mesh outer = sphere(20, 1.0), inner = sphere(10, 0.5);
+  const MeshDistanceAccel accOuter(outer), accInner(inner);
+  MeshDistanceOptions brute;
+  brute.path = QueryPath::BruteForce;
+  Rng rng(17);
+  for (int c = 0; c < 2; ++c) {
+    const Transform tb = randomPose(rng, 0.05);
+    const MeshMeshDistanceResult ref = distance(outer, Transform::identity(), inner, tb, brute);
+    MeshDistanceOptions withAccel;
+    withAccel.accelA = &accOuter;
+    withAccel.accelB = &accInner;
+    EXPECT_EQ(distance(outer, Transform::identity(), inner, tb).distance, ref.distance) << "case " << c;
+    EXPECT_EQ(distance(outer, Transform::identity(), inner, tb, withAccel).distance, ref.distance) << "case " << c;
+  }
+}
+
+TEST(MeshDistance, ModelDistanceUsesWorldTransforms) {
+  Rng rng(15);
+  const auto a = test::bumpySphere(6, 8), b = test::bumpySphere(5, 7);
+  for (int c = 0; c < 20; ++c) {
+    const Transform ta = randomPose(rng, 3), tb = randomPose(rng, 3);
+    const MeshMeshDistanceResult m = distance(PlacedMesh{a.get(), ta}, PlacedMesh{b.get(), tb});
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(*a, ta, *b, tb, brute);
+    const double scale = scaleOf(*a, *b, ta, tb);
+    EXPECT_NEAR(double(m.distance), double(ref.distance), kMapUlps * scale + kRelative * double(ref.distance));
+    checkPoints(*a, ta, *b, tb, m, 4 * kMapUlps * scale, "model case " + std::to_string(c));
+  }
+}
+
+TEST(MeshDistance, InvalidOptionsThrowNamingTheField) {
+  const auto a = test::bumpySphere(3, 4);
+  MeshDistanceOptions o;
+  o.maxDistance = std::numeric_limits<Real>::quiet_NaN();
+  try {
+    distance(*a, Transform::identity(), *a, Transform::identity(), o);
+    FAIL() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("maxDistance"), std::string::npos) << e.what();
+  }
+  o = {};
+  o.stopDistance = -1;
+  try {
+    distance(*a, Transform::identity(), *a, Transform::identity(), o);
+    FAIL() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("stopDistance"), std::string::npos) << e.what();
+  }
+  const auto other = test::bumpySphere(5, 6);
+  const MeshDistanceAccel foreign(*other);
+  o = {};
+  o.accelB = &foreign;
+  try {
+    distance(*a, Transform::identity(), *a, Transform::identity(), o);
+    FAIL() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("accelB"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MeshDistance, IdenticalPosesGiveZeroAndFarMeshesNotFound) {
+  const auto a = test::bumpySphere(6, 8);
+  EXPECT_EQ(distance(*a, Transform::identity(), *a, Transform::identity()).distance, 0);
+  Transform far;
+  far.translation = Vec3(100, 0, 0);
+  MeshDistanceOptions o;
+  o.maxDistance = 10;
+  EXPECT_FALSE(distance(*a, Transform::identity(), *a, far, o).found);
+}
+
+}  // namespace
+}  // namespace crux
