@@ -158,7 +158,7 @@ OpHandler meshShape(std::string key) {
         answer["hit"] = state.world->overlapsVolume(mesh, shape);
         return;
       } else {
-        fail("volume", "volume mode is defined for mesh_sphere, mesh_aabb, mesh_obb and mesh_triangle only");
+        fail("volume", "volume mode is defined for mesh_sphere, mesh_aabb, mesh_obb, mesh_triangle and mesh_mesh only");
       }
     }
     if (listTriangles) {
@@ -172,7 +172,8 @@ OpHandler meshShape(std::string key) {
   };
 }
 
-/// mesh_mesh: surfaces of a (placed by transform_a) and b (placed by transform_b) touch?
+/// mesh_mesh: surfaces of a (placed by transform_a) and b (placed by transform_b) touch? With
+/// "volume": true each closed operand is a solid (at least one must be closed).
 void meshMesh(const Json& request, Answer& answer, BatchState& state) {
   const std::string nameA = readMeshName(request, "a");
   const std::string nameB = readMeshName(request, "b");
@@ -183,8 +184,14 @@ void meshMesh(const Json& request, Answer& answer, BatchState& state) {
   const Transform ta = optionalTransform("transform_a");
   const Transform tb = optionalTransform("transform_b");
   const bool listTriangles = readFlag(request, "triangles");
+  const bool volume = readFlag(request, "volume");
+  if (volume && listTriangles) fail("volume", "cannot be combined with \"triangles\" (they list surface contacts)");
   const MeshHandle a = findMesh(state, "a", nameA);
   const MeshHandle b = findMesh(state, "b", nameB);
+  if (volume) {
+    answer["hit"] = state.world->overlapsVolume(a, ta, b, tb);
+    return;
+  }
   if (listTriangles) {
     if (const auto pairs = state.world->touchingTrianglePairs(a, ta, b, tb)) {
       answer["hit"] = !pairs->empty();

@@ -142,6 +142,11 @@ OpHandler modelShape(std::string key) {
   return [key](const Json& request, Answer& answer, BatchState& state) {
     const std::string name = readModelName(request, "model");
     const auto shape = readField<Shape>(request, key);
+    // Volume mode on models is not implemented yet: refuse it rather than answer the surface
+    // test silently (docs/batch.md "Volume mode").
+    if (readFlag(request, "volume"))
+      fail("volume", "volume mode is not implemented for model ops (mesh_sphere, mesh_aabb, mesh_obb, "
+                     "mesh_triangle and mesh_mesh have it)");
     const ModelHandle model = findModel(state, "model", name);
     validate(shape, key);
     answer["hit"] = touches(*state.world, model, shape);

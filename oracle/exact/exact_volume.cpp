@@ -24,10 +24,12 @@ struct ExactSolid::Impl {
   std::unique_ptr<CGAL::Side_of_triangle_mesh<SurfaceMesh, K>> side;
 };
 
-ExactSolid::ExactSolid(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+ExactSolid::ExactSolid(const Mesh& mesh) : ExactSolid(mesh, ExactRigid()) {}
+
+ExactSolid::ExactSolid(const Mesh& mesh, const ExactRigid& place) : impl_(std::make_unique<Impl>()) {
   std::vector<Point> points;
   points.reserve(mesh.vertexCount());
-  for (const Vec3& v : mesh.vertices()) points.push_back(toPoint(v));
+  for (const Vec3& v : mesh.vertices()) points.push_back(place.apply(v));
   std::vector<std::array<std::size_t, 3>> faces;
   faces.reserve(mesh.triangleCount());
   for (std::size_t i = 0; i < mesh.triangleCount(); ++i) {
@@ -46,6 +48,7 @@ ExactSolid::ExactSolid(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
 
 ExactSolid::~ExactSolid() = default;
 
-bool ExactSolid::contains(const Vec3& p) const { return (*impl_->side)(toPoint(p)) != CGAL::ON_UNBOUNDED_SIDE; }
+bool ExactSolid::contains(const Vec3& p) const { return contains(toPoint(p)); }
+bool ExactSolid::contains(const Point& p) const { return (*impl_->side)(p) != CGAL::ON_UNBOUNDED_SIDE; }
 
 }  // namespace crux::exact

@@ -17,6 +17,8 @@
 /// precondition violation for CGAL and throws std::runtime_error (reported by the world as
 /// "exact failed on ...").
 
+#include "exact/exact_rigid.hpp"
+
 #include <crux/mesh/mesh.hpp>
 
 #include <memory>
@@ -28,12 +30,16 @@ class ExactSolid {
  public:
   /// Builds the Surface_mesh and the AABB tree (O(n log n), exact points).
   explicit ExactSolid(const Mesh& mesh);
+  /// The mesh placed by `place` (its vertices mapped exactly): the solid in world space, for
+  /// mesh_mesh volume (each mesh by its own transform, as the exact surface test places them).
+  ExactSolid(const Mesh& mesh, const detail::ExactRigid& place);
   ~ExactSolid();
   ExactSolid(const ExactSolid&) = delete;
   ExactSolid& operator=(const ExactSolid&) = delete;
 
   /// Is p inside the solid or on its surface?
   bool contains(const Vec3& p) const;
+  bool contains(const detail::Point& p) const;
 
  private:
   struct Impl;

@@ -140,6 +140,20 @@ class ExactWorld final : public CollisionWorld {
   bool doOverlapsVolume(MeshHandle m, const Aabb& b) override { return doOverlaps(m, b) || solid(m).contains(b.min); }
   bool doOverlapsVolume(MeshHandle m, const Obb& b) override { return doOverlaps(m, b) || solid(m).contains(b.center); }
   bool doOverlapsVolume(MeshHandle m, const Triangle& t) override { return doOverlaps(m, t) || solid(m).contains(t.a); }
+  /// mesh_mesh volume: the exact surface test, else a vertex of the other mesh inside a closed
+  /// one, both meshes placed exactly in the world (ExactSolid of the placed mesh, Side_of_triangle_mesh).
+  bool doOverlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb, bool aClosed,
+                        bool bClosed) override {
+    if (doOverlaps(a, ta, b, tb)) return true;
+    const ExactRigid ra(ta, ExactRigid::Rotation::Snapped), rb(tb, ExactRigid::Rotation::Snapped);
+    const auto vertexInside = [](const Mesh& solidMesh, const ExactRigid& rs, const Mesh& other, const ExactRigid& ro) {
+      const ExactSolid s(solidMesh, rs);
+      for (const TriangleIndices& t : other.triangles())
+        if (s.contains(ro.apply(other.vertices()[t[0]]))) return true;
+      return false;
+    };
+    return (aClosed && vertexInside(mesh(a), ra, mesh(b), rb)) || (bClosed && vertexInside(mesh(b), rb, mesh(a), ra));
+  }
 
   Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return exact::closestPoint(t, p); }
   bool doOverlaps(const Triangle& t, const Sphere& s) override { return exact::overlaps(t, s); }

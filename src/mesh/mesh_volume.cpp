@@ -4,6 +4,7 @@
 #include <crux/mesh/mesh_volume.hpp>
 
 #include <crux/error.hpp>
+#include <crux/geometry/axis_aligned.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
 #include <crux/mesh/mesh_query.hpp>
@@ -12,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace crux {
@@ -327,6 +329,62 @@ bool MeshVolume::overlaps(const Sphere& s) const { return crux::overlaps(*mesh_,
 bool MeshVolume::overlaps(const Aabb& b) const { return crux::overlaps(*mesh_, b) || contains(b.min); }
 bool MeshVolume::overlaps(const Obb& b) const { return crux::overlaps(*mesh_, b) || contains(b.center); }
 bool MeshVolume::overlaps(const Triangle& t) const { return crux::overlaps(*mesh_, t) || contains(t.a); }
+
+namespace {
+
+/// Points of b in a's frame by ta⁻¹·tb, with the mesh layer's rule for mesh–mesh (the surface
+/// test maps b's triangles by the same rule, mesh_query.cpp): identity skipped, an axis-aligned
+/// relative rotation applied as its exact signed permutation (translation Pᵀ(t_b - t_a) when ta
+/// is axis-aligned too), any other rotation by the rounded rigid transform.
+class PointFrame {
+ public:
+  PointFrame(const Transform& ta, const Transform& tb) {
+    const bool same = ta.rotation.coeffs() == tb.rotation.coeffs() && ta.translation == tb.translation;
+    rel_ = ta.inverse() * tb;
+    if (const std::optional<Quat> s = snapAxisAligned(rel_.rotation.normalized())) {
+      aligned_ = true;
+      rel_.rotation = *s;
+      if (const std::optional<Quat> sa = snapAxisAligned(ta.rotation.normalized()))
+        rel_.translation = signedPermutation(*sa).transpose() * (tb.translation - ta.translation);
+      rotation_ = signedPermutation(rel_.rotation);
+    }
+    identity_ = same || (rel_.rotation.vec().isZero(0) && rel_.translation.isZero(0));
+  }
+  Vec3 map(const Vec3& p) const {
+    if (identity_) return p;
+    if (aligned_) return Vec3(rotation_ * p + rel_.translation);
+    return rel_.apply(p);
+  }
+
+ private:
+  Transform rel_;
+  Mat3 rotation_ = Mat3::Identity();
+  bool identity_ = true;
+  bool aligned_ = false;
+};
+
+/// Is a corner of some triangle of b (one per triangle, consecutive repeats skipped) inside a?
+bool someCornerInside(const MeshVolume& a, const Mesh& b, const PointFrame& frame) {
+  const Aabb& box = a.mesh().bounds();
+  std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
+  for (const TriangleIndices& t : b.triangles()) {
+    if (t[0] == last) continue;
+    last = t[0];
+    const Vec3 p = frame.map(b.vertices()[t[0]]);
+    if (boxContains(box, p) && a.contains(p)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool overlapsVolume(const MeshVolume& a, const Transform& ta, const Mesh& b, const Transform& tb) {
+  return crux::overlaps(a.mesh(), ta, b, tb) || someCornerInside(a, b, PointFrame(ta, tb));
+}
+
+bool overlapsVolume(const MeshVolume& a, const Transform& ta, const MeshVolume& b, const Transform& tb) {
+  return overlapsVolume(a, ta, b.mesh(), tb) || someCornerInside(b, a.mesh(), PointFrame(tb, ta));
+}
 
 bool pointInside(const Mesh& mesh, const Vec3& p) { return MeshVolume(mesh).contains(p); }
 bool overlapsVolume(const Mesh& mesh, const Sphere& s) { return MeshVolume(mesh).overlaps(s); }

@@ -20,7 +20,8 @@ constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
     "mesh_aabb", "mesh_obb", "mesh_plane", "mesh_triangle", "mesh_mesh", "add_model", "set_transform",
     "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
     "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs", "contacts", "distance", "mesh_distance", "model_distance",
-    "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume"};
+    "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume",
+    "mesh_mesh volume"};
 
 std::array<WorldOp, kWorldOpCount> makeOpList() {
   std::array<WorldOp, kWorldOpCount> ops{};
@@ -411,10 +412,15 @@ void CollisionWorld::validateOperand(const WorldOperand& o, const std::string& f
       o.shape);
 }
 
-void CollisionWorld::requireClosed(MeshHandle mesh, const std::string& field) const {
+const std::string& CollisionWorld::notClosedReason(MeshHandle mesh, const std::string& field) const {
   const MeshEntry& e = entry(mesh, field);
   std::call_once(e.closed->once, [&] { e.closed->notClosed = closedness(*e.mesh).reason(e.name); });
-  if (!e.closed->notClosed.empty()) throw InvalidInput(field + ": " + e.closed->notClosed);
+  return e.closed->notClosed;
+}
+
+void CollisionWorld::requireClosed(MeshHandle mesh, const std::string& field) const {
+  const std::string& reason = notClosedReason(mesh, field);
+  if (!reason.empty()) throw InvalidInput(field + ": " + reason);
 }
 
 std::vector<WorldContact> CollisionWorld::contacts(const WorldOperand& a, const WorldOperand& b, double margin) {
@@ -495,6 +501,19 @@ bool CollisionWorld::overlapsVolume(MeshHandle mesh, const Triangle& t) {
   return guarded(WorldOp::MeshTriangleVolume, [&] { return doOverlapsVolume(mesh, t); });
 }
 
+bool CollisionWorld::overlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb) {
+  entry(a, "a");
+  entry(b, "b");
+  validateTransform(ta, "transform_a");
+  validateTransform(tb, "transform_b");
+  if (!supports(WorldOp::MeshMeshVolume)) unsupported(WorldOp::MeshMeshVolume);
+  const std::string& whyA = notClosedReason(a, "a");
+  const std::string& whyB = notClosedReason(b, "b");
+  if (!whyA.empty() && !whyB.empty())
+    throw InvalidInput("a: mesh_mesh volume needs a closed operand: a: " + whyA + "; b: " + whyB);
+  return guarded(WorldOp::MeshMeshVolume, [&] { return doOverlapsVolume(a, ta, b, tb, whyA.empty(), whyB.empty()); });
+}
+
 std::vector<WorldContact> CollisionWorld::doContacts(const WorldOperand&, const WorldOperand&, double) {
   unsupported(WorldOp::Contacts);
 }
@@ -511,6 +530,9 @@ bool CollisionWorld::doOverlapsVolume(MeshHandle, const Sphere&) { unsupported(W
 bool CollisionWorld::doOverlapsVolume(MeshHandle, const Aabb&) { unsupported(WorldOp::MeshAabbVolume); }
 bool CollisionWorld::doOverlapsVolume(MeshHandle, const Obb&) { unsupported(WorldOp::MeshObbVolume); }
 bool CollisionWorld::doOverlapsVolume(MeshHandle, const Triangle&) { unsupported(WorldOp::MeshTriangleVolume); }
+bool CollisionWorld::doOverlapsVolume(MeshHandle, const Transform&, MeshHandle, const Transform&, bool, bool) {
+  unsupported(WorldOp::MeshMeshVolume);
+}
 
 // ---- extensions -----------------------------------------------------------------------------------
 

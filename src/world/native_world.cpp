@@ -253,6 +253,12 @@ class NativeWorld final : public CollisionWorld {
   bool doOverlapsVolume(MeshHandle m, const Aabb& b) override { return volume(m).overlaps(b); }
   bool doOverlapsVolume(MeshHandle m, const Obb& b) override { return volume(m).overlaps(b); }
   bool doOverlapsVolume(MeshHandle m, const Triangle& t) override { return volume(m).overlaps(t); }
+  bool doOverlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb, bool aClosed,
+                        bool bClosed) override {
+    if (aClosed && bClosed) return crux::overlapsVolume(volume(a), ta, volume(b), tb);
+    if (aClosed) return crux::overlapsVolume(volume(a), ta, mesh(b), tb);
+    return crux::overlapsVolume(volume(b), tb, mesh(a), ta);
+  }
 
   // ---- models -----------------------------------------------------------------------------------
 

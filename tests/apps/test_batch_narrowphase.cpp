@@ -29,6 +29,12 @@ const std::string kQuad =
     R"({"op":"mesh","name":"quad","vertices":[[0,0,0],[1,0,0],[1,1,0],[0,1,0]],"triangles":[[0,1,2],[0,2,3]]})";
 const std::string kAxes = R"("axes":[[1,0,0],[0,1,0],[0,0,1]])";
 
+/// A closed cube [0.25,0.75]^3 wholly inside kCube.
+const std::string kSmallCube =
+    R"({"op":"mesh","name":"small","vertices":[[0.25,0.25,0.25],[0.75,0.25,0.25],[0.75,0.75,0.25],[0.25,0.75,0.25],)"
+    R"([0.25,0.25,0.75],[0.75,0.25,0.75],[0.75,0.75,0.75],[0.25,0.75,0.75]],)"
+    R"("triangles":[[0,2,1],[0,3,2],[4,5,6],[4,6,7],[0,1,5],[0,5,4],[1,2,6],[1,6,5],[2,3,7],[2,7,6],[3,0,4],[3,4,7]]})";
+
 /// A batch with the cube and the open quad defined.
 struct Batch {
   BatchState state;
@@ -187,6 +193,46 @@ TEST(BatchNarrowPhase, PointInsideAndVolumeMode) {
             0u);
 }
 
+/// mesh_mesh with "volume": true: a closed mesh wholly inside another hits only in volume mode;
+/// one closed operand suffices; two open ones are an error naming both.
+TEST(BatchNarrowPhase, MeshMeshVolumeMode) {
+  Batch b;
+  ASSERT_EQ(errorOf(b.ask(kSmallCube)), "");
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small"})")["hit"], false);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small","volume":true})")["hit"], true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"small","b":"cube","volume":true})")["hit"], true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small","transform_b":{"translation":[2,0,0]},"volume":true})")
+                ["hit"],
+            false);
+  // An open tile (a surface) wholly inside the cube: free for the surface test, a hit in volume
+  // mode (the cube is the solid).
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"mesh","name":"tile","vertices":[[0.25,0.25,0.5],[0.75,0.25,0.5],[0.75,0.75,0.5],)"
+                          R"([0.25,0.75,0.5]],"triangles":[[0,1,2],[0,2,3]]})")),
+            "");
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"tile","b":"cube"})")["hit"], false);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"tile","b":"cube","volume":true})")["hit"], true);
+  EXPECT_EQ(b.ask(R"({"op":"mesh_mesh","a":"quad","b":"cube","transform_a":{"translation":[0,0,3]},"volume":true})")
+                ["hit"],
+            false);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_mesh","a":"quad","b":"quad","volume":true})"))
+                .rfind("a: mesh_mesh volume needs a closed operand: a: mesh \"quad\" is not closed", 0),
+            0u);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small","volume":true,"triangles":true})"))
+                .rfind("volume: cannot be combined", 0),
+            0u);
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small","volume":"yes"})")),
+            "volume: expected true or false, got string");
+  // Not (yet) on model ops: an error, never a silent surface answer.
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"m","mesh":"cube"})")), "");
+  EXPECT_EQ(errorOf(b.ask(R"({"op":"model_sphere","model":"m","sphere":{"center":[0.5,0.5,0.5],"radius":0.1},)"
+                          R"("volume":true})"))
+                .rfind("volume: volume mode is not implemented for model ops", 0),
+            0u);
+  EXPECT_EQ(b.ask(R"({"op":"model_sphere","model":"m","sphere":{"center":[0.5,0.5,0.5],"radius":0.1},"volume":false})")
+                ["hit"],
+            false);
+}
+
 TEST(BatchNarrowPhase, ErrorsNameTheField) {
   Batch b;
   const std::string s = R"({"sphere":{"center":[0,0,3],"radius":1}})";
@@ -239,23 +285,30 @@ TEST(BatchNarrowPhase, PeersAnswerWhatTheySupportAndAgreeOnClearCases) {
       R"({"op":"point_inside","mesh":"cube","point":[1.5,0.25,0.75]})",
       R"({"op":"mesh_sphere","mesh":"cube","sphere":{"center":[0.5,0.5,0.5],"radius":0.2},"volume":true})",
       R"({"op":"mesh_aabb","mesh":"cube","aabb":{"min":[2,2,2],"max":[3,3,3]},"volume":true})",
+      R"({"op":"mesh_mesh","a":"cube","b":"small","volume":true})",
+      R"({"op":"mesh_mesh","a":"quad","b":"cube","transform_b":{"translation":[0,0,3]},"volume":true})",
       R"({"op":"distance","a":{"mesh":"cube"},"b":{"box":{"center":[0.5,0.5,3],"half":[0.5,0.5,0.5],)" + kAxes +
           "}}}",
       R"({"op":"distance","a":{"capsule":{"a":[-1,0,0],"b":[1,0,0],"radius":0.5}},"b":{"sphere":{"center":[0,3,0],"radius":1}}})",
       R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[0,0,3]}})",
   };
   Batch native;
+  native.ask(kSmallCube);
   std::vector<Answer> want;
   for (const std::string& l : lines) want.push_back(native.ask(l));
   for (const std::string_view name : builtBackends()) {
     if (name == "native") continue;
     Batch peer(*parseBackend(name));
+    peer.ask(kSmallCube);
     for (std::size_t i = 0; i < lines.size(); ++i) {
       const Answer got = peer.ask(lines[i]);
       const std::string op = Json::parse(lines[i])["op"];
       const bool volume = lines[i].find("\"volume\":true") != std::string::npos;
       WorldOp worldOp = *parseOp(op);
-      if (volume) worldOp = op == "mesh_sphere" ? WorldOp::MeshSphereVolume : WorldOp::MeshAabbVolume;
+      if (volume)
+        worldOp = op == "mesh_sphere" ? WorldOp::MeshSphereVolume
+                  : op == "mesh_aabb" ? WorldOp::MeshAabbVolume
+                                      : WorldOp::MeshMeshVolume;
       if (!peer.state.world->supports(worldOp)) {
         EXPECT_EQ(errorOf(got), "unsupported: " + std::string(opName(worldOp)) + " on " + std::string(name));
         continue;

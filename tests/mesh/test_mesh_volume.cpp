@@ -455,6 +455,98 @@ TEST(MeshVolumeOverlaps, ShapeWhollyInsideOverlapsOnlyInVolumeMode) {
   EXPECT_FALSE(vol.overlaps(Triangle{Vec3(5, 0, 0), Vec3(6, 0, 0), Vec3(5, 1, 0)}));
 }
 
+/// Mesh–mesh volume mode: a small closed box wholly inside a big one overlaps only in volume
+/// mode (the surface test, FCL's and Bullet's semantics, says free), from either side; one
+/// closed operand suffices (the other is a surface: an open box around the small solid is a
+/// sheet outside it).
+TEST(MeshVolumeOverlaps, NestedMeshesOverlapOnlyInVolumeMode) {
+  const Mesh big = boxMesh({-4, -4, -4}, {4, 4, 4}, "big");
+  const Mesh small = boxMesh({-1, -1, -1}, {1, 2, 1}, "small");
+  const MeshVolume vBig(big), vSmall(small);
+  const Transform id;
+  EXPECT_FALSE(overlaps(big, id, small, id));
+  EXPECT_TRUE(overlapsVolume(vBig, id, small, id));
+  EXPECT_FALSE(overlapsVolume(vSmall, id, big, id));  // big's surface is outside small's solid
+  EXPECT_TRUE(overlapsVolume(vSmall, id, vBig, id));
+  EXPECT_TRUE(overlapsVolume(vBig, id, vSmall, id));
+  // Moved out (touching, then apart) by integer translations.
+  Transform out;
+  out.translation = Vec3(5, 0, 0);  // small spans x in [4, 6]: touches big's face x = 4
+  EXPECT_TRUE(overlapsVolume(vBig, id, vSmall, out));
+  out.translation = Vec3(6, 0, 0);
+  EXPECT_FALSE(overlapsVolume(vBig, id, vSmall, out));
+  EXPECT_FALSE(overlapsVolume(vSmall, out, vBig, id));
+  // An open box (one face removed) around the small solid: surface only, outside it.
+  std::vector<TriangleIndices> tris = big.triangles();
+  tris.resize(tris.size() - 2);
+  const Mesh open(big.vertices(), tris, "open");
+  EXPECT_FALSE(isClosed(open));
+  EXPECT_FALSE(overlapsVolume(vSmall, id, open, id));
+  EXPECT_TRUE(overlapsVolume(vBig, id, open, id));  // the surfaces coincide
+}
+
+/// Integer-grid boxes under axis-aligned rotations (quarter and half turns) and integer
+/// translations stay axis-aligned integer boxes, so the solids overlap iff their world
+/// intervals overlap on every axis: an independent exact reference for volume mode.
+TEST(MeshVolumeOverlaps, RandomGridBoxPairsMatchIntervalOverlap) {
+  std::mt19937 rng(20261122);
+  std::uniform_int_distribution<int> coord(-3, 3), size(1, 6), turn(0, 3), shift(-1, 1);
+  const Real h = std::sqrt(Real(0.5));
+  // Rotation about z by k quarter turns, as a quaternion and as its integer action on (x, y).
+  const Quat turns[4] = {Quat::Identity(), Quat(h, 0, 0, h), Quat(0, 0, 0, 1), Quat(h, 0, 0, -h)};
+  const auto rotate = [](int k, long long x, long long y) -> std::array<long long, 2> {
+    switch (k) {
+      case 1: return {-y, x};
+      case 2: return {-x, -y};
+      case 3: return {y, -x};
+      default: return {x, y};
+    }
+  };
+  int hits = 0, nested = 0;
+  for (int it = 0; it < 300; ++it) {
+    std::array<int, 3> lo[2], hi[2];
+    Transform tf[2];
+    std::array<long long, 3> wlo[2], whi[2];
+    int k[2];
+    for (int m = 0; m < 2; ++m) {
+      // Even cases: a big, b small (often nested); odd cases: both of any size.
+      for (int i = 0; i < 3; ++i)
+        lo[m][i] = coord(rng), hi[m][i] = lo[m][i] + (it % 2 ? size(rng) : m == 0 ? 5 + size(rng) : 1);
+      k[m] = turn(rng);
+      tf[m].rotation = turns[k[m]];
+      tf[m].translation = Vec3(Real(shift(rng)), Real(shift(rng)), Real(shift(rng)));
+      const auto p = rotate(k[m], lo[m][0], lo[m][1]), q = rotate(k[m], hi[m][0], hi[m][1]);
+      wlo[m] = {std::min(p[0], q[0]), std::min(p[1], q[1]), lo[m][2]};
+      whi[m] = {std::max(p[0], q[0]), std::max(p[1], q[1]), hi[m][2]};
+      for (int i = 0; i < 3; ++i) wlo[m][i] += (long long)tf[m].translation[i], whi[m][i] += (long long)tf[m].translation[i];
+    }
+    bool want = true, inside = true;
+    for (int i = 0; i < 3; ++i) {
+      want = want && wlo[0][i] <= whi[1][i] && wlo[1][i] <= whi[0][i];
+      inside = inside && wlo[0][i] < wlo[1][i] && whi[1][i] < whi[0][i];
+    }
+    const Mesh a = boxMesh(lo[0], hi[0], "a"), b = boxMesh(lo[1], hi[1], "b");
+    const MeshVolume va(a), vb(b);
+    const bool got = overlapsVolume(va, tf[0], vb, tf[1]);
+    const bool gotOne = overlapsVolume(va, tf[0], b, tf[1]);  // b as a surface: same unless a is inside b
+    hits += want;
+    nested += inside;
+    ASSERT_EQ(got, want) << "case " << it << ": a [" << wlo[0][0] << "," << wlo[0][1] << "," << wlo[0][2] << "]-["
+                         << whi[0][0] << "," << whi[0][1] << "," << whi[0][2] << "] turn " << k[0] << " t "
+                         << str17(tf[0].translation) << ", b [" << wlo[1][0] << "," << wlo[1][1] << "," << wlo[1][2]
+                         << "]-[" << whi[1][0] << "," << whi[1][1] << "," << whi[1][2] << "] turn " << k[1] << " t "
+                         << str17(tf[1].translation);
+    if (inside) {
+      EXPECT_TRUE(gotOne) << "case " << it;
+      EXPECT_FALSE(overlaps(a, tf[0], b, tf[1])) << "case " << it << ": nested surfaces do not touch";
+    }
+  }
+  std::printf("grid box pairs: %d of 300 overlap, %d with b strictly inside a\n", hits, nested);
+  EXPECT_GT(hits, 30);
+  EXPECT_LT(hits, 270);
+  EXPECT_GT(nested, 5);
+}
+
 TEST(MeshVolumeOverlaps, RandomSpheresMatchSurfaceOrCentreInside) {
   VoxelSet v(4);
   for (int x = 0; x < 4; ++x)

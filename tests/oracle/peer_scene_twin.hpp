@@ -23,20 +23,12 @@
 #include <string_view>
 #include <utility>
 #include <vector>
+#include "support/printing.hpp"
 
 namespace crux {
 namespace {
 
-std::string str(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-template <class V>
-std::string str(const Eigen::MatrixBase<V>& v) {
-  return "(" + str(double(v.x())) + ", " + str(double(v.y())) + ", " + str(double(v.z())) + ")";
-}
+using test_support::str;
 std::string str(const Sphere& s) { return "sphere " + str(s.center) + " r " + str(double(s.radius)); }
 std::string str(const Aabb& b) { return "aabb " + str(b.min) + " " + str(b.max); }
 std::string str(const Obb& b) {

@@ -30,20 +30,12 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "support/printing.hpp"
 
 namespace crux {
 namespace {
 
-std::string str(double x) {
-  std::ostringstream os;
-  os.precision(17);
-  os << x;
-  return os.str();
-}
-template <class V>
-std::string str(const Eigen::MatrixBase<V>& v) {
-  return "(" + str(double(v.x())) + ", " + str(double(v.y())) + ", " + str(double(v.z())) + ")";
-}
+using test_support::str;
 
 // ---------------------------------------------------------------------------------------------
 // The frame a case runs in: canonical coordinates x map to scale·x + offset.
@@ -808,6 +800,7 @@ TEST_F(OracleSanity, UnsupportedOpsSaySo) {
           [&] { w->overlapsVolume(cube, Aabb{}); },
           [&] { w->overlapsVolume(cube, Obb{}); },
           [&] { w->overlapsVolume(cube, T); },
+          [&] { w->overlapsVolume(cube, Transform{}, cube, Transform{}); },
       };
       static_assert(std::size(calls) == kWorldOpCount, "one call per op");
       try {

@@ -90,6 +90,22 @@ class MeshVolume {
   const Mesh* mesh_;
 };
 
+/// Volume-mode mesh–mesh (a closed, placed by ta; b placed by tb, closed or not): does b touch
+/// the solid of a? True when the surfaces touch or cross (crux::overlaps(Mesh, Transform, Mesh,
+/// Transform), the exact BVH-vs-BVH surface test), or else when a vertex of b is in a's solid:
+/// surfaces that do not touch leave every connected piece of b wholly inside or wholly outside
+/// a, so one corner per triangle of b (consecutive repeats skipped) decides. b's vertices are
+/// mapped into a's frame by the relative transform ta⁻¹·tb exactly as the surface test maps b's
+/// triangles (identity skipped, axis-aligned rotations as exact signed permutations), so on
+/// integer-grid meshes under such transforms the answer is exact. No allocation; cost
+/// O(surface test + triangles(b) · point test) in the worst case (points outside a's bounds are
+/// rejected by a box test first).
+bool overlapsVolume(const MeshVolume& a, const Transform& ta, const Mesh& b, const Transform& tb);
+/// Both closed: the solids touch. As above, plus a vertex of a inside b's solid (a wholly inside
+/// b). One closed operand suffices for the overload above: the closed one is the solid and the
+/// other is taken as its surface (a sheet wholly inside a closed mesh overlaps it).
+bool overlapsVolume(const MeshVolume& a, const Transform& ta, const MeshVolume& b, const Transform& tb);
+
 /// pointInside for a mesh not yet known to be closed: checks closedness (O(n log n),
 /// allocates) then MeshVolume::contains. Throws InvalidInput when the mesh is not closed.
 /// Use MeshVolume for repeated queries.

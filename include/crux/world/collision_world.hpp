@@ -94,17 +94,18 @@ enum class WorldOp : std::uint8_t {
   MeshAabbVolume,      ///< mesh_aabb with "volume": true
   MeshObbVolume,       ///< mesh_obb with "volume": true
   MeshTriangleVolume,  ///< mesh_triangle with "volume": true
+  MeshMeshVolume,      ///< mesh_mesh with "volume": true (at least one operand closed)
 };
 
 /// Number of WorldOp values.
-inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::MeshTriangleVolume) + 1;
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::MeshMeshVolume) + 1;
 /// The ops of the original protocol contract (closest_point_triangle ... scene_pairs); those after
 /// it are the narrow-phase and volume extensions of docs/batch.md.
 inline constexpr bool isContractOp(WorldOp op) { return op <= WorldOp::ScenePairs; }
-/// Whether `op` is one of the volume-mode variants (mesh_<shape> with "volume": true): they are
+/// Whether `op` is one of the volume-mode variants (mesh_<shape>, mesh_mesh with "volume": true): they are
 /// not protocol op names of their own, only ops a world may or may not support.
 inline constexpr bool isVolumeVariant(WorldOp op) {
-  return op >= WorldOp::MeshSphereVolume && op <= WorldOp::MeshTriangleVolume;
+  return op >= WorldOp::MeshSphereVolume && op <= WorldOp::MeshMeshVolume;
 }
 
 /// The protocol name of an op ("closest_point_triangle", "mesh_mesh", ...). Mesh and LoadMesh
@@ -422,6 +423,11 @@ class CollisionWorld {
   bool overlapsVolume(MeshHandle mesh, const Aabb& b);
   bool overlapsVolume(MeshHandle mesh, const Obb& b);
   bool overlapsVolume(MeshHandle mesh, const Triangle& t);
+  /// mesh_mesh with "volume": true: do a (placed by ta) and b (placed by tb) touch when each
+  /// closed operand is taken as its solid? (crux::overlapsVolume(MeshVolume, …), mesh_volume.hpp:
+  /// surfaces touch, or one lies inside the other.) One closed operand suffices (it is the solid,
+  /// the other its surface); neither closed throws InvalidInput naming both ("a: … ; b: …").
+  bool overlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb);
 
   // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
 
@@ -509,6 +515,9 @@ class CollisionWorld {
   virtual bool doOverlapsVolume(MeshHandle mesh, const Aabb& b);
   virtual bool doOverlapsVolume(MeshHandle mesh, const Obb& b);
   virtual bool doOverlapsVolume(MeshHandle mesh, const Triangle& t);
+  /// mesh_mesh volume; the base has checked that at least one of a, b is closed (aClosed, bClosed).
+  virtual bool doOverlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb, bool aClosed,
+                                bool bClosed);
 
   /// Extensions; the defaults return nothing (triangles not listed).
   virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
@@ -527,6 +536,8 @@ class CollisionWorld {
   void validateOperand(const WorldOperand& o, const std::string& field) const;
   /// Throws InvalidInput("mesh: <reason>") unless the mesh is closed.
   void requireClosed(MeshHandle mesh, const std::string& field) const;
+  /// Empty when the mesh is closed, else why not (the cached verdict).
+  const std::string& notClosedReason(MeshHandle mesh, const std::string& field) const;
   /// Runs a hook, letting crux's own exceptions through and wrapping any other.
   template <class F>
   auto guarded(WorldOp op, F&& f) -> decltype(f());
