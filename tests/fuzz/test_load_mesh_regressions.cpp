@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include "support/invalid_input.hpp"
 
 namespace crux {
 namespace {
@@ -23,18 +24,7 @@ namespace fs = std::filesystem;
 
 const fs::path kRegressions = fs::path(CRUX_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
 
-std::string invalidInputMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "threw a non-InvalidInput exception: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "did not throw";
-  return {};
-}
+using test_support::invalidInputMessage;
 
 /// Loads tests/fuzz/regressions/`name` and expects an InvalidInput that starts with its path
 /// and contains `problem`, within `seconds` (+ 5 s of slack for loaded machines).

@@ -34,6 +34,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "support/invalid_input.hpp"
 
 namespace crux {
 namespace {
@@ -95,18 +96,7 @@ std::string describe(const std::vector<Eigen::Vector3i>& a, const std::vector<Ei
   return os.str();
 }
 
-std::string invalidInputMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "threw a non-InvalidInput exception: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "did not throw";
-  return {};
-}
+using test_support::invalidInputMessage;
 
 // Mesh–mesh overlap of random grid tetrahedra at 1e15: equal to the exact answer at the origin,
 // whether the offset is in the vertices, in both models' transforms, or split between them.

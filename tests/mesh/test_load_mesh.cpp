@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "support/invalid_input.hpp"
 
 namespace crux {
 namespace {
@@ -29,20 +30,7 @@ std::string missing(const fs::path& dir) {
   return fs::is_directory(dir) ? std::string() : dir.string() + " is missing (run scripts/setup)";
 }
 
-/// The message of the InvalidInput `f` throws; fails the test if it throws nothing or
-/// something else.
-std::string invalidInputMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "threw a non-InvalidInput exception: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "did not throw";
-  return {};
-}
+using test_support::invalidInputMessage;
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 

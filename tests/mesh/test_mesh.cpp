@@ -15,26 +15,14 @@
 
 #if __has_include(<CGAL/Exact_predicates_inexact_constructions_kernel.h>)
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include "support/invalid_input.hpp"
 #define CRUX_TEST_HAVE_CGAL 1
 #endif
 
 namespace crux {
 namespace {
 
-/// The message of the InvalidInput `f` throws; fails the test if it throws nothing or
-/// something else.
-std::string invalidInputMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "threw a non-InvalidInput exception: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "did not throw";
-  return {};
-}
+using test_support::invalidInputMessage;
 
 bool startsWith(const std::string& s, const std::string& prefix) { return s.rfind(prefix, 0) == 0; }
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }

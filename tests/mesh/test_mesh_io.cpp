@@ -20,6 +20,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "support/invalid_input.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define CRUX_TEST_SANITIZED 1
@@ -39,18 +40,7 @@ namespace fs = std::filesystem;
 
 const fs::path kAssimpModels = "/usr/share/assimp/models";
 
-std::string invalidInputMessage(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InvalidInput& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "threw a non-InvalidInput exception: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "did not throw";
-  return {};
-}
+using test_support::invalidInputMessage;
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
