@@ -4,6 +4,7 @@
 
 #include <crux/error.hpp>
 #include <crux/mesh/mesh.hpp>
+#include <crux/mesh/mesh_io.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -25,6 +26,7 @@ struct MeshReport {
   BvhShape bvh;
   std::size_t memoryBytes = 0;
   double bytesPerTriangle = 0;
+  MeshMemoryEstimate estimate;  ///< what the loader checks against available memory first
 };
 
 MeshReport report(const std::string& path, const Mesh& mesh, double loadSeconds) {
@@ -36,6 +38,7 @@ MeshReport report(const std::string& path, const Mesh& mesh, double loadSeconds)
   r.bvh = bvhShape(mesh.bvh());
   r.memoryBytes = mesh.memoryBytes();
   r.bytesPerTriangle = double(r.memoryBytes) / double(std::max<std::size_t>(1, r.stats.triangles));
+  r.estimate = estimateMeshMemory(r.stats.vertices, r.stats.triangles);
   return r;
 }
 
@@ -64,6 +67,8 @@ Answer toJson(const MeshReport& r) {
   j["bvh"] = std::move(bvh);
   j["memory_bytes"] = r.memoryBytes;
   j["bytes_per_triangle"] = r.bytesPerTriangle;
+  j["estimated_mesh_bytes"] = r.estimate.meshBytes;
+  j["estimated_peak_bytes"] = r.estimate.peakBytes;
   return j;
 }
 
@@ -95,6 +100,8 @@ void writeText(std::ostream& out, const MeshReport& r) {
              << " (mean leaf depth " << r.bvh.meanLeafDepth << "), leaf size mean " << r.bvh.meanLeafSize
              << " max " << r.bvh.maxLeafSize << '\n';
   row("memory") << r.memoryBytes << " bytes (" << r.bytesPerTriangle << " bytes/triangle)\n";
+  row("memory estimate") << r.estimate.meshBytes << " bytes built, " << r.estimate.peakBytes
+                         << " bytes peak while building (checked before a load: docs/limits.md)\n";
   out.unsetf(std::ios::floatfield);
   out << std::setprecision(6);
 }

@@ -121,6 +121,9 @@ TEST(Info, ClosedCube) {
   EXPECT_DOUBLE_EQ(j["bvh"]["mean_leaf_size"].get<double>() * j["bvh"]["leaves"].get<double>(), 12.0);
   EXPECT_EQ(j["memory_bytes"], mesh.memoryBytes());
   EXPECT_DOUBLE_EQ(j["bytes_per_triangle"].get<double>(), double(mesh.memoryBytes()) / 12.0);
+  // The estimate the loader checks before building bounds what the built mesh holds.
+  EXPECT_GE(j["estimated_mesh_bytes"].get<std::size_t>(), mesh.memoryBytes());
+  EXPECT_GE(j["estimated_peak_bytes"].get<std::size_t>(), j["estimated_mesh_bytes"].get<std::size_t>());
 }
 
 TEST(Info, OpenDuplicateAndDegenerateTriangles) {

@@ -75,14 +75,18 @@ class Scene {
   /// non-empty broad phase.
   explicit Scene(std::unique_ptr<BroadPhase> broadPhase);
 
-  /// Adds a model (see ModelHierarchy::add; throws InvalidInput as it does).
+  /// Adds a model (see ModelHierarchy::add; throws InvalidInput as it does, and when the
+  /// model's world bounds overflow Real — the scene is then unchanged).
   ModelId add(std::shared_ptr<const Mesh> mesh, const Transform& local = {}, ModelId parent = kNoModel);
   /// Removes a model; its children move to its parent keeping their world pose.
   void remove(ModelId id);
-  /// Sets a model's transform relative to its parent; its descendants move with it.
+  /// Sets a model's transform relative to its parent; its descendants move with it. Throws
+  /// InvalidInput, leaving the scene unchanged, for an invalid transform or one that would put
+  /// a moved model's world bounds beyond Real's range (docs/limits.md).
   void setTransform(ModelId id, const Transform& local);
   /// Sets the local transforms of many models, then updates the broad phase once (a frame's
-  /// worth of moves). Throws before changing anything when an id is unknown.
+  /// worth of moves). Throws InvalidInput with the scene unchanged when an id is unknown, a
+  /// transform is invalid, or a moved model's world bounds would overflow (all moves undone).
   void setTransforms(const std::vector<std::pair<ModelId, Transform>>& moves);
   /// Re-parents a model keeping its world pose (kNoModel detaches it); a cycle throws.
   void setParent(ModelId id, ModelId parent);
