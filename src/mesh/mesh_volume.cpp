@@ -9,6 +9,8 @@
 #include <crux/geometry/predicates.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
+#include "relative_frame.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -332,39 +334,10 @@ bool MeshVolume::overlaps(const Triangle& t) const { return crux::overlaps(*mesh
 
 namespace {
 
-/// Points of b in a's frame by ta⁻¹·tb, with the mesh layer's rule for mesh–mesh (the surface
-/// test maps b's triangles by the same rule, mesh_query.cpp): identity skipped, an axis-aligned
-/// relative rotation applied as its exact signed permutation (translation Pᵀ(t_b - t_a) when ta
-/// is axis-aligned too), any other rotation by the rounded rigid transform.
-class PointFrame {
- public:
-  PointFrame(const Transform& ta, const Transform& tb) {
-    const bool same = ta.rotation.coeffs() == tb.rotation.coeffs() && ta.translation == tb.translation;
-    rel_ = ta.inverse() * tb;
-    if (const std::optional<Quat> s = snapAxisAligned(rel_.rotation.normalized())) {
-      aligned_ = true;
-      rel_.rotation = *s;
-      if (const std::optional<Quat> sa = snapAxisAligned(ta.rotation.normalized()))
-        rel_.translation = signedPermutation(*sa).transpose() * (tb.translation - ta.translation);
-      rotation_ = signedPermutation(rel_.rotation);
-    }
-    identity_ = same || (rel_.rotation.vec().isZero(0) && rel_.translation.isZero(0));
-  }
-  Vec3 map(const Vec3& p) const {
-    if (identity_) return p;
-    if (aligned_) return Vec3(rotation_ * p + rel_.translation);
-    return rel_.apply(p);
-  }
-
- private:
-  Transform rel_;
-  Mat3 rotation_ = Mat3::Identity();
-  bool identity_ = true;
-  bool aligned_ = false;
-};
+using mesh_detail::RelativeFrame;  // the mesh–mesh surface test's mapping (relative_frame.hpp)
 
 /// Is a corner of some triangle of b (one per triangle, consecutive repeats skipped) inside a?
-bool someCornerInside(const MeshVolume& a, const Mesh& b, const PointFrame& frame) {
+bool someCornerInside(const MeshVolume& a, const Mesh& b, const RelativeFrame& frame) {
   const Aabb& box = a.mesh().bounds();
   std::uint32_t last = std::numeric_limits<std::uint32_t>::max();
   for (const TriangleIndices& t : b.triangles()) {
@@ -379,11 +352,11 @@ bool someCornerInside(const MeshVolume& a, const Mesh& b, const PointFrame& fram
 }  // namespace
 
 bool overlapsVolume(const MeshVolume& a, const Transform& ta, const Mesh& b, const Transform& tb) {
-  return crux::overlaps(a.mesh(), ta, b, tb) || someCornerInside(a, b, PointFrame(ta, tb));
+  return crux::overlaps(a.mesh(), ta, b, tb) || someCornerInside(a, b, RelativeFrame(ta, tb));
 }
 
 bool overlapsVolume(const MeshVolume& a, const Transform& ta, const MeshVolume& b, const Transform& tb) {
-  return overlapsVolume(a, ta, b.mesh(), tb) || someCornerInside(b, a.mesh(), PointFrame(tb, ta));
+  return overlapsVolume(a, ta, b.mesh(), tb) || someCornerInside(b, a.mesh(), RelativeFrame(tb, ta));
 }
 
 bool pointInside(const Mesh& mesh, const Vec3& p) { return MeshVolume(mesh).contains(p); }
