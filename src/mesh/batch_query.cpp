@@ -4,6 +4,8 @@
 #include <crux/error.hpp>
 #include <crux/mesh/batch_query.hpp>
 
+#include "tbb_policy.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -25,7 +27,7 @@ void parallelChunks(std::size_t n, const ParallelOptions& parallel,
                        std::to_string(kMaxBatchThreads));
   if (n == 0) return;
   const std::size_t grain = parallel.grain == 0 ? kDefaultBatchGrain : parallel.grain;
-  if (parallel.threads == 1 || n <= grain) {
+  if (!kTbbParallelAllowed || parallel.threads == 1 || n <= grain) {
     body(context, 0, n);
     return;
   }

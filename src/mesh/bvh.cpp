@@ -19,6 +19,8 @@
 #include <crux/error.hpp>
 #include <crux/mesh/bvh.hpp>
 
+#include "tbb_policy.hpp"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
@@ -118,7 +120,7 @@ struct Scratch {
 class Builder {
  public:
   Builder(const std::vector<Aabb>& prims, const BvhBuildOptions& options, Bvh& out)
-      : options_(options), bvh_(out), parallel_(tbb::this_task_arena::max_concurrency() > 1) {
+      : options_(options), bvh_(out), parallel_(kTbbParallelAllowed && tbb::this_task_arena::max_concurrency() > 1) {
     const auto n = static_cast<std::uint32_t>(prims.size());
     prims_.resize(n);
     bvh_.primIndices.resize(n);
