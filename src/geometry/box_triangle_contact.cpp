@@ -1,0 +1,487 @@
+// Box–triangle contact manifold by the separating-axis test (13 axes), reference-face clipping
+// and edge–edge closest points. Fixed-size buffers only; falls back to contacts() (GJK/EPA) when
+// the SAT axis does not realise the distance.
+
+#include <algorithm>
+#include <cmath>
+#include <crux/geometry/box_triangle_contact.hpp>
+#include <limits>
+
+namespace crux {
+namespace {
+
+using V = Eigen::Vector3d;
+
+/// cos and sin of contact.hpp's feature angle (2°).
+constexpr double kFeatureCos = double(kContactFaceAngleCos);
+constexpr double kFeatureSin = 0.034899496702500969;  // sin(2°)
+
+/// The SAT answer is accepted when it realises the axis' separation: an edge–edge pair whose
+/// closest points differ along the axis only, and (separated pairs) a clipped point at the
+/// axis' separation, within this × scale (scaled units); otherwise the generic routine answers.
+constexpr double kRealiseTolerance = 1e-9;
+
+/// Clip buffers: a triangle clipped by 4 planes or a box face by 3 has at most 7 vertices.
+constexpr int kMaxClip = 12;
+
+struct ClipVertex {
+  V p;
+  double sep;  // separation along the reference normal, interpolated linearly along cuts
+  std::uint32_t id;
+};
+
+std::uint32_t vertexId(int i) { return featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(i)); }
+std::uint32_t edgeId(int i, int j) {
+  return featureId(FeatureKind::Edge, static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
+}
+bool isVertex(std::uint32_t id) { return (id >> 24) == static_cast<std::uint32_t>(FeatureKind::Vertex); }
+
+/// Id of a point cut out of the segment between two clip vertices: the edge when both are
+/// vertices (adjacent in every loop clipped here), else the incident feature.
+std::uint32_t cutId(const ClipVertex& a, const ClipVertex& b, std::uint32_t featureId) {
+  if (isVertex(a.id) && isVertex(b.id)) return edgeId(int(a.id & 0xFFFFFFu), int(b.id & 0xFFFFFFu));
+  return featureId;
+}
+
+/// Sutherland–Hodgman against {x : dist(x) >= 0}, dist affine; a 2-vertex input is a segment.
+/// `snap` (axis >= 0) puts cut points exactly on the axis-aligned plane x[axis] = value.
+template <class Dist>
+int clip(const ClipVertex* in, int n, Dist dist, int snapAxis, double snapValue, std::uint32_t feature,
+         ClipVertex* out) {
+  auto cut = [&](const ClipVertex& a, const ClipVertex& b, double da, double db) {
+    const double t = da / (da - db);
+    ClipVertex c{a.p + (b.p - a.p) * t, a.sep + (b.sep - a.sep) * t, cutId(a, b, feature)};
+    if (snapAxis >= 0) c.p[snapAxis] = snapValue;
+    return c;
+  };
+  if (n == 1) {
+    if (dist(in[0].p) < 0) return 0;
+    out[0] = in[0];
+    return 1;
+  }
+  if (n == 2) {
+    const double d0 = dist(in[0].p), d1 = dist(in[1].p);
+    if (d0 < 0 && d1 < 0) return 0;
+    int k = 0;
+    if (d0 >= 0) out[k++] = in[0];
+    if ((d0 < 0) != (d1 < 0)) out[k++] = cut(in[0], in[1], d0, d1);
+    if (d1 >= 0) out[k++] = in[1];
+    return k;
+  }
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    const ClipVertex& a = in[i];
+    const ClipVertex& b = in[(i + 1) % n];
+    const double da = dist(a.p), db = dist(b.p);
+    if (da >= 0 && k < kMaxClip) out[k++] = a;
+    if ((da < 0) != (db < 0) && k < kMaxClip) out[k++] = cut(a, b, da, db);
+  }
+  return k;
+}
+
+/// A contact point in the scaled double frame (no initialisation: filled before use).
+struct Point {
+  V a, b;
+  double sep;
+  std::uint32_t fa, fb;
+};
+
+/// Keeps the deepest point, the farthest from it, and the two extreme signed areas about `u`
+/// (contact.cpp's reduction).
+void reduce(Point* pts, int& count, const V& u) {
+  if (count <= ContactManifold::kMaxContactPoints) return;
+  auto P = [&](int i) -> const V& { return pts[i].b; };
+  int sel[4] = {0, -1, -1, -1};
+  for (int i = 1; i < count; ++i)
+    if (pts[i].sep < pts[sel[0]].sep) sel[0] = i;
+  double best = -1;
+  for (int i = 0; i < count; ++i)
+    if (i != sel[0] && (P(i) - P(sel[0])).squaredNorm() > best) {
+      best = (P(i) - P(sel[0])).squaredNorm();
+      sel[1] = i;
+    }
+  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
+  int hi = -1, lo = -1;
+  for (int i = 0; i < count; ++i) {
+    if (i == sel[0] || i == sel[1]) continue;
+    if (hi < 0 || area(i) > area(hi)) hi = i;
+    if (lo < 0 || area(i) < area(lo)) lo = i;
+  }
+  sel[2] = hi;
+  sel[3] = lo;
+  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the largest triangle + the best 4th
+    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
+    sel[3] = -1;
+    double bestGain = -1;
+    for (int i = 0; i < count; ++i) {
+      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
+      double gain = 0;
+      for (int e = 0; e < 3; ++e) {
+        const V a = P(sel[e]), b = P(sel[(e + 1) % 3]);
+        gain = std::max(gain, std::abs((b - a).cross(P(i) - a).dot(u)));
+      }
+      if (gain > bestGain) {
+        bestGain = gain;
+        sel[3] = i;
+      }
+    }
+  }
+  Point kept[4];
+  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
+  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
+  count = 4;
+}
+
+/// Box vertex i in the local frame: signs (bit0, bit1, bit2) of i.
+V boxVertex(const V& h, int i) {
+  return V((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
+}
+
+/// The box's supporting feature along unit d (contact.hpp's rule), as a clip polygon.
+int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
+  int k = 0;
+  d.cwiseAbs().maxCoeff(&k);
+  if (std::abs(d[k]) >= kFeatureCos) {
+    const bool pos = d[k] > 0;
+    const int u = (k + 1) % 3, v = (k + 2) % 3;
+    const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+    for (int q = 0; q < 4; ++q) {
+      const int qq = pos ? q : 3 - q;
+      const int idx = (pos ? 1 << k : 0) | (su[qq] << u) | (sv[qq] << v);
+      f[q] = {boxVertex(h, idx), 0, vertexId(idx)};
+    }
+    id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (pos ? 1 : 0)));
+    return 4;
+  }
+  const int is = (d.x() >= 0 ? 1 : 0) | (d.y() >= 0 ? 2 : 0) | (d.z() >= 0 ? 4 : 0);
+  int bestAxis = -1;
+  double bestCos = kFeatureSin;
+  for (int i = 0; i < 3; ++i)
+    if (h[i] > 0 && std::abs(d[i]) <= bestCos) {
+      bestCos = std::abs(d[i]);
+      bestAxis = i;
+    }
+  f[0] = {boxVertex(h, is), 0, vertexId(is)};
+  if (bestAxis < 0) {
+    id = f[0].id;
+    return 1;
+  }
+  const int other = is ^ (1 << bestAxis);
+  f[1] = {boxVertex(h, other), 0, vertexId(other)};
+  id = edgeId(is, other);
+  return 2;
+}
+
+/// The triangle's supporting feature along unit d (contact.hpp's rule), as a clip polygon;
+/// `m` is its normal (b−a)×(c−a) and mLen its length, 0 when degenerate.
+int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex* f, std::uint32_t& id) {
+  if (mLen > 0 && std::abs(m.dot(d)) >= kFeatureCos * mLen) {
+    for (int i = 0; i < 3; ++i) f[i] = {t[i], 0, vertexId(i)};
+    id = featureId(FeatureKind::Face, m.dot(d) > 0 ? 0u : 1u);
+    return 3;
+  }
+  int is = 0;
+  double best = t[0].dot(d);
+  for (int i = 1; i < 3; ++i)
+    if (t[i].dot(d) > best) {
+      best = t[i].dot(d);
+      is = i;
+    }
+  int bestK = -1;
+  double bestCos = kFeatureSin;
+  for (int k = 1; k <= 2; ++k) {
+    const int o = (is + k) % 3;
+    const V e = t[o] - t[is];
+    const double len = e.norm();
+    if (!(len > 0)) continue;
+    const double c = std::abs(e.dot(d)) / len;
+    if (c <= bestCos) {
+      bestCos = c;
+      bestK = o;
+    }
+  }
+  f[0] = {t[is], 0, vertexId(is)};
+  if (bestK < 0) {
+    id = f[0].id;
+    return 1;
+  }
+  f[1] = {t[bestK], 0, vertexId(bestK)};
+  id = edgeId(is, bestK);
+  return 2;
+}
+
+/// Closest points of segments [p1, q1] and [p2, q2] (RTCD 5.1.9, with the denominator taken as
+/// |d1 × d2|² so that it is never negative; parallel segments clamp s = 0 first).
+void closestSegmentSegment(const V& p1, const V& q1, const V& p2, const V& q2, V& c1, V& c2) {
+  const V d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  double s = 0, t = 0;
+  if (a <= 0 && e <= 0) {
+  } else if (a <= 0) {
+    t = std::clamp(f / e, 0.0, 1.0);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 0) {
+      s = std::clamp(-c / a, 0.0, 1.0);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = d1.cross(d2).squaredNorm();
+      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = std::clamp(-c / a, 0.0, 1.0);
+      } else if (t > 1) {
+        t = 1;
+        s = std::clamp((b - c) / a, 0.0, 1.0);
+      }
+    }
+  }
+  c1 = p1 + d1 * s;
+  c2 = p2 + d2 * t;
+}
+
+enum class AxisKind { BoxFace, TriangleFace, Edge };
+
+struct Axis {
+  AxisKind kind = AxisKind::BoxFace;
+  int i = 0, j = 0;  // box axis; triangle edge (Edge)
+  double sep = -std::numeric_limits<double>::infinity();
+  V n = V::UnitZ();  // unit, box -> triangle
+};
+
+/// Separation numerator of the triangle from the box along the unnormalised axis a: the larger
+/// of the two sides (separation = numerator / |a|); `sign` receives the side (+1: triangle
+/// along +a).
+inline double axisNumerator(const V* t, const V& h, const V& a, double& sign) {
+  const double p0 = a.dot(t[0]), p1 = a.dot(t[1]), p2 = a.dot(t[2]);
+  const double lo = std::min(p0, std::min(p1, p2)), hi = std::max(p0, std::max(p1, p2));
+  const double r = h.dot(a.cwiseAbs());
+  const double pos = lo - r, neg = -r - hi;
+  sign = pos >= neg ? 1.0 : -1.0;
+  return std::max(pos, neg);
+}
+
+/// num / sqrt(a2) > bound, without the square root or the division (a2 > 0).
+inline bool exceeds(double num, double a2, double bound) {
+  if (num >= 0) return bound < 0 || num * num > bound * bound * a2;
+  return bound < 0 && num * num < bound * bound * a2;
+}
+
+/// The GJK/EPA pair (gjk.hpp's distance(), as contacts() uses): one point, the closest (or
+/// deepest) pair, with the features supporting the normal (contact.hpp's rule), when the
+/// signed distance is <= m. Unlike contacts(), no clipping: its edge–edge and sliver-plane
+/// clipping can put points off the shapes (docs/narrowphase.md).
+bool fallback(const Vec3& half, const Triangle& tri, double m, const V* t, const V& h, const V& normal,
+              double normalLen, double unscale, ContactManifold& out) {
+  Obb box;
+  box.half = half;
+  const DistanceResult d = distance(ConvexShape(tri), Transform{}, ConvexShape(box), Transform{});
+  out.normal = d.normal;
+  out.count = 0;
+  if (!(double(d.distance) <= m * unscale)) return false;
+  const V n = d.normal.template cast<double>();
+  ClipVertex f[4];
+  std::uint32_t idA = 0, idB = 0;
+  triangleFeature(t, normal, normalLen, -n, f, idA);
+  boxFeature(h, n, f, idB);
+  ContactPoint& c = out.points[0];
+  c.pointA = d.pointA;
+  c.pointB = d.pointB;
+  c.separation = d.distance;
+  c.featureA = idA;
+  c.featureB = idB;
+  out.count = 1;
+  return true;
+}
+
+}  // namespace
+
+bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+  out.count = 0;
+  if (!(margin >= 0)) margin = 0;
+  // Exact power-of-two rescaling to a length scale in [0.5, 1).
+  double S = std::max({double(half.cwiseAbs().maxCoeff()), double(tri.a.cwiseAbs().maxCoeff()),
+                       double(tri.b.cwiseAbs().maxCoeff()), double(tri.c.cwiseAbs().maxCoeff())});
+  int exponent = 0;
+  if (S > 0 && std::isfinite(S)) std::frexp(S, &exponent);
+  const double scale = std::ldexp(1.0, -exponent), unscale = std::ldexp(1.0, exponent);
+  const V h = half.cast<double>().cwiseAbs() * scale;
+  const V t[3] = {tri.a.cast<double>() * scale, tri.b.cast<double>() * scale, tri.c.cast<double>() * scale};
+  const double m = std::isfinite(double(margin)) ? double(margin) * scale : std::numeric_limits<double>::infinity();
+
+  // ---- separating axes ----
+  const V E[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+  const V normal = E[0].cross(t[2] - t[0]);
+  const double longest = std::max({E[0].squaredNorm(), E[1].squaredNorm(), E[2].squaredNorm()});
+  const double normalLen = normal.norm();
+  const bool hasFace = normalLen > kBoxTriangleDegenerateRelative * longest && normalLen > 0;
+
+  Axis face;  // best box face
+  for (int k = 0; k < 3; ++k) {
+    const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
+    const double pos = lo - h[k], neg = -h[k] - hi;
+    const double sep = std::max(pos, neg);
+    if (sep > face.sep) {
+      face.i = k;
+      face.sep = sep;
+      face.n = V::Unit(k) * (pos >= neg ? 1.0 : -1.0);
+    }
+  }
+  out.normal = face.n.cast<Real>();
+  if (!(face.sep <= m)) return false;        // a separating axis: distance >= face.sep > margin
+  const double bias = kBoxTriangleFaceBias;  // × scale, which is ~1 after rescaling
+  if (hasFace) {
+    double sign = 1;
+    const double num = axisNumerator(t, h, normal, sign);
+    const double sep = num / normalLen;
+    if (!(sep <= m)) return false;  // a separating axis beyond the margin (never biased away)
+    if (sep >= face.sep - bias) {
+      face.kind = AxisKind::TriangleFace;
+      face.sep = sep;
+      face.n = normal * (sign / normalLen);
+    }
+  }
+  Axis best = face;
+  {
+    double bound = face.sep + bias;  // an edge axis must exceed this
+    for (int j = 0; j < 3; ++j) {
+      const double e2 = E[j].squaredNorm();
+      for (int i = 0; i < 3; ++i) {
+        V a = V::Zero();  // unit(i) × E[j], exact
+        const int u = (i + 1) % 3, v = (i + 2) % 3;
+        a[u] = -E[j][v];
+        a[v] = E[j][u];
+        const double a2 = a[u] * a[u] + a[v] * a[v];
+        if (!(a2 > kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2) || !(a2 > 0)) continue;
+        double sign = 1;
+        const double num = axisNumerator(t, h, a, sign);
+        if (exceeds(num, a2, m)) return false;  // separating beyond the margin
+        if (!exceeds(num, a2, bound)) continue;
+        const double len = std::sqrt(a2);
+        const double sep = num / len;
+        if (!(sep > bound)) continue;
+        bound = sep;
+        best.kind = AxisKind::Edge;
+        best.i = i;
+        best.j = j;
+        best.sep = sep;
+        best.n = a * (sign / len);
+      }
+    }
+  }
+  // An edge axis within the feature angle of the best face axis gives way to that face, as
+  // contact.cpp turns a normal within 2° of a face into that face's normal: a face contact (2–4
+  // points) rather than one edge–edge point, at most 2° off the minimum-penetration direction.
+  if (best.kind == AxisKind::Edge && best.n.dot(face.n) >= kFeatureCos) best = face;
+  out.normal = best.n.cast<Real>();
+
+  // ---- points ----
+  const V& n = best.n;
+  Point pts[kMaxClip];
+  int np = 0;
+  double minSep = std::numeric_limits<double>::infinity();  // scaled units
+  ClipVertex bufA[kMaxClip], bufB[kMaxClip];
+  ClipVertex* cur = bufA;
+  ClipVertex* nxt = bufB;
+  std::uint32_t incId = 0;
+  V u = n;  // outward normal of the reference face
+
+  if (best.kind == AxisKind::BoxFace) {
+    const int k = best.i;
+    const double s = n[k];  // ±1
+    int cnt = triangleFeature(t, normal, hasFace ? normalLen : 0.0, -n, cur, incId);
+    for (int q = 0; q < cnt; ++q) cur[q].sep = s * cur[q].p[k] - h[k];
+    for (int side = 1; side <= 2 && cnt > 0; ++side) {
+      const int a = (k + side) % 3;
+      const double ha = h[a];
+      cnt = clip(
+          cur, cnt, [&](const V& p) { return p[a] + ha; }, a, -ha, incId, nxt);
+      std::swap(cur, nxt);
+      if (cnt == 0) break;
+      cnt = clip(
+          cur, cnt, [&](const V& p) { return ha - p[a]; }, a, ha, incId, nxt);
+      std::swap(cur, nxt);
+    }
+    const std::uint32_t refId = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (s > 0 ? 1 : 0)));
+    for (int q = 0; q < cnt; ++q) {
+      if (!(cur[q].sep <= m)) continue;
+      minSep = std::min(minSep, cur[q].sep);
+      Point& c = pts[np++];
+      c.a = cur[q].p;
+      c.b = cur[q].p;
+      c.b[k] = s * h[k];
+      c.sep = cur[q].sep;
+      c.fa = cur[q].id;
+      c.fb = refId;
+    }
+  } else if (best.kind == AxisKind::TriangleFace) {
+    u = -n;  // the triangle's face toward the box
+    const double sigma = normal.dot(u) > 0 ? 1.0 : -1.0;
+    const double inv = sigma / normalLen;
+    int cnt = boxFeature(h, n, cur, incId);
+    for (int q = 0; q < cnt; ++q) cur[q].sep = normal.dot(cur[q].p - t[0]) * inv;
+    const int order[3] = {0, sigma > 0 ? 1 : 2, sigma > 0 ? 2 : 1};  // counter-clockwise about u
+    const V un = normal * sigma;                                     // u, unnormalised
+    for (int e = 0; e < 3 && cnt > 0; ++e) {
+      const V& o = t[order[e]];
+      const V w = un.cross(t[order[(e + 1) % 3]] - o);  // inward side normal
+      cnt = clip(
+          cur, cnt, [&](const V& p) { return w.dot(p - o); }, -1, 0.0, incId, nxt);
+      std::swap(cur, nxt);
+    }
+    const std::uint32_t refId = featureId(FeatureKind::Face, sigma > 0 ? 0u : 1u);
+    for (int q = 0; q < cnt; ++q) {
+      if (!(cur[q].sep <= m)) continue;
+      minSep = std::min(minSep, cur[q].sep);
+      Point& c = pts[np++];
+      c.a = cur[q].p - cur[q].sep * u;
+      c.b = cur[q].p;
+      c.sep = cur[q].sep;
+      c.fa = refId;
+      c.fb = cur[q].id;
+    }
+  } else {
+    // Edge–edge: the box edge along axis i supporting +n, the triangle edge j.
+    const int i = best.i, j = best.j;
+    int idx = 0;
+    for (int k = 0; k < 3; ++k)
+      if (k != i && n[k] >= 0) idx |= 1 << k;
+    const int idx2 = idx | (1 << i);
+    const V b0 = boxVertex(h, idx), b1 = boxVertex(h, idx2);
+    const int j2 = (j + 1) % 3;
+    V pa, pb;
+    closestSegmentSegment(t[j], t[j2], b0, b1, pa, pb);
+    const V d = pa - pb;
+    const double along = d.dot(n);
+    if ((d - along * n).norm() <= kRealiseTolerance && std::abs(along - best.sep) <= kRealiseTolerance) {
+      minSep = best.sep;
+      Point& c = pts[np++];
+      c.a = pa;
+      c.b = pa - best.sep * n;
+      c.sep = best.sep;
+      const bool endA = (pa - t[j]).squaredNorm() == 0 || (pa - t[j2]).squaredNorm() == 0;
+      c.fa = endA ? vertexId((pa - t[j]).squaredNorm() == 0 ? j : j2) : edgeId(j, j2);
+      c.fb = edgeId(idx, idx2);
+    }
+  }
+  if (np == 0) return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+  if (best.sep > 0) {  // separated: the SAT bound is the distance only if a point realises it
+    if (minSep > best.sep + kRealiseTolerance)
+      return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+  }
+  reduce(pts, np, u);
+  out.normal = n.cast<Real>();
+  out.count = np;
+  for (int q = 0; q < np; ++q) {
+    ContactPoint& c = out.points[q];
+    c.pointA = (pts[q].a * unscale).cast<Real>();
+    c.pointB = (pts[q].b * unscale).cast<Real>();
+    c.separation = static_cast<Real>(pts[q].sep * unscale);
+    c.featureA = pts[q].fa;
+    c.featureB = pts[q].fb;
+  }
+  return true;
+}
+
+}  // namespace crux
