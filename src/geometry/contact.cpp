@@ -26,6 +26,22 @@ constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 /// sin of the feature angle (kContactFaceAngleCos).
 const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
+/// Rounding budget, in ulps of Real × the pair's coordinate scale, within which a reference
+/// feature must place the points projected onto it (they are returned as Real, whose own
+/// rounding is one ulp): used for sliver triangles and near-parallel edge pairs below.
+constexpr double kOnFeatureUlps = 8;
+constexpr double kEpsReal = std::numeric_limits<Real>::epsilon();
+constexpr double kEpsDouble = std::numeric_limits<double>::epsilon();
+
+/// A triangle's unit normal computed in double from (b−a)×(c−a) is tilted by about
+/// 0.3·eps_double·L²/|(b−a)×(c−a)| (L its longest edge; measured, worst of 2e5 random slivers),
+/// which moves points projected onto its plane by that × L. A triangle is used as a REFERENCE
+/// face only when this stays within kOnFeatureUlps/2 Real ulps of L, i.e. when
+/// |(b−a)×(c−a)| >= kSliverAreaRatio·L²; a sliver is clipped as an edge instead (defect 1 of
+/// issue 6: points landed off sliver triangles). About 0.075 (a 1:13 triangle) in double
+/// builds, about 4e-9 in float builds.
+const double kSliverAreaRatio = 0.3 * kEpsDouble / (0.5 * kOnFeatureUlps * kEpsReal);
+
 /// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
 struct Feature {
   V3 v[kMaxFeatureVerts];
@@ -34,6 +50,7 @@ struct Feature {
   V3 normal = V3::Zero();  // outward unit normal of a face (n >= 3)
   double align = 0;        // normal·d for a face
   std::uint32_t id = 0;    // featureId of the whole feature
+  bool sliver = false;     // a triangle face too thin to be a reference face (kSliverAreaRatio)
 };
 
 void setVertex(Feature& f, const V3& v, int index) {
@@ -73,12 +90,14 @@ void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int n
                                                                           std::max(is, others[bestK])));
 }
 
-/// The feature of P's core that supports direction d (unit, world).
-void supportingFeature(const Placed& P, const V3& d, Feature& f) {
+/// The feature of P's core that supports direction d (unit, world). With allowFace false a
+/// triangle gives its supporting vertex or edge, never its face.
+void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace = true) {
   const ConvexShape& s = *P.shape;
   const double cosTol = double(kContactFaceAngleCos);
   int is = 0;
   P.support(d, &is);
+  f.sliver = false;
   switch (s.kind) {
     case ConvexKind::Sphere: setVertex(f, P.p[0], 0); return;
     case ConvexKind::Capsule: {
@@ -89,7 +108,10 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f) {
     case ConvexKind::Triangle: {
       V3 m = (P.p[1] - P.p[0]).cross(P.p[2] - P.p[0]);
       const double len = m.norm();
-      if (len > 0 && std::abs(m.dot(d)) >= cosTol * len) {
+      const double longest2 = std::max({(P.p[1] - P.p[0]).squaredNorm(), (P.p[2] - P.p[1]).squaredNorm(),
+                                        (P.p[0] - P.p[2]).squaredNorm()});
+      if (allowFace && len > 0 && std::abs(m.dot(d)) >= cosTol * len) {
+        f.sliver = !(len >= kSliverAreaRatio * longest2);
         m /= len;
         const bool front = m.dot(d) > 0;
         f.n = 3;
@@ -276,6 +298,11 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   Feature fa, fb;
   supportingFeature(A, -n, fa);
   supportingFeature(B, n, fb);
+  // A sliver triangle face is never the reference: when the other feature is no usable face,
+  // the sliver is clipped as its supporting edge (or touches at a vertex) instead.
+  const bool faceA = fa.n >= 3 && !fa.sliver, faceB = fb.n >= 3 && !fb.sliver;
+  if (fa.sliver && !faceB) supportingFeature(A, -n, fa, false);
+  if (fb.sliver && !faceA) supportingFeature(B, n, fb, false);
   // Two edges are clipped only when parallel (within the feature angle); crossing edges touch at
   // one point, the GJK/EPA one.
   bool clipFeatures = fa.n >= 2 && fb.n >= 2;
@@ -284,9 +311,9 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     clipFeatures = ea.cross(eb).norm() <= kSinTol * ea.norm() * eb.norm();
   }
   if (clipFeatures) {
-    // Reference: the better aligned face; else (two edges) A's edge.
-    bool refIsA = fa.n >= 3 && (fb.n < 3 || fa.align >= fb.align - 1e-9);
-    if (fa.n < 3 && fb.n >= 3) refIsA = false;
+    // Reference: the better aligned (non-sliver) face; else (two edges) B's edge.
+    bool refIsA = faceA && (!faceB || fa.align >= fb.align - 1e-9);
+    if (!faceA && faceB) refIsA = false;
     const Feature& ref = refIsA ? fa : fb;
     const Feature& inc = refIsA ? fb : fa;
     V3 u = refIsA ? V3(-n) : n;  // outward from the reference body
@@ -316,9 +343,32 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     ContactPoint pts[kMaxClipVerts];
     int np = 0;
     const V3 r0 = ref.v[0];
-    for (int i = 0; i < cnt; ++i) {
+    // Edge reference: each point is measured from its closest point on the reference edge; two
+    // edges within the feature angle but skew (offset across the normal) have no common
+    // perpendicular there, and projecting along the normal would leave the reference edge
+    // (defect 2 of issue 6: points outside a box). When that offset exceeds the rounding budget
+    // (kOnFeatureUlps; for a rounded reference, the offset whose effect on its surface is that
+    // budget), the pair falls back to the single GJK/EPA point.
+    double lateralTol = 0;
+    if (ref.n == 2) {
+      double scale = rA + rB + m;
+      for (int i = 0; i < 2; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
+      for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
+      const double tol = kOnFeatureUlps * kEpsReal * scale;
+      lateralTol = tol + std::sqrt(2 * (refIsA ? rA : rB) * tol);
+    }
+    bool skew = false;
+    for (int i = 0; i < cnt && !skew; ++i) {
       const V3 q = cur[i].p;
-      const double s = u.dot(q - r0);
+      double s = u.dot(q - r0);
+      if (ref.n == 2) {
+        const V3 e = ref.v[1] - ref.v[0];
+        const double e2 = e.squaredNorm();
+        const double t = e2 > 0 ? std::clamp(e.dot(q - r0) / e2, 0.0, 1.0) : 0.0;
+        const V3 diff = q - (r0 + t * e);
+        s = u.dot(diff);
+        if (!((diff - s * u).norm() <= lateralTol)) skew = true;
+      }
       const double sep = s - rA - rB;
       if (!(sep <= m)) continue;
       const V3 onRef = q - s * u;
@@ -330,7 +380,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
       c.featureA = refIsA ? ref.id : cur[i].id;
       c.featureB = refIsA ? cur[i].id : ref.id;
     }
-    if (np > 0) {
+    if (np > 0 && !skew) {
       reduce(pts, np, u);
       out.normal = n.cast<Real>();
       out.count = np;

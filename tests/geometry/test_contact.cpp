@@ -1,13 +1,17 @@
 // Tests of src/geometry/contact.cpp: manifolds with known answers (stacked boxes, a rotated box,
 // capsule and sphere resting on a box, parallel capsules, a triangle on a box, hull on hull,
 // speculative margin) and seeded properties over random pairs (every point on both shapes,
-// pointA - pointB = separation·normal, separation <= margin, at most 4 points).
+// pointA - pointB = separation·normal, separation <= margin, at most 4 points), plus the
+// issue-6 regressions: sliver triangles and nearly parallel, offset edges (triangle vs box).
 
 #include <crux/error.hpp>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
 #include <limits>
 #include <memory>
@@ -271,6 +275,180 @@ TEST(Contacts, BadMarginIsInvalidInputNamingIt) {
       EXPECT_EQ(std::string(e.what()).rfind("margin: ", 0), 0u) << e.what();
     }
   }
+}
+
+}  // namespace
+}  // namespace crux
+
+// ---- issue 6 regressions: sliver triangles, nearly parallel offset edges (triangle A, box B) ----
+
+namespace crux {
+namespace {
+
+/// Tolerance of "on the shape" / pointA - pointB = separation·normal: the rounding of the
+/// returned Real values × the pair's coordinate scale (as in test_box_triangle_contact.cpp).
+constexpr double kOnShapeUlps = 64;
+
+std::string describeTriBox(const Triangle& t, const Vec3& half, Real margin) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "tri " << str(t.a) << " " << str(t.b) << " " << str(t.c) << " half " << str(half) << " margin "
+     << double(margin);
+  return os.str();
+}
+
+/// Every point of the manifold of (triangle, identity) vs (box of half extents `half`, identity)
+/// lies on both shapes, pointA - pointB = separation·normal, separation <= margin.
+::testing::AssertionResult triBoxWellFormed(const Triangle& t, const Vec3& half, Real margin,
+                                            const ContactManifold& m) {
+  const double S = std::max({double(half.cwiseAbs().maxCoeff()), double(t.a.cwiseAbs().maxCoeff()),
+                             double(t.b.cwiseAbs().maxCoeff()), double(t.c.cwiseAbs().maxCoeff())}) +
+                   double(margin);
+  const double tol = kOnShapeUlps * kEps * S;
+  auto num = [](double x) {
+    std::ostringstream os;
+    os.precision(17);
+    os << x;
+    return os.str();
+  };
+  auto fail = [&](const std::string& what) {
+    return ::testing::AssertionFailure() << what << "\n" << describeTriBox(t, half, margin) << "\n" << str(m);
+  };
+  if (m.count < 1 || m.count > ContactManifold::kMaxContactPoints) return fail("point count");
+  if (!(std::abs(double(m.normal.norm()) - 1) <= 8 * kEps)) return fail("normal not unit");
+  const V3d h = half.cast<double>();
+  for (int i = 0; i < m.count; ++i) {
+    const ContactPoint& p = m.points[i];
+    const V3d a = p.pointA.cast<double>(), b = p.pointB.cast<double>();
+    if (!std::isfinite(a.sum() + b.sum() + double(p.separation))) return fail("non-finite point");
+    // On the triangle: its closest point, or (well conditioned on slivers) its edges.
+    double dA = double(squaredDistance(t, p.pointA));
+    for (int e = 0; e < 3; ++e) dA = std::min(dA, double(squaredDistance(Segment{t[e], t[(e + 1) % 3]}, p.pointA)));
+    if (!(std::sqrt(dA) <= tol)) return fail("pointA not on the triangle, off by " + num(std::sqrt(dA)));
+    const V3d excess = b.cwiseAbs() - h;
+    if (!(excess.maxCoeff() <= tol)) return fail("pointB outside the box by " + num(excess.maxCoeff()));
+    if (!(excess.maxCoeff() >= -tol)) return fail("pointB inside the box, not on its surface");
+    if (!((a - b - double(p.separation) * m.normal.cast<double>()).norm() <= tol))
+      return fail("pointA - pointB != separation * normal");
+    if (!(double(p.separation) <= double(margin) + tol)) return fail("separation > margin");
+  }
+  return ::testing::AssertionSuccess();
+}
+
+bool triBox(const Triangle& t, const Vec3& half, Real margin, ContactManifold& m) {
+  Obb box;
+  box.half = half;
+  return contacts(ConvexShape(t), Transform{}, ConvexShape(box), Transform{}, margin, m);
+}
+
+TEST(ContactsIssue6, NearlyParallelOffsetEdgesKeepPointsOnTheBox) {
+  // From H2's NearlyParallelOffsetEdgesKeepPointsOnTheBox (test_box_triangle_contact.cpp): the
+  // edge-reference clipping put pointB at |y| = 1.782 > 1.7356 (double build).
+  const Vec3 half(Real(0.82585418100247765), Real(1.7355784415104598), Real(0.49252121972387419));
+  const Triangle t{Vec3(Real(1.1181553810141036), Real(-1.7530383300405692), Real(-0.50425362319975031)),
+                   Vec3(Real(-0.80504669195608036), Real(-1.8079226704036215), Real(-0.50776341272902537)),
+                   Vec3(Real(0.4474789120501419), Real(-3.2561772844565269), Real(-1.1719251984506456))};
+  ContactManifold m;
+  ASSERT_TRUE(triBox(t, half, Real(0.2), m));
+  EXPECT_TRUE(triBoxWellFormed(t, half, Real(0.2), m));
+}
+
+TEST(ContactsIssue6, ExactlyParallelEdgesStillGiveTwoPoints) {
+  // A triangle edge parallel to the box edge (y = z = 1) and 0.05 above it along the bisector:
+  // the overlap of the two edges, both ends.
+  const Real d = Real(0.05 / std::sqrt(2.0));
+  const Triangle t{Vec3(Real(-0.5), 1 + d, 1 + d), Vec3(Real(1.5), 1 + d, 1 + d), Vec3(Real(0.5), 2, 2)};
+  ContactManifold m;
+  ASSERT_TRUE(triBox(t, Vec3::Ones(), Real(0.1), m));
+  EXPECT_TRUE(triBoxWellFormed(t, Vec3::Ones(), Real(0.1), m));
+  ASSERT_EQ(m.count, 2) << str(m);
+  const Real xs[2] = {std::min(m.points[0].pointB.x(), m.points[1].pointB.x()),
+                      std::max(m.points[0].pointB.x(), m.points[1].pointB.x())};
+  EXPECT_NEAR(xs[0], -0.5, 64 * kEps) << str(m);
+  EXPECT_NEAR(xs[1], 1, 64 * kEps) << str(m);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(m.points[i].separation, 0.05, 64 * kEps) << str(m);
+}
+
+/// Unit vector perpendicular to v (any).
+V3d perpendicular(const V3d& v) {
+  const V3d o = std::abs(v.x()) < 0.9 ? V3d::UnitX() : V3d::UnitY();
+  return v.cross(o).normalized();
+}
+
+TEST(ContactsIssue6, RandomNearlyParallelOffsetEdgesStayOnBothShapes) {
+  // A triangle edge within 0.01°..2° of a box edge, offset along the edge's outward bisector
+  // (gap) and across it (lateral), the third vertex away from the box.
+  std::mt19937_64 rng(20261122);
+  std::uniform_real_distribution<double> U(0, 1);
+  int found = 0, multi = 0;
+  const int n = 6000;
+  for (int i = 0; i < n; ++i) {
+    const V3d h(0.3 + 1.7 * U(rng), 0.3 + 1.7 * U(rng), 0.3 + 1.7 * U(rng));
+    const int ax = int(U(rng) * 3) % 3, ay = (ax + 1) % 3, az = (ax + 2) % 3;
+    const double sy = U(rng) < 0.5 ? -1 : 1, sz = U(rng) < 0.5 ? -1 : 1;
+    V3d corner = V3d::Zero();
+    corner[ay] = sy * h[ay];
+    corner[az] = sz * h[az];
+    V3d bis = V3d::Zero();
+    bis[ay] = sy;
+    bis[az] = sz;
+    bis.normalize();
+    V3d dir = V3d::Unit(ax);
+    const double angle = (0.01 + 1.99 * U(rng)) * M_PI / 180;
+    dir = Eigen::AngleAxisd(angle, (bis * std::cos(6.3 * U(rng)) + dir.cross(bis) * std::sin(6.3 * U(rng))).normalized()) * dir;
+    const double scale = h.maxCoeff();
+    const double gap = scale * (-0.02 + 0.1 * U(rng)), lateral = scale * 0.05 * (2 * U(rng) - 1);
+    const V3d mid = corner + V3d::Unit(ax) * h[ax] * (2 * U(rng) - 1) + bis * gap + dir.cross(bis).normalized() * lateral;
+    const double len = scale * (0.5 + 2 * U(rng));
+    const V3d a = mid - dir * len * U(rng), b = mid + dir * len * U(rng);
+    const V3d away = (bis + perpendicular(bis) * (U(rng) - 0.5)).normalized();
+    const V3d c = (a + b) / 2 + away * scale * (0.3 + U(rng));
+    const Triangle t{a.cast<Real>(), b.cast<Real>(), c.cast<Real>()};
+    const Real margin = Real(scale * 0.1 * U(rng));
+    ContactManifold m;
+    if (!triBox(t, h.cast<Real>(), margin, m)) continue;
+    ++found;
+    if (m.count > 1) ++multi;
+    ASSERT_TRUE(triBoxWellFormed(t, h.cast<Real>(), margin, m)) << "case " << i;
+  }
+  EXPECT_GT(found, n / 3);
+  std::printf("near-parallel edges: %d contacts of %d, %d with > 1 point\n", found, n, multi);
+}
+
+TEST(ContactsIssue6, RandomSliverTrianglesStayOnBothShapes) {
+  // Slivers (height / length 1e-1 .. 1e-7, not exactly degenerate) near a box face, tilted by up
+  // to 3°, some long enough to overhang an edge.
+  std::mt19937_64 rng(6006);
+  std::uniform_real_distribution<double> U(0, 1);
+  int found = 0, multi = 0;
+  const int n = 6000;
+  for (int i = 0; i < n; ++i) {
+    const V3d h(0.3 + 1.7 * U(rng), 0.3 + 1.7 * U(rng), 0.3 + 1.7 * U(rng));
+    const int ax = int(U(rng) * 3) % 3;
+    const double side = U(rng) < 0.5 ? -1 : 1;
+    const V3d nrm = V3d::Unit(ax) * side;
+    V3d onFace = V3d(h.x() * (2 * U(rng) - 1), h.y() * (2 * U(rng) - 1), h.z() * (2 * U(rng) - 1)) * 1.2;
+    onFace[ax] = side * h[ax];
+    const double scale = h.maxCoeff();
+    const V3d tiltAxis = perpendicular(nrm);
+    const Eigen::Matrix3d tilt =
+        Eigen::AngleAxisd(3 * M_PI / 180 * U(rng), Eigen::AngleAxisd(6.3 * U(rng), nrm) * tiltAxis).toRotationMatrix();
+    const V3d u = tilt * (Eigen::AngleAxisd(6.3 * U(rng), nrm) * perpendicular(nrm));
+    const V3d w = (tilt * nrm).cross(u).normalized();
+    const double len = scale * (0.2 + 2 * U(rng)), thin = std::pow(10.0, -1 - 6 * U(rng));
+    const V3d a = onFace + nrm * scale * (-0.02 + 0.1 * U(rng)) - u * len * U(rng);
+    const V3d b = a + u * len;
+    const V3d c = a + u * len * (-0.2 + 1.4 * U(rng)) + (U(rng) < 0.5 ? w : V3d(tilt * nrm)) * len * thin;
+    const Triangle t{a.cast<Real>(), b.cast<Real>(), c.cast<Real>()};
+    const Real margin = Real(scale * 0.1 * U(rng));
+    ContactManifold m;
+    if (!triBox(t, h.cast<Real>(), margin, m)) continue;
+    ++found;
+    if (m.count > 1) ++multi;
+    ASSERT_TRUE(triBoxWellFormed(t, h.cast<Real>(), margin, m)) << "case " << i << " thinness " << thin;
+  }
+  EXPECT_GT(found, n / 3);
+  std::printf("slivers: %d contacts of %d, %d with > 1 point\n", found, n, multi);
 }
 
 }  // namespace
