@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -136,19 +137,26 @@ bool touches(CollisionWorld& world, ModelHandle model, const Shape& s) {
   return world.overlaps(model, s);
 }
 
-/// model_<shape>: `hit` for the world-space shape in field `key`.
+/// model_<shape>: `hit` for the world-space shape in field `key`; with "volume": true (sphere,
+/// aabb, obb, triangle) the model's closed mesh is a solid placed by the model's world transform.
 template <class Shape>
 OpHandler modelShape(std::string key) {
   return [key](const Json& request, Answer& answer, BatchState& state) {
     const std::string name = readModelName(request, "model");
     const auto shape = readField<Shape>(request, key);
-    // Volume mode on models is not implemented yet: refuse it rather than answer the surface
-    // test silently (docs/batch.md "Volume mode").
-    if (readFlag(request, "volume"))
-      fail("volume", "volume mode is not implemented for model ops (mesh_sphere, mesh_aabb, mesh_obb, "
-                     "mesh_triangle and mesh_mesh have it)");
+    const bool volume = readFlag(request, "volume");
     const ModelHandle model = findModel(state, "model", name);
     validate(shape, key);
+    if (volume) {
+      if constexpr (std::is_same_v<Shape, Sphere> || std::is_same_v<Shape, Aabb> || std::is_same_v<Shape, Obb> ||
+                    std::is_same_v<Shape, Triangle>) {
+        answer["hit"] = state.world->overlapsVolume(model, shape);
+        return;
+      } else {
+        fail("volume", "volume mode is defined for model_sphere, model_aabb, model_obb and model_triangle only (a "
+                       "segment or plane meets a bounded solid iff it meets its surface)");
+      }
+    }
     answer["hit"] = touches(*state.world, model, shape);
   };
 }

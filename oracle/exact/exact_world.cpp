@@ -4,6 +4,7 @@
 #include "exact/exact_world.hpp"
 
 #include "exact/exact.hpp"
+#include "exact/exact_distance.hpp"
 #include "exact/exact_kernel.hpp"
 #include "exact/exact_rigid.hpp"
 #include "exact/exact_volume.hpp"
@@ -19,6 +20,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -120,10 +122,11 @@ class ExactWorld final : public CollisionWorld {
   std::string description() const override {
     return "CGAL " CGAL_VERSION_STR " Epeck (exact rationals), brute force over triangles";
   }
-  /// Every contract op, and volume mode (CGAL::Side_of_triangle_mesh); no contacts or distances
-  /// (an exact oracle of those would need exact closest points between convex shapes).
+  /// Every contract op, volume mode (CGAL::Side_of_triangle_mesh), and the narrow phase
+  /// (exact_distance.hpp: exact signed distances of convex cores, brute force over triangles).
   bool supports(WorldOp op) const override {
-    return isContractOp(op) || op == WorldOp::PointInside || isVolumeVariant(op);
+    return isContractOp(op) || op == WorldOp::PointInside || isVolumeVariant(op) || op == WorldOp::Contacts ||
+           op == WorldOp::Distance || op == WorldOp::MeshDistance || op == WorldOp::ModelDistance;
   }
   WorldTolerance tolerance() const override { return kExactTolerance; }
 
@@ -153,6 +156,62 @@ class ExactWorld final : public CollisionWorld {
       return false;
     };
     return (aClosed && vertexInside(mesh(a), ra, mesh(b), rb)) || (bClosed && vertexInside(mesh(b), rb, mesh(a), ra));
+  }
+
+  // ---- narrow phase (exact_distance.hpp): a convex operand is its exact core + radius; a mesh
+  // operand is every triangle (contacts: one per triangle within the margin, not reduced;
+  // distance: the minimum over triangles). Poses read with the Snapped rotation rule.
+
+  std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin) override {
+    std::vector<WorldContact> out;
+    if (!a.isMesh() && !b.isMesh()) {
+      const ConvexShape sa = convexOf(a), sb = convexOf(b);
+      for (const ExactContact& c : exact::contacts(sa, a.pose, sb, b.pose, margin))
+        out.push_back({c.pointA, c.pointB, c.normal, c.depth, std::nullopt, std::nullopt});
+      return out;
+    }
+    const bool meshIsA = a.isMesh();
+    const WorldOperand& m = meshIsA ? a : b;
+    const WorldOperand& s = meshIsA ? b : a;
+    const ConvexShape shape = convexOf(s);
+    for (const ExactContact& c : exact::contacts(mesh(std::get<MeshHandle>(m.shape)), m.pose, shape, s.pose, margin)) {
+      if (meshIsA) out.push_back({c.pointA, c.pointB, c.normal, c.depth, c.triangle, std::nullopt});
+      else out.push_back({c.pointB, c.pointA, -c.normal, c.depth, std::nullopt, c.triangle});
+    }
+    return out;
+  }
+  WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
+    WorldDistance w;
+    if (!a.isMesh() && !b.isMesh()) {
+      const ConvexShape sa = convexOf(a), sb = convexOf(b);
+      const ExactDistance d = exact::distance(sa, a.pose, sb, b.pose);
+      w.distance = d.distance;
+      w.pointA = d.pointA;
+      w.pointB = d.pointB;
+      w.normal = d.normal;
+      return w;
+    }
+    const bool meshIsA = a.isMesh();
+    const WorldOperand& m = meshIsA ? a : b;
+    const WorldOperand& s = meshIsA ? b : a;
+    const ConvexShape shape = convexOf(s);
+    const ExactDistance d = exact::distance(mesh(std::get<MeshHandle>(m.shape)), m.pose, shape, s.pose);
+    w.distance = d.distance;
+    w.pointA = meshIsA ? d.pointA : d.pointB;
+    w.pointB = meshIsA ? d.pointB : d.pointA;
+    w.normal = meshIsA ? d.normal : Vec3d(-d.normal);
+    (meshIsA ? w.triangleA : w.triangleB) = d.triangleA;
+    return w;
+  }
+  std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
+                                              double maxDistance) override {
+    return toWorld(exact::meshDistance(mesh(a), ta, mesh(b), tb, maxDistance));
+  }
+  /// Both meshes placed by the models' exactly composed world transforms.
+  std::optional<WorldDistance> doModelDistance(ModelHandle a, ModelHandle b, double maxDistance) override {
+    const Mesh& ma = *models_.meshData(a);
+    const Mesh& mb = *models_.meshData(b);
+    return toWorld(exact::detail::meshDistance(ma, worldOf(a), mb, worldOf(b), maxDistance));
   }
 
   Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return exact::closestPoint(t, p); }
@@ -215,6 +274,8 @@ class ExactWorld final : public CollisionWorld {
                          std::optional<ModelHandle> parent) override {
     const ModelHandle h = models_.add(name, mesh, sharedMesh(mesh), local, parent);
     forget(h);  // handles are reused after removal
+    if (h.index >= modelMeshNames_.size()) modelMeshNames_.resize(std::size_t(h.index) + 1);
+    modelMeshNames_[h.index] = meshName(mesh);
     return h;
   }
   void doRemoveModel(ModelHandle m) override {
@@ -255,6 +316,21 @@ class ExactWorld final : public CollisionWorld {
     return anySimplex(m, &box, [&](const Simplex& x) { return overlapsSimplex(x, q); });
   }
 
+  // Model volume mode (the base has checked that the model's mesh is closed): the exact surface
+  // test on the placed model, else the shape's reference point (as MeshVolume's: sphere / OBB
+  // centre, AABB min corner, triangle corner a) in the exact solid of the mesh placed by the
+  // model's exactly composed world transform (ExactSolid, Side_of_triangle_mesh).
+  ModelMeshRef doModelMesh(ModelHandle m, WorldOp) override {
+    const std::shared_ptr<const Mesh>& data = models_.meshData(m);  // validates m
+    return {models_.name(m), models_.mesh(m), modelMeshNames_[m.index], data.get()};
+  }
+  bool doOverlapsVolume(ModelHandle m, const Sphere& s) override { return touches(m, s) || solidOf(m).contains(s.center); }
+  bool doOverlapsVolume(ModelHandle m, const Aabb& b) override { return touches(m, b) || solidOf(m).contains(b.min); }
+  bool doOverlapsVolume(ModelHandle m, const Obb& b) override { return touches(m, b) || solidOf(m).contains(b.center); }
+  bool doOverlapsVolume(ModelHandle m, const Triangle& t) override {
+    return doOverlaps(m, t) || solidOf(m).contains(t.a);
+  }
+
   // ---- the scene ---------------------------------------------------------------------------
 
   void doSceneRaycast(const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
@@ -293,6 +369,27 @@ class ExactWorld final : public CollisionWorld {
   }
 
  private:
+  /// The convex shape of a non-mesh operand (a hull operand: a view of the operand's ConvexHull).
+  static ConvexShape convexOf(const WorldOperand& o) {
+    return std::visit(
+        [](const auto& s) -> ConvexShape {
+          if constexpr (std::is_same_v<std::decay_t<decltype(s)>, MeshHandle>) return ConvexShape();
+          else return ConvexShape(s);
+        },
+        o.shape);
+  }
+  static std::optional<WorldDistance> toWorld(const std::optional<ExactDistance>& d) {
+    if (!d) return std::nullopt;
+    WorldDistance w;
+    w.distance = d->distance;
+    w.pointA = d->pointA;
+    w.pointB = d->pointB;
+    w.normal = d->normal;
+    w.triangleA = d->triangleA;
+    w.triangleB = d->triangleB;
+    return w;
+  }
+
   /// The exact solid of a closed mesh, built on first use.
   const ExactSolid& solid(MeshHandle m) {
     std::unique_ptr<ExactSolid>& s = solids_[m.index];
@@ -306,6 +403,7 @@ class ExactWorld final : public CollisionWorld {
   struct ModelCache {
     std::unique_ptr<ExactRigid> world;
     std::unique_ptr<PlacedSimplices> placed;
+    std::unique_ptr<ExactSolid> solid;  ///< model volume mode: the placed closed mesh
   };
 
   ModelCache& slot(ModelHandle m) {
@@ -342,6 +440,13 @@ class ExactWorld final : public CollisionWorld {
       slot(m).placed = std::make_unique<PlacedSimplices>(mesh, world);
     }
     return *slot(m).placed;
+  }
+
+  /// The exact solid of the model's (closed) mesh placed in the world.
+  const ExactSolid& solidOf(ModelHandle m) {
+    const Mesh& mesh = *models_.meshData(m);
+    if (!slot(m).solid) slot(m).solid = std::make_unique<ExactSolid>(mesh, worldOf(m));
+    return *slot(m).solid;
   }
 
   /// Does any placed triangle of the model pass the test? Triangles whose interval box misses
@@ -417,6 +522,7 @@ class ExactWorld final : public CollisionWorld {
 
   oracle::ModelTable models_;
   std::vector<ModelCache> cache_;  ///< by model handle
+  std::vector<std::string> modelMeshNames_;  ///< by model handle: its mesh's name when it was added
 };
 
 }  // namespace

@@ -21,7 +21,7 @@ constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
     "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
     "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs", "contacts", "distance", "mesh_distance", "model_distance",
     "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume",
-    "mesh_mesh volume"};
+    "mesh_mesh volume", "model_sphere volume", "model_aabb volume", "model_obb volume", "model_triangle volume"};
 
 std::array<WorldOp, kWorldOpCount> makeOpList() {
   std::array<WorldOp, kWorldOpCount> ops{};
@@ -514,6 +514,45 @@ bool CollisionWorld::overlapsVolume(MeshHandle a, const Transform& ta, MeshHandl
   return guarded(WorldOp::MeshMeshVolume, [&] { return doOverlapsVolume(a, ta, b, tb, whyA.empty(), whyB.empty()); });
 }
 
+void CollisionWorld::requireClosedModel(ModelHandle model, WorldOp op) {
+  const ModelMeshRef ref = guarded(op, [&] { return doModelMesh(model, op); });
+  const auto live = meshes_.find(ref.handle.index);
+  std::string reason;
+  if (live != meshes_.end() && live->second.mesh.get() == ref.mesh)
+    reason = notClosedReason(ref.handle, "model");  // the mesh's cached verdict
+  else  // the mesh's name was redefined since the model was added: no cached verdict
+    reason = closedness(*ref.mesh).reason(ref.meshName);
+  if (!reason.empty()) {
+    std::string q = "\"";
+    for (const char c : ref.model) {
+      if (c == '"' || c == '\\') q += '\\';
+      q += c;
+    }
+    throw InvalidInput("model: model " + q + "\": " + reason);
+  }
+}
+
+template <class Shape>
+bool CollisionWorld::modelVolume(ModelHandle model, const Shape& shape, const char* field, WorldOp op) {
+  validate(shape, field);
+  if (!supports(op)) unsupported(op);
+  requireClosedModel(model, op);
+  return guarded(op, [&] { return doOverlapsVolume(model, shape); });
+}
+
+bool CollisionWorld::overlapsVolume(ModelHandle model, const Sphere& s) {
+  return modelVolume(model, s, "sphere", WorldOp::ModelSphereVolume);
+}
+bool CollisionWorld::overlapsVolume(ModelHandle model, const Aabb& b) {
+  return modelVolume(model, b, "aabb", WorldOp::ModelAabbVolume);
+}
+bool CollisionWorld::overlapsVolume(ModelHandle model, const Obb& b) {
+  return modelVolume(model, b, "obb", WorldOp::ModelObbVolume);
+}
+bool CollisionWorld::overlapsVolume(ModelHandle model, const Triangle& t) {
+  return modelVolume(model, t, "triangle", WorldOp::ModelTriangleVolume);
+}
+
 std::vector<WorldContact> CollisionWorld::doContacts(const WorldOperand&, const WorldOperand&, double) {
   unsupported(WorldOp::Contacts);
 }
@@ -533,6 +572,11 @@ bool CollisionWorld::doOverlapsVolume(MeshHandle, const Triangle&) { unsupported
 bool CollisionWorld::doOverlapsVolume(MeshHandle, const Transform&, MeshHandle, const Transform&, bool, bool) {
   unsupported(WorldOp::MeshMeshVolume);
 }
+CollisionWorld::ModelMeshRef CollisionWorld::doModelMesh(ModelHandle, WorldOp op) { unsupported(op); }
+bool CollisionWorld::doOverlapsVolume(ModelHandle, const Sphere&) { unsupported(WorldOp::ModelSphereVolume); }
+bool CollisionWorld::doOverlapsVolume(ModelHandle, const Aabb&) { unsupported(WorldOp::ModelAabbVolume); }
+bool CollisionWorld::doOverlapsVolume(ModelHandle, const Obb&) { unsupported(WorldOp::ModelObbVolume); }
+bool CollisionWorld::doOverlapsVolume(ModelHandle, const Triangle&) { unsupported(WorldOp::ModelTriangleVolume); }
 
 // ---- extensions -----------------------------------------------------------------------------------
 

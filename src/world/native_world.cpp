@@ -15,6 +15,8 @@
 #include <crux/model/model_query.hpp>
 #include <crux/scene/scene.hpp>
 
+#include "model/rigid.hpp"
+
 #include <algorithm>
 #include <map>
 #include <memory>
@@ -260,6 +262,38 @@ class NativeWorld final : public CollisionWorld {
     return crux::overlapsVolume(volume(b), tb, mesh(a), ta);
   }
 
+  // Model volume mode: the world-space shape mapped into the model's mesh frame exactly as the
+  // surface queries of model_query.cpp map it (RigidFrame: the identity skipped, axis-aligned
+  // rotations as exact signed permutations, so integer-grid answers stay exact), then the mesh's
+  // cached MeshVolume. A sphere stays a sphere, an AABB becomes an OBB (an AABB again under an
+  // axis-aligned rotation), an OBB stays an OBB, a triangle a triangle.
+  ModelMeshRef doModelMesh(ModelHandle model, WorldOp) override {
+    const ModelId id = require(model, "model");
+    const ModelMesh& m = modelMeshes_[id];
+    return {names_[id], m.handle, m.name, m.mesh.get()};
+  }
+  bool doOverlapsVolume(ModelHandle model, const Sphere& s) override {
+    const auto [v, f] = modelVolume(model);
+    return v.overlaps(f.identity() ? s : Sphere{f.toMesh(s.center), s.radius});
+  }
+  bool doOverlapsVolume(ModelHandle model, const Aabb& b) override {
+    const auto [v, f] = modelVolume(model);
+    if (f.identity()) return v.overlaps(b);
+    if (f.axisAligned()) {
+      const Vec3 p = f.toMesh(b.min), q = f.toMesh(b.max);
+      return v.overlaps(Aabb{p.cwiseMin(q), p.cwiseMax(q)});
+    }
+    return v.overlaps(Obb{f.toMesh(b.center()), b.half(), f.rotation().transpose()});
+  }
+  bool doOverlapsVolume(ModelHandle model, const Obb& b) override {
+    const auto [v, f] = modelVolume(model);
+    return v.overlaps(f.identity() ? b : Obb{f.toMesh(b.center), b.half, f.rotation().transpose() * b.axes});
+  }
+  bool doOverlapsVolume(ModelHandle model, const Triangle& t) override {
+    const auto [v, f] = modelVolume(model);
+    return v.overlaps(f.identity() ? t : Triangle{f.toMesh(t.a), f.toMesh(t.b), f.toMesh(t.c)});
+  }
+
   // ---- models -----------------------------------------------------------------------------------
 
   ModelHandle doAddModel(const std::string& name, MeshHandle m, const Transform& local,
@@ -269,6 +303,8 @@ class NativeWorld final : public CollisionWorld {
     const ModelId id = scene_.add(sharedMesh(m), local, parentId);
     if (id >= names_.size()) names_.resize(std::size_t(id) + 1);
     names_[id] = name;
+    if (id >= modelMeshes_.size()) modelMeshes_.resize(std::size_t(id) + 1);
+    modelMeshes_[id] = ModelMesh{m, meshName(m), sharedMesh(m)};
     byName_.emplace(name, id);
     return ModelHandle{id};
   }
@@ -277,6 +313,7 @@ class NativeWorld final : public CollisionWorld {
     scene_.remove(id);
     byName_.erase(names_[id]);
     names_[id].clear();
+    modelMeshes_[id] = ModelMesh{};
   }
   void doSetTransform(ModelHandle model, const Transform& local) override {
     scene_.setTransform(require(model, "model"), local);
@@ -369,8 +406,36 @@ class NativeWorld final : public CollisionWorld {
     std::call_once(e.volumeOnce, [&] { e.volume = std::make_unique<MeshVolume>(mesh(m)); });
     return *e.volume;
   }
+  /// The closed-solid view of a model's mesh and the model's world frame. The mesh's extras
+  /// while it is still defined under the handle the model was made with; a model whose mesh
+  /// name was redefined since keeps the old mesh, whose view lives in `retiredVolumes_`.
+  std::pair<const MeshVolume&, model_detail::RigidFrame> modelVolume(ModelHandle model) {
+    const ModelId id = require(model, "model");
+    const PlacedMesh p = scene_.placed(id);
+    const MeshHandle h = modelMeshes_[id].handle;
+    const model_detail::RigidFrame frame(p.world);
+    if (extras_.count(h.index) && &mesh(h) == p.mesh) return {volume(h), frame};
+    std::lock_guard<std::mutex> lock(retiredMutex_);
+    auto& [kept, v] = retiredVolumes_[p.mesh];
+    if (!v) {
+      kept = modelMeshes_[id].mesh;  // keeps the address from being reused while the view lives
+      v = std::make_unique<MeshVolume>(*kept);
+    }
+    return {*v, frame};
+  }
 
   std::map<std::uint32_t, std::unique_ptr<NativeMeshExtras>> extras_;  ///< by mesh handle
+  /// The mesh each model was added with: its handle and name then (model volume mode).
+  struct ModelMesh {
+    MeshHandle handle;
+    std::string name;
+    std::shared_ptr<const Mesh> mesh;
+  };
+  std::vector<ModelMesh> modelMeshes_;  ///< by ModelId
+  /// Volume views of meshes whose name was redefined while models still use them (rare; kept
+  /// until the world goes, keyed by the mesh, which the models keep alive).
+  std::map<const Mesh*, std::pair<std::shared_ptr<const Mesh>, std::unique_ptr<MeshVolume>>> retiredVolumes_;
+  std::mutex retiredMutex_;
   Scene scene_;                                          ///< dynamic AABB tree broad phase
   std::vector<std::string> names_;                       ///< by ModelId; empty for free ids
   std::map<std::string, ModelId, std::less<>> byName_;  ///< live model names

@@ -222,15 +222,83 @@ TEST(BatchNarrowPhase, MeshMeshVolumeMode) {
             0u);
   EXPECT_EQ(errorOf(b.ask(R"({"op":"mesh_mesh","a":"cube","b":"small","volume":"yes"})")),
             "volume: expected true or false, got string");
-  // Not (yet) on model ops: an error, never a silent surface answer.
-  ASSERT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"m","mesh":"cube"})")), "");
-  EXPECT_EQ(errorOf(b.ask(R"({"op":"model_sphere","model":"m","sphere":{"center":[0.5,0.5,0.5],"radius":0.1},)"
-                          R"("volume":true})"))
-                .rfind("volume: volume mode is not implemented for model ops", 0),
-            0u);
-  EXPECT_EQ(b.ask(R"({"op":"model_sphere","model":"m","sphere":{"center":[0.5,0.5,0.5],"radius":0.1},"volume":false})")
-                ["hit"],
+}
+
+/// model_<shape> with "volume": true: the model's closed mesh placed by its world transform
+/// (through a parent) is a solid; shapes wholly inside hit only in volume mode; open meshes,
+/// segments and planes are errors naming the field; peers without volumes say unsupported.
+TEST(BatchNarrowPhase, ModelVolumeMode) {
+  Batch b;
+  // p at (10,0,0) turned a quarter about z; m its child at local (0,0,2): m's cube [0,1]^3 is at
+  // world x in [9,10], y in [0,1], z in [2,3] (a point (x,y,z) of the cube maps to (10-y, x, z+2)).
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"p","mesh":"cube","transform":{"translation":[10,0,0],)"
+                          R"("rotation":[0.7071067811865476,0,0,0.7071067811865476]}})")),
+            "");
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"m","mesh":"cube","parent":"p",)"
+                          R"("transform":{"translation":[0,0,2]}})")),
+            "");
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"add_model","name":"q","mesh":"quad"})")), "");
+  const auto hit = [&](const std::string& op, const std::string& shape, const std::string& extra) {
+    const Answer a = b.ask(R"({"op":")" + op + R"(","model":"m",)" + shape + extra + "}");
+    EXPECT_EQ(errorOf(a), "") << op << " " << shape << extra;
+    return a["hit"];
+  };
+  const std::string in = R"("sphere":{"center":[9.5,0.5,2.5],"radius":0.1})";
+  EXPECT_EQ(hit("model_sphere", in, ""), false);
+  EXPECT_EQ(hit("model_sphere", in, R"(,"volume":false)"), false);
+  EXPECT_EQ(hit("model_sphere", in, R"(,"volume":true)"), true);
+  // Inside the cube's local frame without the parent's transform: outside in the world.
+  EXPECT_EQ(hit("model_sphere", R"("sphere":{"center":[0.5,0.5,2.5],"radius":0.1})", R"(,"volume":true)"), false);
+  EXPECT_EQ(hit("model_aabb", R"("aabb":{"min":[9.25,0.5,2.25],"max":[9.75,0.75,2.5]})", R"(,"volume":true)"), true);
+  EXPECT_EQ(hit("model_aabb", R"("aabb":{"min":[9.25,0.5,2.25],"max":[9.75,0.75,2.5]})", ""), false);
+  EXPECT_EQ(hit("model_aabb", R"("aabb":{"min":[10.5,0.5,2.25],"max":[10.75,0.75,2.5]})", R"(,"volume":true)"),
             false);
+  EXPECT_EQ(hit("model_obb", R"("obb":{"center":[9.5,0.5,2.5],"half":[0.2,0.2,0.2],)" + kAxes + "}",
+                R"(,"volume":true)"),
+            true);
+  EXPECT_EQ(hit("model_triangle", R"("triangle":[[9.2,0.2,2.2],[9.3,0.2,2.2],[9.2,0.3,2.2]])", R"(,"volume":true)"),
+            true);
+  EXPECT_EQ(hit("model_triangle", R"("triangle":[[9.2,0.2,2.2],[9.3,0.2,2.2],[9.2,0.3,2.2]])", ""), false);
+  // Moving the parent moves the solid.
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"set_transform","model":"p","transform":{"translation":[20,0,0]}})")), "");
+  EXPECT_EQ(hit("model_sphere", in, R"(,"volume":true)"), false);
+  EXPECT_EQ(hit("model_sphere", R"("sphere":{"center":[20.5,0.5,2.5],"radius":0.1})", R"(,"volume":true)"), true);
+  // Errors.
+  const auto err = [&](const std::string& line) { return errorOf(b.ask(line)); };
+  EXPECT_EQ(err(R"({"op":"model_sphere","model":"q",)" + in + R"(,"volume":true})"),
+            R"(model: model "q": mesh "quad" is not closed: edge (0,1) is used by 1 triangle (4 boundary, 0 )"
+            R"(non-manifold, 0 inconsistently oriented edges))");
+  EXPECT_EQ(err(R"({"op":"model_sphere","model":"m",)" + in + R"(,"volume":1})"),
+            "volume: expected true or false, got number");
+  EXPECT_EQ(err(R"({"op":"model_sphere","model":"zz",)" + in + R"(,"volume":true})"),
+            R"(model: no model named "zz" (add it first with add_model))");
+  EXPECT_EQ(err(R"({"op":"model_sphere","model":"m","sphere":{"center":[0,0,0],"radius":-1},"volume":true})"),
+            "sphere.radius is negative: -1");
+  EXPECT_EQ(err(R"({"op":"model_plane","model":"m","plane":{"normal":[0,0,1],"d":0.5},"volume":true})")
+                .rfind("volume: volume mode is defined for model_sphere, model_aabb, model_obb and model_triangle", 0),
+            0u);
+  EXPECT_EQ(err(R"({"op":"model_segment","model":"m","segment":{"start":[0,0,0],"end":[1,1,1]},"volume":true})")
+                .rfind("volume: volume mode is defined for", 0),
+            0u);
+  // A model keeps its mesh when the name is redefined: the old (closed) cube stays the solid.
+  ASSERT_EQ(errorOf(b.ask(R"({"op":"mesh","name":"cube","vertices":[[0,0,0],[1,0,0],[1,1,0]],"triangles":[[0,1,2]]})")),
+            "");
+  EXPECT_EQ(hit("model_sphere", R"("sphere":{"center":[20.5,0.5,2.5],"radius":0.1})", R"(,"volume":true)"), true);
+  // Peers: exact answers as native, fcl and bullet say unsupported.
+  for (const std::string_view name : builtBackends()) {
+    if (name == "native") continue;
+    Batch peer(*parseBackend(name));
+    ASSERT_EQ(errorOf(peer.ask(R"({"op":"add_model","name":"m","mesh":"cube","transform":{"translation":[5,0,0]}})")),
+              "");
+    const Answer a = peer.ask(R"({"op":"model_obb","model":"m","obb":{"center":[5.5,0.5,0.5],"half":[0.1,0.1,0.1],)" +
+                              kAxes + R"(},"volume":true})");
+    if (!peer.state.world->supports(WorldOp::ModelObbVolume)) {
+      EXPECT_EQ(errorOf(a), "unsupported: model_obb volume on " + std::string(name));
+      continue;
+    }
+    EXPECT_EQ(errorOf(a), "") << name;
+    EXPECT_EQ(a["hit"], true) << name;
+  }
 }
 
 TEST(BatchNarrowPhase, ErrorsNameTheField) {

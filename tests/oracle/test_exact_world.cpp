@@ -767,5 +767,110 @@ TEST(ExactWorldModels, IntegerGridAgreesWithCrux) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// The narrow phase on the exact world (oracle/exact/exact_distance.cpp; the routines themselves
+// are tested in test_exact_distance.cpp): the world's argument order, swaps and features, and
+// agreement with the native world on the docs/batch.md examples and models under quarter turns.
+
+TEST(ExactWorldNarrowPhase, SupportsContactsAndDistances) {
+  const auto w = exact::makeExactWorld();
+  for (const WorldOp op : {WorldOp::Contacts, WorldOp::Distance, WorldOp::MeshDistance, WorldOp::ModelDistance})
+    EXPECT_TRUE(w->supports(op)) << opName(op);
+}
+
+TEST(ExactWorldNarrowPhase, BatchExamplesOnTheUnitCube) {
+  const auto w = exact::makeExactWorld();
+  const auto native = makeWorld("native");
+  const MeshHandle cube = w->addMesh("cube", boxMesh(1, 1, 1));
+  const MeshHandle ncube = native->addMesh("cube", boxMesh(1, 1, 1));
+  Obb box;
+  box.center = v3(0.5, 0.5, 1.375);
+  box.half = v3(0.25, 0.25, 0.5);
+  // A box sunk 0.125 into the top face: one contact per top triangle (not reduced), the mesh
+  // triangle as feature; swapped, the features and normal swap.
+  const std::vector<WorldContact> c = w->contacts(WorldOperand{cube}, WorldOperand{box}, 0);
+  ASSERT_EQ(c.size(), 2u);
+  for (const WorldContact& k : c) {
+    EXPECT_EQ(k.depth, 0.125);
+    EXPECT_EQ(k.normal, Vec3d(0, 0, -1));
+    ASSERT_TRUE(k.featureA.has_value());
+    EXPECT_TRUE(*k.featureA == 2 || *k.featureA == 3);
+    EXPECT_FALSE(k.featureB.has_value());
+    EXPECT_NEAR((k.pointA - k.pointB).dot(k.normal), -k.depth, 1e-15);
+  }
+  const std::vector<WorldContact> s = w->contacts(WorldOperand{box}, WorldOperand{cube}, 0);
+  ASSERT_EQ(s.size(), 2u);
+  EXPECT_EQ(s[0].normal, Vec3d(0, 0, 1));
+  EXPECT_TRUE(s[0].featureB.has_value() && !s[0].featureA.has_value());
+  const std::vector<WorldContact> nc = native->contacts(WorldOperand{ncube}, WorldOperand{box}, 0);
+  ASSERT_FALSE(nc.empty());
+  for (const WorldContact& k : nc) EXPECT_NEAR(k.depth, 0.125, 1e-6);
+  // Capsule above the cube: distance 1.5 to the top face.
+  WorldOperand capsule{Capsule{v3(-1, 0, 0), v3(1, 0, 0), Real(0.5)}, makeTransform(v3(0, 0, 3))};
+  const WorldDistance d = w->distance(capsule, WorldOperand{cube});
+  EXPECT_EQ(d.distance, 1.5);
+  EXPECT_EQ(d.normal, Vec3d(0, 0, 1));
+  ASSERT_TRUE(d.triangleB.has_value());
+  EXPECT_TRUE(*d.triangleB == 2 || *d.triangleB == 3);
+  EXPECT_NEAR(native->distance(capsule, WorldOperand{ncube}).distance, 1.5, 1e-6);
+  // Two convex shapes: one contact (the witness) within the margin, none beyond it.
+  WorldOperand sphere{Sphere{v3(0, 0, 0), 1}, makeTransform(v3(0.5, 0.5, 4.125))};
+  WorldOperand unitBox{box, Transform::identity()};
+  EXPECT_EQ(w->contacts(sphere, unitBox, 1.0).size(), 0u);  // gap 4.125 - 1 - 1.875 = 1.25
+  const std::vector<WorldContact> one = w->contacts(sphere, unitBox, 1.25);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].depth, -1.25);
+  EXPECT_THROW(w->contacts(WorldOperand{cube}, WorldOperand{cube}, 0), InvalidInput);
+}
+
+TEST(ExactWorldNarrowPhase, MeshAndModelDistanceUnderQuarterTurnsMatchNative) {
+  const auto w = exact::makeExactWorld();
+  const auto native = makeWorld("native");
+  const auto bar = boxMesh(3, 1, 1), tet = tetraMesh(2);
+  const MeshHandle wb = w->addMesh("bar", bar), wt = w->addMesh("tet", tet);
+  const MeshHandle nb = native->addMesh("bar", bar), nt = native->addMesh("tet", tet);
+  std::mt19937_64 rng(0x6d6d6469u);
+  std::uniform_int_distribution<int> coord(-2, 2), turn(0, 3);
+  int zeros = 0;
+  const bool models = native->supports(WorldOp::ModelDistance);
+  for (int i = 0; i < 60; ++i) {
+    const Transform ta = makeTransform(v3(coord(rng), coord(rng), coord(rng)), quarterTurns(turn(rng), turn(rng), 0));
+    const Transform tb = makeTransform(v3(coord(rng), coord(rng), coord(rng)), quarterTurns(0, turn(rng), turn(rng)));
+    const double max = i % 3 == 0 ? 2.0 : std::numeric_limits<double>::infinity();
+    const auto e = w->meshDistance(wb, ta, wt, tb, max);
+    const auto n = native->meshDistance(nb, ta, nt, tb, max);
+    const std::string what = "ta " + str(ta) + " tb " + str(tb) + " max " + str(max);
+    if (!e) {
+      EXPECT_FALSE(n.has_value() && n->distance < max - 1e-5) << what;
+      continue;
+    }
+    ASSERT_TRUE(n.has_value() || e->distance > max - 1e-5) << what;
+    if (!n) continue;
+    EXPECT_NEAR(n->distance, e->distance, 1e-6 * (1 + e->distance)) << what;
+    if (e->distance == 0) {
+      ++zeros;
+      EXPECT_EQ(n->distance, 0.0) << "integer grid, quarter turns: touching is exact: " << what;
+    }
+    if (!models) continue;
+    // The same placements as models: a parent turned a quarter about z holding each mesh.
+    const auto place = [&](CollisionWorld& world, MeshHandle m, const std::string& name, const Transform& t) {
+      const ModelHandle parent = world.addModel(name + "-p", m, makeTransform(v3(0, 0, 0), quarterTurns(0, 0, 1)));
+      // Undo the parent's turn: rotation q(-90° z)·q, translation turned by -90° about z exactly.
+      const Transform local = makeTransform(Vec3(t.translation.y(), -t.translation.x(), t.translation.z()),
+                                            (quarterTurns(0, 0, 3) * t.rotation).normalized());
+      return world.addModel(name, m, local, parent);
+    };
+    const std::string tag = std::to_string(i);
+    const ModelHandle ea = place(*w, wb, "a" + tag, ta), eb = place(*w, wt, "b" + tag, tb);
+    const ModelHandle na = place(*native, nb, "a" + tag, ta), nb2 = place(*native, nt, "b" + tag, tb);
+    const auto me = w->modelDistance(ea, eb), mn = native->modelDistance(na, nb2);
+    ASSERT_TRUE(me && mn) << what;
+    EXPECT_EQ(me->distance, e->distance) << "model placement differs from the mesh placement: " << what;
+    EXPECT_NEAR(mn->distance, me->distance, 1e-6 * (1 + me->distance)) << what;
+  }
+  std::printf("%d of 60 placements touch or cross\n", zeros);
+  EXPECT_GT(zeros, 3);
+}
+
 }  // namespace
 }  // namespace crux

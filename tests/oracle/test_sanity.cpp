@@ -801,6 +801,10 @@ TEST_F(OracleSanity, UnsupportedOpsSaySo) {
           [&] { w->overlapsVolume(cube, Obb{}); },
           [&] { w->overlapsVolume(cube, T); },
           [&] { w->overlapsVolume(cube, Transform{}, cube, Transform{}); },
+          [&] { w->overlapsVolume(model, Sphere{}); },
+          [&] { w->overlapsVolume(model, Aabb{}); },
+          [&] { w->overlapsVolume(model, Obb{}); },
+          [&] { w->overlapsVolume(model, T); },
       };
       static_assert(std::size(calls) == kWorldOpCount, "one call per op");
       try {

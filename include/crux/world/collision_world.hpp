@@ -95,17 +95,21 @@ enum class WorldOp : std::uint8_t {
   MeshObbVolume,       ///< mesh_obb with "volume": true
   MeshTriangleVolume,  ///< mesh_triangle with "volume": true
   MeshMeshVolume,      ///< mesh_mesh with "volume": true (at least one operand closed)
+  ModelSphereVolume,   ///< model_sphere with "volume": true (the model's mesh closed)
+  ModelAabbVolume,     ///< model_aabb with "volume": true
+  ModelObbVolume,      ///< model_obb with "volume": true
+  ModelTriangleVolume, ///< model_triangle with "volume": true
 };
 
 /// Number of WorldOp values.
-inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::MeshMeshVolume) + 1;
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::ModelTriangleVolume) + 1;
 /// The ops of the original protocol contract (closest_point_triangle ... scene_pairs); those after
 /// it are the narrow-phase and volume extensions of docs/batch.md.
 inline constexpr bool isContractOp(WorldOp op) { return op <= WorldOp::ScenePairs; }
-/// Whether `op` is one of the volume-mode variants (mesh_<shape>, mesh_mesh with "volume": true): they are
-/// not protocol op names of their own, only ops a world may or may not support.
+/// Whether `op` is one of the volume-mode variants (mesh_<shape>, mesh_mesh, model_<shape> with
+/// "volume": true): they are not protocol op names of their own, only ops a world may or may not support.
 inline constexpr bool isVolumeVariant(WorldOp op) {
-  return op >= WorldOp::MeshSphereVolume && op <= WorldOp::MeshMeshVolume;
+  return op >= WorldOp::MeshSphereVolume && op <= WorldOp::ModelTriangleVolume;
 }
 
 /// The protocol name of an op ("closest_point_triangle", "mesh_mesh", ...). Mesh and LoadMesh
@@ -428,6 +432,13 @@ class CollisionWorld {
   /// surfaces touch, or one lies inside the other.) One closed operand suffices (it is the solid,
   /// the other its surface); neither closed throws InvalidInput naming both ("a: … ; b: …").
   bool overlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb);
+  /// model_<shape> with "volume": true: does the world-space shape touch the closed solid of the
+  /// model's mesh placed by the model's world transform (surface, or wholly inside)? The mesh
+  /// must be closed: otherwise InvalidInput("model: model \"m\": mesh \"quad\" is not closed: …").
+  bool overlapsVolume(ModelHandle model, const Sphere& s);
+  bool overlapsVolume(ModelHandle model, const Aabb& b);
+  bool overlapsVolume(ModelHandle model, const Obb& b);
+  bool overlapsVolume(ModelHandle model, const Triangle& t);
 
   // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
 
@@ -518,6 +529,22 @@ class CollisionWorld {
   /// mesh_mesh volume; the base has checked that at least one of a, b is closed (aClosed, bClosed).
   virtual bool doOverlapsVolume(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb, bool aClosed,
                                 bool bClosed);
+  /// The mesh behind a model, for the closedness check of model volume mode: the model's name,
+  /// the handle and name its mesh had when the model was added, and the mesh itself (which the
+  /// model keeps even when that name was redefined since). Backends with models override it;
+  /// the default throws Unsupported(`op`).
+  struct ModelMeshRef {
+    std::string model;
+    MeshHandle handle;
+    std::string meshName;
+    const Mesh* mesh = nullptr;
+  };
+  virtual ModelMeshRef doModelMesh(ModelHandle model, WorldOp op);
+  /// model_<shape> volume; the base has checked that the model's mesh is closed.
+  virtual bool doOverlapsVolume(ModelHandle model, const Sphere& s);
+  virtual bool doOverlapsVolume(ModelHandle model, const Aabb& b);
+  virtual bool doOverlapsVolume(ModelHandle model, const Obb& b);
+  virtual bool doOverlapsVolume(ModelHandle model, const Triangle& t);
 
   /// Extensions; the defaults return nothing (triangles not listed).
   virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
@@ -536,6 +563,12 @@ class CollisionWorld {
   void validateOperand(const WorldOperand& o, const std::string& field) const;
   /// Throws InvalidInput("mesh: <reason>") unless the mesh is closed.
   void requireClosed(MeshHandle mesh, const std::string& field) const;
+  /// Throws InvalidInput("model: model \"m\": <reason>") unless the model's mesh is closed (the
+  /// cached verdict while the mesh is still defined under its handle, else computed afresh).
+  void requireClosedModel(ModelHandle model, WorldOp op);
+  /// The checks and call shared by the model volume overloads.
+  template <class Shape>
+  bool modelVolume(ModelHandle model, const Shape& shape, const char* field, WorldOp op);
   /// Empty when the mesh is closed, else why not (the cached verdict).
   const std::string& notClosedReason(MeshHandle mesh, const std::string& field) const;
   /// Runs a hook, letting crux's own exceptions through and wrapping any other.

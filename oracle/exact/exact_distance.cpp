@@ -1,0 +1,596 @@
+/// @file exact_distance.cpp  Exact signed distances and contacts of convex shapes and mesh
+/// triangles (method: exact_distance.hpp; public entry points: exact.hpp).
+
+#include "exact/exact_distance.hpp"
+
+#include <crux/error.hpp>
+
+#include <CGAL/Projection_traits_xy_3.h>
+#include <CGAL/Projection_traits_xz_3.h>
+#include <CGAL/Projection_traits_yz_3.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/convex_hull_2.h>
+#include <CGAL/convex_hull_3.h>
+#include <CGAL/intersections.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iterator>
+#include <map>
+#include <numeric>
+#include <utility>
+
+namespace crux::exact {
+namespace detail {
+namespace {
+
+/// An exact number rounded once (to_double of the exact rational, not of the lazy interval,
+/// whose to_double may stop at a relative precision of 1e-5).
+double toDouble(const FT& x) { return CGAL::to_double(x.exact()); }
+
+Vec3d toVec3d(const Vector& v) { return {toDouble(v.x()), toDouble(v.y()), toDouble(v.z())}; }
+
+/// Unit vector of an exact direction, rounded (scaled first so tiny or huge ones normalise).
+Vec3d unitOf(const Vector& v) {
+  Vec3d d = toVec3d(v);
+  const double m = d.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m)) return Vec3d::UnitZ();
+  d /= m;
+  return d.normalized();
+}
+
+struct LessXyz {
+  bool operator()(const Point& a, const Point& b) const { return CGAL::compare_xyz(a, b) == CGAL::SMALLER; }
+};
+
+/// Σ w_k p_k (the weights sum to 1).
+Point combine(const Point* const* points, const FT* weights, int count) {
+  Vector sum = CGAL::NULL_VECTOR;
+  for (int k = 0; k < count; ++k) sum = sum + (*points[k] - CGAL::ORIGIN) * weights[k];
+  return CGAL::ORIGIN + sum;
+}
+
+/// Barycentric weights of the point of the non-degenerate triangle (a, b, c) closest to p: the
+/// Voronoi-region case analysis of Ericson, Real-Time Collision Detection 5.1.5, in rationals.
+std::array<FT, 3> closestWeights(const Point& p, const Point& a, const Point& b, const Point& c) {
+  const Vector ab = b - a, ac = c - a, ap = p - a;
+  const FT d1 = ab * ap, d2 = ac * ap;
+  if (d1 <= 0 && d2 <= 0) return {FT(1), FT(0), FT(0)};
+  const Vector bp = p - b;
+  const FT d3 = ab * bp, d4 = ac * bp;
+  if (d3 >= 0 && d4 <= d3) return {FT(0), FT(1), FT(0)};
+  const FT vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const FT v = d1 / (d1 - d3);
+    return {FT(1) - v, v, FT(0)};
+  }
+  const Vector cp = p - c;
+  const FT d5 = ab * cp, d6 = ac * cp;
+  if (d6 >= 0 && d5 <= d6) return {FT(0), FT(0), FT(1)};
+  const FT vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const FT w = d2 / (d2 - d6);
+    return {FT(1) - w, FT(0), w};
+  }
+  const FT va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const FT w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {FT(0), FT(1) - w, w};
+  }
+  const FT denom = va + vb + vc;
+  const FT v = vb / denom, w = vc / denom;
+  return {FT(1) - v - w, v, w};
+}
+
+/// The Minkowski difference's points a_i − b_j, each remembering one (i, j) it came from.
+struct Difference {
+  const ExactCore& a;
+  const ExactCore& b;
+  std::vector<Point> points;
+  std::map<Point, std::pair<std::uint32_t, std::uint32_t>, LessXyz> source;
+
+  Difference(const ExactCore& ca, const ExactCore& cb) : a(ca), b(cb) {
+    points.reserve(a.points.size() * b.points.size());
+    for (std::uint32_t i = 0; i < a.points.size(); ++i)
+      for (std::uint32_t j = 0; j < b.points.size(); ++j) {
+        const Point d = CGAL::ORIGIN + (a.points[i] - b.points[j]);
+        if (source.emplace(d, std::make_pair(i, j)).second) points.push_back(d);
+      }
+  }
+
+  /// The witnesses on A and B of Σ w_k v_k for difference points v_k.
+  void witnesses(const Point* const* v, const FT* w, int count, CoreDistance& out) const {
+    const Point* pa[3];
+    const Point* pb[3];
+    for (int k = 0; k < count; ++k) {
+      const auto& ij = source.at(*v[k]);
+      pa[k] = &a.points[ij.first];
+      pb[k] = &b.points[ij.second];
+    }
+    out.pointA = combine(pa, w, count);
+    out.pointB = combine(pb, w, count);
+  }
+};
+
+Point centroid(const std::vector<Point>& pts) {
+  Vector sum = CGAL::NULL_VECTOR;
+  for (const Point& p : pts) sum = sum + (p - CGAL::ORIGIN);
+  return CGAL::ORIGIN + sum / FT(int(pts.size()));
+}
+
+/// Keeps the nearest of candidate closest points (weights over difference points).
+struct Nearest {
+  bool found = false;
+  FT squared;
+  std::array<const Point*, 3> v{};
+  std::array<FT, 3> w;
+  int count = 0;
+
+  void offer(const Point& x, const std::array<const Point*, 3>& verts, const std::array<FT, 3>& weights, int n) {
+    const FT d2 = (x - CGAL::ORIGIN).squared_length();
+    if (found && !(d2 < squared)) return;
+    found = true;
+    squared = d2;
+    v = verts;
+    w = weights;
+    count = n;
+  }
+};
+
+/// Closest point of the triangle (a, b, c) to the origin, offered to `best`.
+void offerTriangle(const Point& a, const Point& b, const Point& c, Nearest& best) {
+  const std::array<FT, 3> w = closestWeights(CGAL::ORIGIN, a, b, c);
+  const Point* v[3] = {&a, &b, &c};
+  best.offer(combine(v, w.data(), 3), {&a, &b, &c}, w, 3);
+}
+
+/// Normal of a flat difference holding the origin, oriented by the core centroids.
+Vector flatNormal(const Vector& candidate, const ExactCore& a, const ExactCore& b) {
+  const Vector c = centroid(a.points) - centroid(b.points);
+  return c * candidate < 0 ? -candidate : candidate;
+}
+
+}  // namespace
+
+Vec3d toVec3d(const Point& p) { return {toDouble(p.x()), toDouble(p.y()), toDouble(p.z())}; }
+
+ExactCore coreOf(const ConvexShape& shape, const ExactRigid& pose) {
+  ExactCore core;
+  core.radius = double(shape.radius);
+  switch (shape.kind) {
+    case ConvexKind::Sphere:
+      core.points.push_back(pose.apply(shape.p[0]));
+      break;
+    case ConvexKind::Capsule:
+      core.points.push_back(pose.apply(shape.p[0]));
+      core.points.push_back(pose.apply(shape.p[1]));
+      break;
+    case ConvexKind::Triangle:
+      for (int i = 0; i < 3; ++i) core.points.push_back(pose.apply(shape.p[i]));
+      break;
+    case ConvexKind::Box: {
+      // Corner k has local signs (bit0, bit1, bit2) of k, as ConvexShape::vertex; computed exactly.
+      const Point c = toPoint(shape.p[0]);
+      for (int k = 0; k < 8; ++k) {
+        Vector off = CGAL::NULL_VECTOR;
+        for (int i = 0; i < 3; ++i) {
+          const FT h(double(shape.p[1][i]));
+          off = off + toVector(Vec3(shape.axes.col(i))) * (((k >> i) & 1) ? h : -h);
+        }
+        core.points.push_back(pose.apply(c + off));
+      }
+      break;
+    }
+    case ConvexKind::Hull:
+      for (const Vec3& v : shape.hull->vertices()) core.points.push_back(pose.apply(v));
+      break;
+  }
+  for (const Point& p : core.points) core.box += p.bbox();
+  return core;
+}
+
+ExactCore coreOf(const Point& a, const Point& b, const Point& c) {
+  ExactCore core;
+  core.points = {a, b, c};
+  core.box = a.bbox() + b.bbox() + c.bbox();
+  return core;
+}
+
+CoreDistance coreDistance(const ExactCore& ca, const ExactCore& cb) {
+  const Difference diff(ca, cb);
+  const std::vector<Point>& d = diff.points;
+  CoreDistance out;
+  const Point& p0 = d[0];
+
+  // Affine dimension of the difference, exactly.
+  std::size_t i1 = 1;
+  while (i1 < d.size() && d[i1] == p0) ++i1;
+  if (i1 == d.size()) {  // a point
+    const Point* v[1] = {&p0};
+    const FT w[1] = {FT(1)};
+    diff.witnesses(v, w, 1, out);
+    out.squared = (p0 - CGAL::ORIGIN).squared_length();
+    if (CGAL::is_zero(out.squared)) {
+      out.relation = CoreRelation::Flat;  // any direction: the centroids' offset, else +z
+      const Vector c = centroid(ca.points) - centroid(cb.points);
+      out.normal = c == CGAL::NULL_VECTOR ? Vector(0, 0, 1) : c;
+    } else {
+      out.relation = CoreRelation::Separated;
+      out.normal = p0 - CGAL::ORIGIN;
+    }
+    return out;
+  }
+  const Point& p1 = d[i1];
+  std::size_t i2 = i1 + 1;
+  while (i2 < d.size() && CGAL::collinear(p0, p1, d[i2])) ++i2;
+  if (i2 == d.size()) {  // a segment: its extreme points (lexicographic order is monotone on a line)
+    const auto [lo, hi] = std::minmax_element(d.begin(), d.end(), LessXyz());
+    const Vector u = *hi - *lo;
+    FT t = -((*lo - CGAL::ORIGIN) * u) / u.squared_length();
+    if (t < 0) t = 0;
+    if (t > 1) t = 1;
+    const Point* v[2] = {&*lo, &*hi};
+    const FT w[2] = {FT(1) - t, t};
+    diff.witnesses(v, w, 2, out);
+    const Point x = combine(v, w, 2);
+    out.squared = (x - CGAL::ORIGIN).squared_length();
+    if (CGAL::is_zero(out.squared)) {
+      out.relation = CoreRelation::Flat;
+      // Perpendicular to the segment: the centroids' offset without its component along u, else
+      // u × the axis u is least aligned with.
+      const Vector c = centroid(ca.points) - centroid(cb.points);
+      const Vector perp = c - u * ((c * u) / u.squared_length());
+      if (perp != CGAL::NULL_VECTOR) {
+        out.normal = perp;
+      } else {
+        int axis = 0;
+        for (int k = 1; k < 3; ++k)
+          if (CGAL::abs(u[k]) < CGAL::abs(u[axis])) axis = k;
+        const Vector e(axis == 0 ? 1 : 0, axis == 1 ? 1 : 0, axis == 2 ? 1 : 0);
+        out.normal = CGAL::cross_product(u, e);
+      }
+    } else {
+      out.relation = CoreRelation::Separated;
+      out.normal = x - CGAL::ORIGIN;
+    }
+    return out;
+  }
+  const Point& p2 = d[i2];
+  std::size_t i3 = i2 + 1;
+  while (i3 < d.size() && CGAL::orientation(p0, p1, p2, d[i3]) == CGAL::COPLANAR) ++i3;
+
+  if (i3 == d.size()) {  // a polygon: 2D hull in the coordinate plane the normal is least parallel to
+    const Vector n = CGAL::cross_product(p1 - p0, p2 - p0);
+    int axis = 0;
+    for (int k = 1; k < 3; ++k)
+      if (CGAL::abs(n[axis]) < CGAL::abs(n[k])) axis = k;
+    std::vector<Point> hull;
+    if (axis == 0)
+      CGAL::convex_hull_2(d.begin(), d.end(), std::back_inserter(hull), CGAL::Projection_traits_yz_3<K>());
+    else if (axis == 1)
+      CGAL::convex_hull_2(d.begin(), d.end(), std::back_inserter(hull), CGAL::Projection_traits_xz_3<K>());
+    else
+      CGAL::convex_hull_2(d.begin(), d.end(), std::back_inserter(hull), CGAL::Projection_traits_xy_3<K>());
+    Nearest best;
+    for (std::size_t k = 1; k + 1 < hull.size(); ++k) offerTriangle(hull[0], hull[k], hull[k + 1], best);
+    diff.witnesses(best.v.data(), best.w.data(), best.count, out);
+    out.squared = best.squared;
+    if (CGAL::is_zero(out.squared)) {
+      out.relation = CoreRelation::Flat;
+      out.normal = flatNormal(n, ca, cb);
+    } else {
+      out.relation = CoreRelation::Separated;
+      out.normal = out.pointA - out.pointB;
+    }
+    return out;
+  }
+
+  // A solid: its hull's facets, oriented outward with an interior point of the tetrahedron found.
+  const Point inner = CGAL::centroid(p0, p1, p2, d[i3]);
+  CGAL::Surface_mesh<Point> hull;
+  CGAL::convex_hull_3(d.begin(), d.end(), hull);
+  struct Facet {
+    std::array<Point, 3> v;
+    Vector n;  ///< outward
+    FT h;      ///< n·(v0 − origin): >= 0 when the origin is on the inner side
+  };
+  std::vector<Facet> facets;
+  facets.reserve(hull.number_of_faces());
+  bool outside = false;
+  for (const auto f : hull.faces()) {
+    Facet fc;
+    int k = 0;
+    for (const auto v : CGAL::vertices_around_face(hull.halfedge(f), hull)) {
+      if (k < 3) fc.v[k] = hull.point(v);
+      ++k;
+    }
+    fc.n = CGAL::cross_product(fc.v[1] - fc.v[0], fc.v[2] - fc.v[0]);
+    if (fc.n * (inner - fc.v[0]) > 0) fc.n = -fc.n;
+    fc.h = fc.n * (fc.v[0] - CGAL::ORIGIN);
+    if (fc.h < 0) outside = true;
+    facets.push_back(std::move(fc));
+  }
+  if (outside) {
+    Nearest best;
+    for (const Facet& fc : facets) offerTriangle(fc.v[0], fc.v[1], fc.v[2], best);
+    diff.witnesses(best.v.data(), best.w.data(), best.count, out);
+    out.relation = CoreRelation::Separated;
+    out.squared = best.squared;
+    out.normal = out.pointA - out.pointB;
+    return out;
+  }
+  // Inside: the nearest facet plane; among facets at that depth, the one holding the projection.
+  FT depth2 = 0;
+  bool first = true;
+  for (const Facet& fc : facets) {
+    const FT q = fc.h * fc.h / fc.n.squared_length();
+    if (first || q < depth2) depth2 = q;
+    first = false;
+  }
+  for (const Facet& fc : facets) {
+    if (fc.h * fc.h / fc.n.squared_length() != depth2) continue;
+    const Point x = CGAL::ORIGIN + fc.n * (fc.h / fc.n.squared_length());
+    const std::array<FT, 3> w = closestWeights(x, fc.v[0], fc.v[1], fc.v[2]);
+    const Point* v[3] = {&fc.v[0], &fc.v[1], &fc.v[2]};
+    if (combine(v, w.data(), 3) != x) continue;
+    diff.witnesses(v, w.data(), 3, out);
+    out.squared = depth2;
+    out.relation = CGAL::is_zero(depth2) ? CoreRelation::Touching : CoreRelation::Penetrating;
+    out.normal = -fc.n;
+    return out;
+  }
+  CGAL_error_msg("exact penetration: no facet holds the projection of the origin");
+  return out;
+}
+
+namespace {
+/// −1, 0, +1: the sign of the signed core distance.
+int signOf(const CoreDistance& d) {
+  if (d.relation == CoreRelation::Separated) return 1;
+  return d.relation == CoreRelation::Penetrating ? -1 : 0;
+}
+}  // namespace
+
+bool closer(const CoreDistance& x, const CoreDistance& y) {
+  const int sx = signOf(x), sy = signOf(y);
+  if (sx != sy) return sx < sy;
+  if (sx > 0) return x.squared < y.squared;
+  if (sx < 0) return y.squared < x.squared;
+  return false;
+}
+
+bool withinMargin(const CoreDistance& d, double radiusA, double radiusB, double margin) {
+  if (d.relation != CoreRelation::Separated) return true;  // signed core distance <= 0 <= margin
+  const FT reach = FT(margin) + FT(radiusA) + FT(radiusB);
+  return d.squared <= reach * reach;
+}
+
+RoundedDistance rounded(const CoreDistance& d, double radiusA, double radiusB) {
+  RoundedDistance r;
+  r.relation = d.relation;
+  const double core = std::sqrt(toDouble(d.squared));
+  r.distance = (d.relation == CoreRelation::Separated ? core : -core) - radiusA - radiusB;
+  if (r.distance == 0) r.distance = 0;  // no -0 (touching cores without radii)
+  r.normal = unitOf(d.normal);
+  r.pointA = toVec3d(d.pointA) - radiusA * r.normal;
+  r.pointB = toVec3d(d.pointB) + radiusB * r.normal;
+  return r;
+}
+
+Point commonPoint(const ExactCore& a, const ExactCore& b) {
+  const auto simplex = [](const ExactCore& c) {
+    const std::vector<Point>& p = c.points;
+    return simplexOf(p[0], p[std::min<std::size_t>(1, p.size() - 1)], p[std::min<std::size_t>(2, p.size() - 1)]);
+  };
+  const Simplex sa = simplex(a), sb = simplex(b);
+  if (const Point* p = std::get_if<Point>(&sa)) return *p;
+  if (const Point* p = std::get_if<Point>(&sb)) return *p;
+  const auto edges = [](const Simplex& s) {
+    std::vector<Segment3> out;
+    if (const Segment3* g = std::get_if<Segment3>(&s)) out.push_back(*g);
+    if (const Triangle3* t = std::get_if<Triangle3>(&s))
+      for (int k = 0; k < 3; ++k) out.emplace_back((*t)[k], (*t)[(k + 1) % 3]);
+    return out;
+  };
+  const auto cut = [](const Segment3& e, const Simplex& s) -> std::optional<Point> {
+    if (const Triangle3* t = std::get_if<Triangle3>(&s)) {
+      if (const auto r = CGAL::intersection(e, *t)) {
+        if (const Point* p = boost::get<Point>(&*r)) return *p;
+        if (const Segment3* g = boost::get<Segment3>(&*r)) return g->source();
+      }
+    } else if (const Segment3* g = std::get_if<Segment3>(&s)) {
+      if (const auto r = CGAL::intersection(e, *g)) {
+        if (const Point* p = boost::get<Point>(&*r)) return *p;
+        if (const Segment3* h = boost::get<Segment3>(&*r)) return h->source();
+      }
+    }
+    return std::nullopt;
+  };
+  for (const Segment3& e : edges(sa))
+    if (const auto p = cut(e, sb)) return *p;
+  for (const Segment3& e : edges(sb))
+    if (const auto p = cut(e, sa)) return *p;
+  CGAL_error_msg("exact commonPoint: the cores do not overlap");
+  return a.points[0];
+}
+
+PlacedTriangles::PlacedTriangles(const Mesh& mesh, const ExactRigid& pose) {
+  std::vector<Point> v;
+  v.reserve(mesh.vertexCount());
+  for (const Vec3& p : mesh.vertices()) v.push_back(pose.apply(p));
+  triangles.reserve(mesh.triangleCount());
+  for (const TriangleIndices& t : mesh.triangles()) triangles.push_back(coreOf(v[t[0]], v[t[1]], v[t[2]]));
+}
+
+FT squaredGap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+  FT sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (a.max(k) < b.min(k)) sum += CGAL::square(FT(b.min(k)) - FT(a.max(k)));
+    else if (b.max(k) < a.min(k)) sum += CGAL::square(FT(a.min(k)) - FT(b.max(k)));
+  }
+  return sum;
+}
+
+}  // namespace detail
+
+// ---- public entry points (exact.hpp) ----------------------------------------------------------
+
+namespace {
+using namespace detail;
+
+ExactDistance toDistance(const RoundedDistance& r) {
+  ExactDistance d;
+  d.distance = r.distance;
+  d.pointA = r.pointA;
+  d.pointB = r.pointB;
+  d.normal = r.normal;
+  d.relation = r.relation;
+  return d;
+}
+
+ExactContact toContact(const RoundedDistance& r, std::uint32_t triangle) {
+  ExactContact c;
+  c.pointA = r.pointA;
+  c.pointB = r.pointB;
+  c.normal = r.normal;
+  c.depth = -r.distance;
+  c.triangle = triangle;
+  c.relation = r.relation;
+  return c;
+}
+
+/// Indices 0..n-1 sorted by a double estimate of each one's lower bound (only the order of
+/// work: every prune below is decided exactly).
+template <class Bound>
+std::vector<std::uint32_t> byBound(std::size_t n, const Bound& bound) {
+  std::vector<double> key(n);
+  for (std::size_t i = 0; i < n; ++i) key[i] = bound(i);
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) { return key[x] < key[y]; });
+  return order;
+}
+
+/// Squared gap of two boxes in double (an estimate for ordering and a filter with slack).
+double approxGap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+  double sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double g = std::max({0.0, b.min(k) - a.max(k), a.min(k) - b.max(k)});
+    sum += g * g;
+  }
+  return sum;
+}
+
+const ExactRigid::Rotation kRule = ExactRigid::Rotation::Snapped;
+}  // namespace
+
+ExactDistance distance(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb) {
+  const ExactCore ca = coreOf(a, ExactRigid(ta, kRule)), cb = coreOf(b, ExactRigid(tb, kRule));
+  return toDistance(rounded(coreDistance(ca, cb), ca.radius, cb.radius));
+}
+
+ExactDistance distance(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
+                       const Transform& shapePose) {
+  if (mesh.triangleCount() == 0) throw InvalidInput("mesh: the mesh has no triangles");
+  const PlacedTriangles placed(mesh, ExactRigid(meshPose, kRule));
+  const ExactCore core = coreOf(shape, ExactRigid(shapePose, kRule));
+  const std::vector<std::uint32_t> order = byBound(
+      placed.triangles.size(), [&](std::size_t t) { return approxGap(placed.triangles[t].box, core.box); });
+  std::optional<CoreDistance> best;
+  std::uint32_t bestIndex = 0;
+  for (const std::uint32_t t : order) {
+    const ExactCore& tri = placed.triangles[t];
+    if (best) {
+      const FT gap = squaredGap(tri.box, core.box);  // the triangle is at least this far (squared)
+      if (best->relation != CoreRelation::Separated ? !CGAL::is_zero(gap) : best->squared < gap) continue;
+    }
+    const CoreDistance d = coreDistance(tri, core);
+    if (!best || closer(d, *best) || (!closer(*best, d) && t < bestIndex)) {
+      best = d;
+      bestIndex = t;
+    }
+  }
+  ExactDistance out = toDistance(rounded(*best, 0.0, core.radius));
+  out.triangleA = bestIndex;
+  return out;
+}
+
+std::optional<ExactDistance> meshDistance(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb,
+                                          double maxDistance) {
+  return detail::meshDistance(a, ExactRigid(ta, kRule), b, ExactRigid(tb, kRule), maxDistance);
+}
+
+std::optional<ExactDistance> detail::meshDistance(const Mesh& a, const ExactRigid& ta, const Mesh& b,
+                                                  const ExactRigid& tb, double maxDistance) {
+  if (a.triangleCount() == 0 || b.triangleCount() == 0) throw InvalidInput("mesh: the mesh has no triangles");
+  const PlacedTriangles pa(a, ta), pb(b, tb);
+  CGAL::Bbox_3 boxA, boxB;
+  for (const ExactCore& t : pa.triangles) boxA += t.box;
+  for (const ExactCore& t : pb.triangles) boxB += t.box;
+  // Work order: a's triangles nearest b's box first, b's nearest a's box first (memory O(n + m)).
+  const std::vector<std::uint32_t> orderA = byBound(
+      pa.triangles.size(), [&](std::size_t i) { return approxGap(pa.triangles[i].box, boxB); });
+  const std::vector<std::uint32_t> orderB = byBound(
+      pb.triangles.size(), [&](std::size_t j) { return approxGap(pb.triangles[j].box, boxA); });
+  const bool bounded = std::isfinite(maxDistance);
+  const FT max2 = bounded ? CGAL::square(FT(maxDistance)) : FT(0);
+  const double max2Approx = bounded ? maxDistance * maxDistance : HUGE_VAL;
+  std::optional<CoreDistance> best;
+  double bestApprox = HUGE_VAL;  // the best squared distance rounded (a filter only)
+  std::uint32_t bestI = 0, bestJ = 0;
+  for (const std::uint32_t i : orderA) {
+    if (best && best->relation != CoreRelation::Separated) break;  // distance 0: nothing is nearer
+    for (const std::uint32_t j : orderB) {
+      const CGAL::Bbox_3 &ba = pa.triangles[i].box, &bb = pb.triangles[j].box;
+      // A double filter (its rounding is far below the 1e-9 slack), then the exact prune.
+      const double g = approxGap(ba, bb);
+      if (g > std::min(bestApprox, max2Approx) * (1 + 1e-9)) continue;
+      const FT gap = squaredGap(ba, bb);
+      if (bounded && max2 < gap) continue;
+      if (best && best->squared < gap) continue;
+      const CoreDistance d = coreDistance(pa.triangles[i], pb.triangles[j]);
+      const bool tie = best && !closer(*best, d) && !closer(d, *best);
+      if (!best || closer(d, *best) || (tie && std::make_pair(i, j) < std::make_pair(bestI, bestJ))) {
+        best = d;
+        bestApprox = CGAL::to_double(d.relation == CoreRelation::Separated ? d.squared : FT(0));
+        bestI = i;
+        bestJ = j;
+      }
+      if (best->relation != CoreRelation::Separated) break;
+    }
+  }
+  if (!best || (bounded && best->relation == CoreRelation::Separated && max2 < best->squared)) return std::nullopt;
+  CoreDistance d = *best;
+  if (d.relation == CoreRelation::Penetrating) d.pointA = d.pointB = commonPoint(pa.triangles[bestI], pb.triangles[bestJ]);
+  if (d.relation != CoreRelation::Separated) d.squared = 0;
+  ExactDistance out = toDistance(rounded(d, 0.0, 0.0));
+  out.distance = std::abs(out.distance);  // unsigned: 0 when the surfaces touch or cross
+  out.triangleA = std::uint32_t(bestI);
+  out.triangleB = std::uint32_t(bestJ);
+  return out;
+}
+
+std::vector<ExactContact> contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b,
+                                   const Transform& tb, double margin) {
+  const ExactCore ca = coreOf(a, ExactRigid(ta, kRule)), cb = coreOf(b, ExactRigid(tb, kRule));
+  const CoreDistance d = coreDistance(ca, cb);
+  if (!withinMargin(d, ca.radius, cb.radius, margin)) return {};
+  return {toContact(rounded(d, ca.radius, cb.radius), 0)};
+}
+
+std::vector<ExactContact> contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
+                                   const Transform& shapePose, double margin) {
+  const PlacedTriangles placed(mesh, ExactRigid(meshPose, kRule));
+  const ExactCore core = coreOf(shape, ExactRigid(shapePose, kRule));
+  const FT reach = FT(margin) + FT(core.radius);
+  std::vector<ExactContact> out;
+  for (std::uint32_t t = 0; t < placed.triangles.size(); ++t) {
+    if (reach * reach < squaredGap(placed.triangles[t].box, core.box)) continue;
+    const CoreDistance d = coreDistance(placed.triangles[t], core);
+    if (withinMargin(d, 0.0, core.radius, margin)) out.push_back(toContact(rounded(d, 0.0, core.radius), t));
+  }
+  return out;
+}
+
+}  // namespace crux::exact
