@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <tuple>
 
 namespace crux::cli {
 namespace {
@@ -875,8 +876,213 @@ DiffCase sceneCase(std::string_view op, Rng& rng) {
   return c;
 }
 
-const std::vector<std::string_view> kMeshOps = {"mesh_ray", "mesh_segment",  "mesh_sphere", "mesh_aabb",
-                                                "mesh_obb", "mesh_plane",    "mesh_triangle", "mesh_mesh"};
+// ---- narrow phase (issue 6): distance, contacts, mesh_distance ------------------------------------
+
+/// A convex operand of the narrow-phase ops (docs/batch.md "Operands") around `at`: a sphere,
+/// box, capsule, hull (4–8 points) or triangle, on the grid (integer coordinates, signed
+/// permutation box frames) or in general position (float coordinates, random box frames).
+/// With `degenerate`: a zero-radius sphere, a flat box, a capsule with a = b, a hull of
+/// collinear or coplanar points, a collinear / point triangle (grid only).
+J convexOperand(Rng& rng, bool general, V at, bool degenerate = false) {
+  const auto point = [&](int spread) {
+    return general ? toFloat(add(at, rng.floatPoint(spread))) : add(at, rng.gridPoint(spread));
+  };
+  const auto length = [&](int hi) { return general ? toFloat(rng.uniform(0.1, hi)) : double(rng.integer(1, hi)); };
+  J o = J::object();
+  switch (rng.integer(0, 4)) {
+    case 0:
+      o["sphere"] = sphereJson(point(1), degenerate ? 0.0 : length(2));
+      break;
+    case 1: {
+      V half = {length(2), length(2), length(1)};
+      if (degenerate) half[std::size_t(rng.integer(0, 2))] = 0;
+      o["box"] = obbJson(point(1), half, general ? rotationMatrix(randomRotation(rng)) : gridFrame(rng));
+      break;
+    }
+    case 2: {
+      const V a = point(1);
+      o["capsule"] = J{{"a", vec(a)}, {"b", vec(degenerate ? a : point(2))}, {"radius", num(length(1))}};
+      break;
+    }
+    case 3: {
+      J points = J::array();
+      const V base = point(1), d = rng.nonZeroGrid(1);
+      const V e = rng.nonZeroGrid(1);
+      const int n = rng.integer(4, 8);
+      for (int i = 0; i < n; ++i) {
+        if (!degenerate) points.push_back(vec(point(2)));
+        else if (rng.chance(0.5)) points.push_back(vec(add(base, mul(d, rng.integer(-2, 2)))));  // collinear
+        else points.push_back(vec(add(add(base, mul(d, rng.integer(-2, 2))), mul(e, rng.integer(-2, 2)))));  // coplanar
+      }
+      o["hull"] = J{{"points", points}};
+      break;
+    }
+    default: {
+      if (degenerate) {
+        const Tri t = degenerateTriangle(rng);
+        o["triangle"] = triJson({add(t.a, at), add(t.b, at), add(t.c, at)});
+      } else {
+        o["triangle"] = triJson({point(2), point(2), point(2)});
+      }
+    }
+  }
+  return o;
+}
+
+/// A box operand (grid frame, integer centre and half extents) and an operand touching one of
+/// its faces exactly from outside: a sphere, a box face to face, or a capsule lying on it.
+std::pair<J, J> touchingOperands(Rng& rng) {
+  const V c = rng.gridPoint(2);
+  const V h = {double(rng.integer(1, 2)), double(rng.integer(1, 2)), double(rng.integer(1, 2))};
+  const std::array<V, 3> identity = {V{1, 0, 0}, V{0, 1, 0}, V{0, 0, 1}};
+  J a = J{{"box", obbJson(c, h, identity)}};
+  const std::size_t axis = std::size_t(rng.integer(0, 2));
+  const double side = rng.chance(0.5) ? 1 : -1;
+  V onFace = c;  // a point of the face (corner, edge or interior, integer)
+  for (std::size_t i = 0; i < 3; ++i)
+    onFace[i] += i == axis ? side * h[i] : double(rng.integer(-int(h[i]), int(h[i])));
+  const double r = double(rng.integer(1, 2));
+  V out = {0, 0, 0};
+  out[axis] = side;
+  J b;
+  switch (rng.integer(0, 2)) {
+    case 0: b = J{{"sphere", sphereJson(add(onFace, mul(out, r)), r)}}; break;
+    case 1: {
+      const V hb = {double(rng.integer(1, 2)), double(rng.integer(1, 2)), double(rng.integer(1, 2))};
+      b = J{{"box", obbJson(add(onFace, mul(out, hb[axis])), hb, identity)}};
+      break;
+    }
+    default: {
+      V along = {0, 0, 0};
+      along[(axis + 1) % 3] = double(rng.integer(1, 3));
+      const V a0 = add(onFace, mul(out, r));
+      b = J{{"capsule", J{{"a", vec(a0)}, {"b", vec(add(a0, along))}, {"radius", num(r)}}}};
+    }
+  }
+  if (rng.chance(0.5)) std::swap(a, b);
+  return {a, b};
+}
+
+/// A placement of an operand: a grid motion (exact rotation, integer translation) or a random one.
+J placement(Rng& rng, bool general) {
+  if (general) return J{{"rotation", rotationJson(randomRotation(rng))}, {"translation", vec(toFloat(rng.floatPoint(1)))}};
+  const auto& rot = gridRotations()[rng.next() % gridRotations().size()];
+  return J{{"rotation", rotationJson(rot.q)}, {"translation", vec(rng.gridPoint(2))}};
+}
+
+/// A `distance` or `contacts` case between two convex operands, in one of the primitive families
+/// (general, grid, touching, degenerate, near_degenerate, huge, tiny, transformed).
+DiffCase narrowConvexCase(std::string_view family, std::string_view op, Rng& rng) {
+  DiffCase c;
+  const bool general = family == "general" || family == "transformed";
+  J q = request(op);
+  if (family == "touching" || family == "near_degenerate") {
+    const auto [a, b] = touchingOperands(rng);
+    q["a"] = a;
+    q["b"] = b;
+  } else {
+    q["a"] = convexOperand(rng, general, {0, 0, 0}, family == "degenerate" && rng.chance(0.5));
+    const V offset = general ? toFloat(rng.floatPoint(2.5)) : rng.gridPoint(3);
+    q["b"] = convexOperand(rng, general, offset, family == "degenerate" && rng.chance(0.5));
+    if (family != "transformed" && rng.chance(0.3)) q["b"]["transform"] = placement(rng, general);
+  }
+  if (op == "contacts" && rng.chance(0.3)) q["margin"] = num(general ? toFloat(rng.uniform(0, 0.5)) : 1);
+  c.exactGrid = !general;
+  c.featureSize = general ? 0.2 : 1;
+  if (family == "near_degenerate") {
+    nudge(q, rng);
+    c.exactGrid = false;
+  } else if (family == "huge" || family == "tiny") {
+    const double s = family == "huge" ? 1e6 : 1e-6;
+    scaleShapes(q, s);
+    c.featureSize *= s;
+    c.exactGrid = false;
+  } else if (family == "transformed") {
+    // one random rigid motion for both operands: the answer's distance and depth are invariant
+    const J motion = placement(rng, true);
+    q["a"]["transform"] = motion;
+    q["b"]["transform"] = motion;
+  }
+  c.query = q.dump();
+  return c;
+}
+
+/// Small real meshes the narrow-phase ops use (the exact backend's distances are brute force
+/// over the triangles: bunny00 and cow would take seconds per case).
+const std::vector<std::string> kNarrowRealMeshes = {"blob-closed", "sphere"};
+
+/// A narrow-phase case of the mesh family: `distance` / `contacts` between a mesh (small
+/// generated, or a small real mesh) and a convex operand near one of its triangles, in either
+/// operand order; `mesh_distance` between two small meshes under grid or random motions.
+DiffCase narrowMeshCase(std::string_view op, Rng& rng, DiffGenerator& g) {
+  DiffCase c;
+  J q = request(op);
+  if (op == "mesh_distance") {
+    const bool general = rng.chance(0.35);
+    c.setup.push_back(meshLine("a", smallMesh(rng, general)).dump());
+    c.setup.push_back(meshLine("b", smallMesh(rng, general)).dump());
+    q["a"] = "a";
+    q["b"] = "b";
+    if (rng.chance(0.7)) q["transform_a"] = placement(rng, general);
+    if (rng.chance(0.7)) q["transform_b"] = placement(rng, general);
+    if (rng.chance(0.2)) q["max"] = num(general ? toFloat(rng.uniform(0, 2)) : double(rng.integer(0, 3)));
+    c.exactGrid = !general;
+    c.featureSize = general ? 0.3 : 1;
+    c.query = q.dump();
+    return c;
+  }
+  const std::string& realName = kNarrowRealMeshes[rng.next() % kNarrowRealMeshes.size()];
+  const Mesh* real = rng.chance(0.35) ? realMesh(g, realName) : nullptr;
+  J meshOperand, shape;
+  if (real) {
+    c.setup.push_back(J{{"op", "load_mesh"}, {"name", realName}, {"path", realMeshPath(g, realName)}}.dump());
+    c.sharedSetup = true;
+    const Aabb& bb = real->bounds();
+    double mag = 0, size = 0;
+    for (int k = 0; k < 3; ++k) {
+      mag = std::max({mag, std::fabs(double(bb.min[k])), std::fabs(double(bb.max[k]))});
+      size = std::max(size, double(bb.max[k] - bb.min[k]));
+    }
+    c.extraMagnitude = mag;
+    meshOperand = J{{"mesh", realName}};
+    const V anchor = toV(real->vertices()[rng.next() % real->vertexCount()]);
+    // a general operand of unit size around the origin, scaled to 2-10 % of the mesh, moved to the anchor
+    J o = convexOperand(rng, true, {0, 0, 0});
+    const double s = toFloat(size * rng.uniform(0.02, 0.1));
+    scaleShapes(o, s);
+    o["transform"] = J{{"translation", vec(toFloat(anchor))}};
+    shape = o;
+    c.featureSize = s;
+    c.exactGrid = false;
+  } else {
+    const bool general = rng.chance(0.3);
+    const MeshData m = smallMesh(rng, general);
+    c.setup.push_back(meshLine("m", m).dump());
+    meshOperand = J{{"mesh", "m"}};
+    const Tri t = m.triangle(rng.next() % m.triangles.size());
+    shape = convexOperand(rng, general, general ? t.a : t.a);
+    if (rng.chance(0.3)) meshOperand["transform"] = placement(rng, general);
+    c.exactGrid = !general;
+    c.featureSize = general ? 0.2 : 1;
+  }
+  const bool meshFirst = rng.chance(0.5);
+  q["a"] = meshFirst ? meshOperand : shape;
+  q["b"] = meshFirst ? shape : meshOperand;
+  if (op == "contacts" && rng.chance(0.3)) q["margin"] = num(c.exactGrid ? 1.0 : toFloat(0.05 * c.featureSize * 4));
+  c.query = q.dump();
+  return c;
+}
+
+bool isNarrowOp(std::string_view op) { return op == "distance" || op == "contacts" || op == "mesh_distance"; }
+
+const std::vector<std::string_view> kMeshOps = {"mesh_ray",      "mesh_segment", "mesh_sphere", "mesh_aabb",
+                                                "mesh_obb",      "mesh_plane",   "mesh_triangle", "mesh_mesh",
+                                                "distance",      "contacts",     "mesh_distance"};
+/// The primitive ops and the convex-pair narrow-phase ops (not in the coplanar family, whose
+/// cases are built around one triangle's plane).
+const std::vector<std::string_view> kPrimitiveAndNarrowOps = {
+    "closest_point_triangle", "triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_plane",
+    "triangle_triangle",      "ray_triangle",    "segment_triangle", "distance", "contacts"};
 const std::vector<std::string_view> kModelOps = {"model_ray", "model_segment",  "model_sphere", "model_aabb",
                                                  "model_obb", "model_plane",    "model_triangle", "children"};
 const std::vector<std::string_view> kSceneOps = {"scene_ray", "scene_query", "scene_pairs"};
@@ -894,7 +1100,8 @@ const std::vector<std::string_view>& diffFamilyOps(std::string_view family) {
   if (family == "mesh") return kMeshOps;
   if (family == "hierarchy") return kModelOps;
   if (family == "scene") return kSceneOps;
-  return kPrimitiveOps;
+  if (family == "coplanar") return kPrimitiveOps;
+  return kPrimitiveAndNarrowOps;
 }
 
 std::uint64_t caseSeed(std::uint64_t seed, std::uint64_t index) {
@@ -916,7 +1123,9 @@ std::optional<DiffCase> generateCase(std::string_view family, std::uint64_t seed
   Rng rng{caseSeed(seed, index)};
   const std::string_view op = ops[rng.next() % ops.size()];
   DiffCase c;
-  if (family == "mesh") {
+  if (isNarrowOp(op)) {
+    c = family == "mesh" ? narrowMeshCase(op, rng, generator) : narrowConvexCase(family, op, rng);
+  } else if (family == "mesh") {
     c = meshCase(op, rng, generator);
   } else if (family == "hierarchy") {
     c = hierarchyCase(op, rng);

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <map>
 #include <sstream>
 
 namespace crux::cli {
@@ -241,6 +242,10 @@ TEST(DiffRun, SameSeedSameSummary) {
   o.seed = 11;
   o.cases = 40;
   o.backends = {"native", "fcl"};
+  // issue 5's ops: FCL's narrow phase runs in child processes (it aborts or loops on some
+  // pairs), which costs seconds per stuck case; DiffNarrowPhase covers those ops
+  o.ops = {"triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_triangle", "closest_point_triangle",
+           "mesh_sphere", "mesh_mesh", "model_sphere", "scene_pairs"};
   std::ostringstream err;
   const J a = runDiff(o, err).toJson(), b = runDiff(o, err).toJson();
   EXPECT_EQ(a["table"], b["table"]);
@@ -270,6 +275,12 @@ TEST(DiffRun, ShortRunFindsNoCruxWrong) {
   o.seed = 2026;
   o.cases = 300;
   o.backends = {"native"};
+  // the ops of issue 5 (the narrow-phase ops have their own run below: DiffNarrowPhase)
+  for (const auto family : diffFamilies())
+    for (const auto op : diffFamilyOps(family))
+      if (op != "distance" && op != "contacts" && op != "mesh_distance" &&
+          std::find(o.ops.begin(), o.ops.end(), op) == o.ops.end())
+        o.ops.emplace_back(op);
   o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
   std::ostringstream err;
   const auto start = std::chrono::steady_clock::now();
@@ -282,6 +293,123 @@ TEST(DiffRun, ShortRunFindsNoCruxWrong) {
     if (perBackend.count("native") && perBackend.at("native").count("agree")) agree += perBackend.at("native").at("agree");
   EXPECT_GT(agree, 250u);  // the generator's cases are answered, not rejected
   EXPECT_LT(seconds, 20.0);
+}
+
+// ---- the narrow-phase ops (distance, contacts, mesh_distance) ------------------------------------
+
+bool exactAnswersNarrowPhase() {
+  return makeWorld("exact")->supports(WorldOp::Distance) && makeWorld("exact")->supports(WorldOp::Contacts);
+}
+
+// Two unit spheres 1 apart along x: distance 1, points (1,0,0) and (2,0,0).
+const std::string kSpheres =
+    R"({"op":"distance","a":{"sphere":{"center":[0,0,0],"radius":1}},"b":{"sphere":{"center":[3,0,0],"radius":1}}})";
+
+J distanceAnswer(double d, const Vec3d& pa, const Vec3d& pb) {
+  return J{{"op", "distance"}, {"distance", d}, {"point_a", {pa.x(), pa.y(), pa.z()}},
+           {"point_b", {pb.x(), pb.y(), pb.z()}}, {"normal", {-1.0, 0.0, 0.0}}};
+}
+
+TEST(DiffNarrowPhase, GenerationIsDeterministicAndValid) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  g.ops = {"distance", "contacts", "mesh_distance"};
+  DiffRunner runner;
+  std::map<std::string, int> ops;
+  for (const auto family : diffFamilies()) {
+    for (std::uint64_t i = 0; i < 12; ++i) {
+      const auto a = generateCase(family, 5, i, g), b = generateCase(family, 5, i, g);
+      ASSERT_EQ(a.has_value(), b.has_value()) << family;
+      if (!a) break;  // the family has none of these ops
+      EXPECT_EQ(a->query, b->query);
+      EXPECT_EQ(a->setup, b->setup);
+      ++ops[a->op];
+      // every generated line is valid protocol input: native answers it
+      const J got = runner.run(*a, "native");
+      EXPECT_FALSE(got.contains("error")) << family << " case " << i << ": " << got.dump() << "\n" << a->query;
+    }
+  }
+  EXPECT_GT(ops["distance"], 10);
+  EXPECT_GT(ops["contacts"], 10);
+  EXPECT_GT(ops["mesh_distance"], 0);
+}
+
+TEST(DiffNarrowPhase, TranslatedCaseMovesOperandB) {
+  const auto moved = translatedCase(primitive(kSpheres, true), Vec3d(1, 2, 3));
+  ASSERT_TRUE(moved);
+  const J q = J::parse(moved->query);
+  EXPECT_EQ(q["b"]["transform"]["translation"], J::parse("[1.0,2.0,3.0]"));
+  EXPECT_FALSE(q["a"].contains("transform"));
+}
+
+TEST(DiffNarrowPhase, PlantedDisagreementsAreClassified) {
+  if (!exactAnswersNarrowPhase()) GTEST_SKIP() << "the exact backend does not answer distance/contacts in this build";
+  DiffRunner runner;
+  const DiffCase c = primitive(kSpheres, true);
+  // the true answer agrees
+  auto k = classify(runner, c, "native", distanceAnswer(1, Vec3d(1, 0, 0), Vec3d(2, 0, 0)));
+  EXPECT_EQ(k.verdict, Verdict::Agree) << describe(k);
+  // a distance 1e-3 off is far beyond issue 6's 1e-6 relative: crux wrong
+  k = classify(runner, c, "native", distanceAnswer(1.001, Vec3d(0.9995, 0, 0), Vec3d(2.0005, 0, 0)));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "beyond-tolerance");
+  // the right distance with a point off its sphere: not a witness
+  k = classify(runner, c, "native", distanceAnswer(1, Vec3d(1, 0.5, 0), Vec3d(2, 0.5, 0)));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "witness-off-shape");
+  // FCL's nearest point on a sphere in the sphere's frame (docs/batch.md): a declared cause
+  k = classify(runner, c, "fcl", distanceAnswer(1, Vec3d(1, 0, 0), Vec3d(-1, 0, 0)));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "sphere-local-point");
+  k = classify(runner, c, "fcl", distanceAnswer(1, Vec3d(1, 0, 0), Vec3d(2, 0, 0)));
+  EXPECT_EQ(k.verdict, Verdict::Agree) << describe(k);
+  // contacts of boxes touching face to face on the grid: exact has contacts; a native miss is a
+  // grid-exactness failure, a Bullet miss is "touching" (within its declared tolerance)
+  const DiffCase touching = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[0,0,0],"half":[1,1,1],"axes":[[1,0,0],[0,1,0],[0,0,1]]}},)"
+      R"("b":{"box":{"center":[0,0,2],"half":[1,1,1],"axes":[[1,0,0],[0,1,0],[0,0,1]]}}})",
+      true);
+  const J none = J{{"op", "contacts"}, {"contacts", J::array()}};
+  ASSERT_FALSE(runner.run(touching, "exact")["contacts"].empty()) << runner.run(touching, "exact").dump();
+  k = classify(runner, touching, "native", none);
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "grid-exactness");
+  k = classify(runner, touching, "bullet", none);
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  // a deepest depth 0.5 short on a mesh operand: Bullet's declared cause
+  const DiffCase onMesh = [] {
+    DiffCase m = primitive(R"({"op":"contacts","a":{"mesh":"m"},"b":{"sphere":{"center":[0,0,1],"radius":2}}})", true);
+    m.setup = {R"({"op":"mesh","name":"m","vertices":[[-2,-2,0],[2,-2,0],[2,2,0],[-2,2,0]],"triangles":[[0,1,2],[0,2,3]]})"};
+    return m;
+  }();
+  J deep = runner.run(onMesh, "exact");
+  ASSERT_FALSE(deep.contains("error")) << deep.dump();
+  // shallower than the minimum penetration depth (deeper is allowed: manifolds measure along
+  // their own normals)
+  for (auto& p : deep["contacts"]) p["depth"] = p["depth"].get<double>() - 0.5;
+  k = classify(runner, onMesh, "bullet", deep);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "ghost-contacts");
+  k = classify(runner, onMesh, "native", deep);
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+}
+
+TEST(DiffNarrowPhase, ShortRunFindsNoCruxWrong) {
+  // the narrow-phase ops over every family that has them, native against exact
+  if (!exactAnswersNarrowPhase()) GTEST_SKIP() << "the exact backend does not answer distance/contacts in this build";
+  DiffOptions o;
+  o.seed = 2027;
+  o.cases = 120;
+  o.backends = {"native"};
+  o.ops = {"distance", "contacts", "mesh_distance"};
+  o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  std::ostringstream err;
+  const DiffSummary s = runDiff(o, err);
+  EXPECT_EQ(s.cruxWrong, 0u) << err.str();
+  std::uint64_t agree = 0;
+  for (const auto& [op, perBackend] : s.table)
+    if (perBackend.count("native") && perBackend.at("native").count("agree")) agree += perBackend.at("native").at("agree");
+  EXPECT_GT(agree, 60u);
 }
 
 }  // namespace
