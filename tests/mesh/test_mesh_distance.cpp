@@ -167,24 +167,27 @@ TEST(MeshDistance, MaxDistanceAndStopDistanceContract) {
   }
 }
 
+/// A soup of n triangles with integer corners in [-3, 3]^3 (degenerate ones included).
+Mesh gridSoup(Rng& rng, int n) {
+  std::uniform_int_distribution<int> g(-3, 3);
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) v.emplace_back(Real(g(rng)), Real(g(rng)), Real(g(rng)));
+    t.push_back({std::uint32_t(3 * i), std::uint32_t(3 * i + 1), std::uint32_t(3 * i + 2)});
+  }
+  return Mesh(std::move(v), std::move(t), "grid");
+}
+
 TEST(MeshDistance, IntegerGridTouchingAndCrossingGiveExactZero) {
   // Grid meshes under integer translations and axis-aligned quarter turns: distance 0 exactly
   // when (and only when) the exact overlap test says the surfaces touch.
   Rng rng(13);
   std::uniform_int_distribution<int> g(-3, 3), turn(0, 3);
-  auto gridSoup = [&](int n) {
-    std::vector<Vec3> v;
-    std::vector<TriangleIndices> t;
-    for (int i = 0; i < n; ++i) {
-      for (int k = 0; k < 3; ++k) v.emplace_back(Real(g(rng)), Real(g(rng)), Real(g(rng)));
-      t.push_back({std::uint32_t(3 * i), std::uint32_t(3 * i + 1), std::uint32_t(3 * i + 2)});
-    }
-    return Mesh(std::move(v), std::move(t), "grid");
-  };
   int zero = 0, positive = 0;
   const int cases = crux::test::scaledCases(1500, 300);
   for (int c = 0; c < cases; ++c) {
-    const Mesh a = gridSoup(4), b = gridSoup(4);
+    const Mesh a = gridSoup(rng, 4), b = gridSoup(rng, 4);
     Transform tb;
     tb.rotation = quatFromEulerDegrees(0, 0, Real(90 * turn(rng)));
     tb.translation = Vec3(Real(g(rng) * 2), Real(g(rng) * 2), Real(g(rng) * 2));
@@ -293,6 +296,108 @@ TEST(MeshDistance, ConcentricSpheresOverflowTheBestFirstHeapAndStayExact) {
     EXPECT_EQ(distance(outer, Transform::identity(), inner, tb).distance, ref.distance) << "case " << c;
     EXPECT_EQ(distance(outer, Transform::identity(), inner, tb, withAccel).distance, ref.distance) << "case " << c;
   }
+}
+
+/// A soup with degenerate members: proper triangles, collinear (needle) triangles, triangles
+/// with a repeated corner and point triangles, plus a flat sheet (zero-thickness oriented boxes),
+/// of overall size ~`size` around `centre`.
+Mesh degenerateSoup(Rng& rng, int n, double size, const Eigen::Vector3d& centre) {
+  std::uniform_real_distribution<double> u(-1, 1), e(-0.2, 0.2);
+  std::uniform_int_distribution<int> kind(0, 4);
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  auto add = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q, const Eigen::Vector3d& r) {
+    const std::uint32_t k = std::uint32_t(v.size());
+    for (const Eigen::Vector3d& x : {p, q, r}) v.push_back((centre + size * x).cast<Real>());
+    t.push_back({k, k + 1, k + 2});
+  };
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d c(u(rng), u(rng), u(rng)), d1(e(rng), e(rng), e(rng)), d2(e(rng), e(rng), e(rng));
+    switch (kind(rng)) {
+      case 0: add(c, c + d1, c + d2); break;                 // proper
+      case 1: add(c, c + d1, c + 0.5 * d1); break;           // collinear
+      case 2: add(c, c + d1, c + d1); break;                 // repeated corner
+      case 3: add(c, c, c); break;                           // a point
+      default: add(Eigen::Vector3d(c.x(), c.y(), 0.25), Eigen::Vector3d(c.x() + d1.x(), c.y() + d1.y(), 0.25),
+                   Eigen::Vector3d(c.x() + d2.x(), c.y() + d2.y(), 0.25));  // flat sheet z = 0.25
+    }
+  }
+  return Mesh(std::move(v), std::move(t), "degenerate soup");
+}
+
+TEST(MeshDistance, AcceleratedBoundsNeverPruneTheAnswerOnDegenerateMeshes) {
+  // The oriented-box pair bounds (line of centres, then box gaps in either box's frame) and the
+  // four-way split of similar-size node pairs must only prune: with accelerators on both sides,
+  // on one side, or none, the BVH answer equals brute force exactly. Degenerate soups (needles,
+  // points, flat sheets: zero-thickness boxes), meshes of very different sizes (one side split
+  // alone), random, quarter-turn and near-touching poses, at scales 1e-3 and 1e3.
+  Rng rng(18);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::uniform_int_distribution<int> turn(0, 3), poseKind(0, 2);
+  const int cases = crux::test::scaledCases(240, 60);
+  int zero = 0;
+  for (int c = 0; c < cases; ++c) {
+    const double scale = c % 3 == 0 ? 1e-3 : (c % 3 == 1 ? 1.0 : 1e3);
+    const double sizeB = scale * (c % 4 == 0 ? 0.02 : 1.0);  // a tiny mesh against a big one
+    const Mesh a = degenerateSoup(rng, 40, scale, Eigen::Vector3d::Zero());
+    const Mesh b = degenerateSoup(rng, 30, sizeB, Eigen::Vector3d::Zero());
+    Transform tb;
+    switch (poseKind(rng)) {
+      case 0: tb = randomPose(rng, 1.5); break;
+      case 1:
+        tb.rotation = quatFromEulerDegrees(Real(90 * turn(rng)), 0, Real(90 * turn(rng)));
+        tb.translation = Vec3(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+        break;
+      default: tb = randomPose(rng, 0.3);
+    }
+    tb.translation *= Real(scale);
+    const std::string what = "case " + std::to_string(c) + " scale " + std::to_string(scale) + " tb " + show(tb);
+    MeshDistanceOptions brute;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult ref = distance(a, Transform::identity(), b, tb, brute);
+    ASSERT_TRUE(ref.found) << what;
+    const MeshDistanceAccel accA(a), accB(b);
+    for (int k = 0; k < 4; ++k) {
+      MeshDistanceOptions o;
+      o.accelA = (k & 1) ? &accA : nullptr;
+      o.accelB = (k & 2) ? &accB : nullptr;
+      const MeshMeshDistanceResult r = distance(a, Transform::identity(), b, tb, o);
+      ASSERT_TRUE(r.found) << what << " accelerators " << k;
+      EXPECT_EQ(r.distance, ref.distance) << std::setprecision(17) << what << " accelerators " << k << " bvh "
+                                          << r.distance << " brute " << ref.distance;
+      // maxDistance exactly at the answer still finds it (the bounds are inclusive).
+      o.maxDistance = ref.distance;
+      EXPECT_TRUE(distance(a, Transform::identity(), b, tb, o).found) << what << " accelerators " << k;
+    }
+    if (ref.distance == 0) ++zero;
+  }
+  std::printf("degenerate soups: %d of %d touching\n", zero, cases);
+}
+
+TEST(MeshDistance, AcceleratedIntegerGridsTouchExactlyWhenTheyOverlap) {
+  // The integer-grid quarter-turn family with accelerators on both sides: distance 0 exactly when
+  // the exact overlap test says so, and equal to brute force.
+  Rng rng(19);
+  std::uniform_int_distribution<int> g(-3, 3), turn(0, 3);
+  int zero = 0;
+  const int cases = crux::test::scaledCases(600, 150);
+  for (int c = 0; c < cases; ++c) {
+    const Mesh a = gridSoup(rng, 12), b = gridSoup(rng, 12);
+    const MeshDistanceAccel accA(a), accB(b);
+    Transform tb;
+    tb.rotation = quatFromEulerDegrees(Real(90 * turn(rng)), 0, Real(90 * turn(rng)));
+    tb.translation = Vec3(Real(g(rng) * 2), Real(g(rng) * 2), Real(g(rng) * 2));
+    MeshDistanceOptions o, brute;
+    o.accelA = &accA;
+    o.accelB = &accB;
+    brute.path = QueryPath::BruteForce;
+    const MeshMeshDistanceResult r = distance(a, Transform::identity(), b, tb, o);
+    EXPECT_EQ(r.distance == 0, overlaps(a, Transform::identity(), b, tb)) << "case " << c << " tb " << show(tb);
+    EXPECT_EQ(r.distance, distance(a, Transform::identity(), b, tb, brute).distance) << "case " << c << " tb " << show(tb);
+    zero += r.distance == 0;
+  }
+  EXPECT_GT(zero, cases / 10);
+  EXPECT_LT(zero, cases - cases / 10);
 }
 
 TEST(MeshDistance, ModelDistanceUsesWorldTransforms) {
