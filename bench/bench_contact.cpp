@@ -11,8 +11,11 @@
 ///
 /// Each workload first compares answers (crux distance vs FCL distance on separated pairs, crux
 /// depth vs libccd EPA depth on overlapping pairs, crux mesh distance vs FCL) and prints the
-/// number of disagreements; then times every engine (median of 5 runs, each repeating the pair
-/// set for ~0.2 s) and prints ns/query and the ratio peer / crux.
+/// number of disagreements; then times every engine and prints ns/query and the ratio peer /
+/// crux. Convex workloads: median of 5 runs (3 with --quick), each repeating the pair set for
+/// ~0.2 s (0.05 s). Mesh distance and mesh contacts: interleaved (timeInterleaved), 9 rounds (5
+/// with --quick) in which every engine runs a ~0.1 s (0.03 s) slice in turn; the ratio is the
+/// median over the rounds of the per-round peer / crux.
 /// Options: --quick, --json FILE (every figure, schema in docs/bench.md), --mesh PATH, --mesh-only
 /// (skip the convex workloads).
 
@@ -134,6 +137,45 @@ double timeIt(std::size_t n, const std::function<double()>& body) {
   lastQueries = n;
   std::sort(samples.begin(), samples.end());
   return samples[samples.size() / 2];
+}
+
+/// Interleaved timing of several engines on the same n queries: `rounds` rounds, in each every
+/// body runs repeatedly for ~`slice` seconds in turn (so the load of a shared machine falls on
+/// all engines alike). median[e]: median ns/query of engine e; ratio[e]: median over the rounds
+/// of (engine e / engine 0) in the same round; runs[e]: ns/query per round.
+struct Interleaved {
+  std::vector<double> median, ratio;
+  std::vector<std::vector<double>> runs;
+};
+Interleaved timeInterleaved(std::size_t n, const std::vector<std::function<double()>>& bodies) {
+  const int rounds = quick ? 5 : 9;
+  const double slice = quick ? 0.03 : 0.1;
+  Interleaved r;
+  r.runs.assign(bodies.size(), {});
+  volatile double sink = 0;
+  for (int k = 0; k < rounds; ++k)
+    for (std::size_t e = 0; e < bodies.size(); ++e) {
+      std::size_t reps = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      double elapsed = 0;
+      do {
+        sink = sink + bodies[e]();
+        ++reps;
+        elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      } while (elapsed < slice);
+      r.runs[e].push_back(elapsed * 1e9 / double(reps * n));
+    }
+  auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  for (std::size_t e = 0; e < bodies.size(); ++e) {
+    r.median.push_back(median(r.runs[e]));
+    std::vector<double> q;
+    for (int k = 0; k < rounds; ++k) q.push_back(r.runs[e][std::size_t(k)] / r.runs[0][std::size_t(k)]);
+    r.ratio.push_back(median(q));
+  }
+  return r;
 }
 
 Transform randomPose(std::mt19937_64& rng, double spread) {
@@ -425,33 +467,22 @@ void runMeshDistance(const std::string& path, int perSeparation) {
     agreement = disagree == 0 ? "agree" : "DISAGREE";
     detail = std::to_string(disagree) + " of " + std::to_string(ps.size()) + " differ, worst " + bench::jsonNumber(worst);
 #endif
-    std::printf("%-34s %12s %10s\n", "query", "us/query", "peer/crux");
-    const double tc = timeIt(ps.size(), [&] {
-      double s = 0;
-      for (const MeshPlacement& p : ps) s += distance(m, Transform::identity(), m, p.tb).distance;
-      return s;
-    });
-    std::printf("%-34s %12.1f %10s\n", "crux distance (BVH vs BVH)", tc * 1e-3, "-");
-    const std::vector<double> plainRuns = lastRuns;
-    const double ta = timeIt(ps.size(), [&] {
+    // Interleaved (timeInterleaved): crux + accelerator, crux BVH only and FCL take turns in
+    // every round, so the load of the shared machine falls on all alike; ratios are medians over
+    // the rounds of the per-round ratio.
+    std::vector<std::function<double()>> bodies;
+    bodies.push_back([&] {
       double s = 0;
       for (const MeshPlacement& p : ps) s += distance(m, Transform::identity(), m, p.tb, withAccel).distance;
       return s;
     });
-    std::printf("%-34s %12.1f %10.2f\n", "crux distance + MeshDistanceAccel", ta * 1e-3, ta / tc);
-    const std::vector<double> accelRuns = lastRuns;
-    WorkloadRow& row = beginRow(std::string("mesh_distance/") + (target > 0 ? bench::jsonNumber(target) + "R" : "crossing"),
-                                title, ps.size());
-    row.notes.push_back(path + ", " + std::to_string(m.triangleCount()) + " triangles, R = " + bench::jsonNumber(R));
-    row.notes.push_back("bullet: unsupported (btGjkPairDetector is convex-only; no mesh-mesh distance)");
-    row.notes.push_back("crux + MeshDistanceAccel: oriented boxes per BVH node, built once in " +
-                        bench::jsonNumber(accelSeconds) + " s");
-    lastRuns = accelRuns;
-    addEngine("crux distance + MeshDistanceAccel", sizeof(Real) == 8 ? "double" : "float", ta);
-    lastRuns = plainRuns;
-    addEngine("crux distance (BVH vs BVH, no accelerator)", sizeof(Real) == 8 ? "double" : "float", tc, "agree");
+    bodies.push_back([&] {
+      double s = 0;
+      for (const MeshPlacement& p : ps) s += distance(m, Transform::identity(), m, p.tb).distance;
+      return s;
+    });
 #if CRUX_BENCH_HAVE_FCL
-    const double tf = timeIt(ps.size(), [&] {
+    bodies.push_back([&] {
       double s = 0;
       for (const MeshPlacement& p : ps) {
         fcl::DistanceRequestd req(true);
@@ -461,9 +492,34 @@ void runMeshDistance(const std::string& path, int perSeparation) {
       }
       return s;
     });
-    std::printf("%-34s %12.1f %10.2f (vs crux + accel %.2f)\n", "fcl::distance (OBBRSS, nearest)", tf * 1e-3, tf / tc,
-                tf / ta);
-    addEngine("fcl::distance (OBBRSS, nearest)", "BVHModel<OBBRSSd>, enable_nearest_points", tf, agreement, detail);
+#endif
+    const Interleaved tm = timeInterleaved(ps.size(), bodies);
+    auto roundRatio = [&](std::size_t num, std::size_t den) {
+      std::vector<double> q;
+      for (std::size_t k = 0; k < tm.runs[num].size(); ++k) q.push_back(tm.runs[num][k] / tm.runs[den][k]);
+      std::sort(q.begin(), q.end());
+      return q[q.size() / 2];
+    };
+    std::printf("%-34s %12s %14s\n", "query (interleaved rounds)", "us/query", "fcl/this");
+    const bool haveFcl = tm.median.size() > 2;
+    std::printf("%-34s %12.1f %14.2f\n", "crux distance + MeshDistanceAccel", tm.median[0] * 1e-3,
+                haveFcl ? roundRatio(2, 0) : NAN);
+    std::printf("%-34s %12.1f %14.2f\n", "crux distance (BVH only)", tm.median[1] * 1e-3, haveFcl ? roundRatio(2, 1) : NAN);
+    if (haveFcl) std::printf("%-34s %12.1f %14s\n", "fcl::distance (OBBRSS, nearest)", tm.median[2] * 1e-3, "-");
+    WorkloadRow& row = beginRow(std::string("mesh_distance/") + (target > 0 ? bench::jsonNumber(target) + "R" : "crossing"),
+                                title, ps.size());
+    row.notes.push_back(path + ", " + std::to_string(m.triangleCount()) + " triangles, R = " + bench::jsonNumber(R));
+    row.notes.push_back("bullet: unsupported (btGjkPairDetector is convex-only; no mesh-mesh distance)");
+    row.notes.push_back("crux + MeshDistanceAccel: oriented boxes per BVH node, built once in " +
+                        bench::jsonNumber(accelSeconds) + " s");
+    row.notes.push_back("engines timed interleaved, " + std::to_string(tm.runs[0].size()) + " rounds");
+    lastRuns = tm.runs[0];
+    addEngine("crux distance + MeshDistanceAccel", sizeof(Real) == 8 ? "double" : "float", tm.median[0]);
+    lastRuns = tm.runs[1];
+    addEngine("crux distance (BVH vs BVH, no accelerator)", sizeof(Real) == 8 ? "double" : "float", tm.median[1], "agree");
+#if CRUX_BENCH_HAVE_FCL
+    lastRuns = tm.runs[2];
+    addEngine("fcl::distance (OBBRSS, nearest)", "BVHModel<OBBRSSd>, enable_nearest_points", tm.median[2], agreement, detail);
 #endif
   }
 }
@@ -761,9 +817,13 @@ void runMeshContacts(const std::string& path, int perKind) {
       compare("bullet contactPairTest", peer, btAgreement, btDetail);
     }
 #endif
-    // ---- timings.
-    std::printf("%-34s %12s %10s\n", "query", "ns/query", "peer/crux");
-    const double tAdj = timeIt(ps.size(), [&] {
+    // ---- timings: interleaved (every engine runs a slice in turn, round after round), so that
+    // the load of the shared machine hits all engines alike; ratio = median over the rounds of
+    // (peer time / crux time) in the same round.
+    std::vector<std::function<double()>> bodies;
+    std::vector<std::string> names;
+    names.push_back("crux contacts + MeshAdjacency");
+    bodies.push_back([&] {
       double sum = 0;
       MeshContactManifold out;
       for (const ShapePlacement& p : ps) {
@@ -772,7 +832,51 @@ void runMeshContacts(const std::string& path, int perKind) {
       }
       return sum;
     });
-    std::printf("%-34s %12.1f %10s\n", "crux contacts + MeshAdjacency", tAdj, "-");
+    names.push_back("crux contacts (no adjacency)");
+    bodies.push_back([&] {
+      double sum = 0;
+      MeshContactManifold out;
+      for (const ShapePlacement& p : ps) {
+        contacts(m, Transform::identity(), cs.shape, p.pose, cruxMargin, out);
+        sum += out.count;
+      }
+      return sum;
+    });
+#if CRUX_BENCH_HAVE_FCL
+    names.push_back("fcl::collide (OBBRSS, contacts)");
+    bodies.push_back([&] {
+      double sum = 0;
+      for (const ShapePlacement& p : ps) {
+        fcl::CollisionRequestd req(100000, true);
+        fcl::CollisionResultd res;
+        fcl::collide(fm.get(), fclIdentity, cs.fcl.get(), toFcl(p.pose), req, res);
+        sum += double(res.numContacts());
+      }
+      return sum;
+    });
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+    names.push_back("bullet contactPairTest (BVH mesh)");
+    bodies.push_back([&] {
+      double sum = 0;
+      for (const ShapePlacement& p : ps) {
+        shapeObject.setWorldTransform(toBt(p.pose));
+        BulletMinDistance cb;
+        cb.m_closestDistanceThreshold = btScalar(margin);
+        bullet.world.contactPairTest(&shapeObject, &bullet.meshObject, cb);
+        sum += cb.points;
+      }
+      return sum;
+    });
+#endif
+    const Interleaved tm = timeInterleaved(ps.size(), bodies);
+    std::printf("%-34s %12s %10s   (interleaved: %d rounds; ratio = median per-round peer/crux)\n", "query",
+                "ns/query", "peer/crux", int(tm.runs[0].size()));
+    for (std::size_t e = 0; e < names.size(); ++e) {
+      if (e == 0) std::printf("%-34s %12.1f %10s\n", names[e].c_str(), tm.median[e], "-");
+      else std::printf("%-34s %12.1f %10.2f\n", names[e].c_str(), tm.median[e], tm.ratio[e]);
+    }
+    std::size_t e = 0;
     WorkloadRow& row = beginRow(key, cs.name + " vs mesh contacts (penetrating and within-margin placements)", ps.size());
     row.notes.push_back(path + ", " + std::to_string(m.triangleCount()) + " triangles, R = " + bench::jsonNumber(R) +
                         "; shape size s = 0.05R, margin 0.01 s; " + std::to_string(perKind) +
@@ -789,49 +893,32 @@ void runMeshContacts(const std::string& path, int perKind) {
                         "contact), Bullet asked for points within the margin (m_closestDistanceThreshold)");
     row.notes.push_back("crux: " + std::to_string(cruxWrong) + " verdicts differ from the construction; with vs "
                         "without adjacency " + std::to_string(adjDiffer) + " deepest depths differ by > 1e-3 s");
-    addEngine("crux contacts + MeshAdjacency", sizeof(Real) == 8 ? "double" : "float", tAdj);
-    const double tPlain = timeIt(ps.size(), [&] {
-      double sum = 0;
-      MeshContactManifold out;
-      for (const ShapePlacement& p : ps) {
-        contacts(m, Transform::identity(), cs.shape, p.pose, cruxMargin, out);
-        sum += out.count;
-      }
-      return sum;
-    });
-    std::printf("%-34s %12.1f %10.2f\n", "crux contacts (no adjacency)", tPlain, tPlain / tAdj);
-    addEngine("crux contacts (no adjacency)", sizeof(Real) == 8 ? "double" : "float", tPlain,
-              adjDiffer == 0 ? "agree" : "differs", std::to_string(adjDiffer) + " deepest depths differ by > 1e-3 s");
+    row.notes.push_back("timed interleaved: " + std::to_string(tm.runs[0].size()) +
+                        " rounds, each engine one slice per round; the ratio of an engine is the median over the "
+                        "rounds of its time / crux's time in that round");
+    row.notes.push_back("peer settings (fair, not handicapped): fcl::collide with CollisionRequest(num_max_contacts "
+                        "100000, enable_contact true) on a BVHModel<OBBRSSd> (FCL's default for meshes), all "
+                        "contacts; Bullet btBvhTriangleMeshShape (quantized AABB tree) with margin 0, shapes with "
+                        "margin 0 (box) or all-margin (sphere, capsule: exact), m_closestDistanceThreshold = "
+                        "margin; crux with margin = the same margin and a MeshAdjacency");
+    lastRuns = tm.runs[e];
+    addEngine(names[e], sizeof(Real) == 8 ? "double" : "float", tm.median[e]);
+    ++e;
+    lastRuns = tm.runs[e];
+    addEngine(names[e], sizeof(Real) == 8 ? "double" : "float", tm.median[e], adjDiffer == 0 ? "agree" : "differs",
+              std::to_string(adjDiffer) + " deepest depths differ by > 1e-3 s");
+    ++e;
 #if CRUX_BENCH_HAVE_FCL
-    const double tFcl = timeIt(ps.size(), [&] {
-      double sum = 0;
-      for (const ShapePlacement& p : ps) {
-        fcl::CollisionRequestd req(100000, true);
-        fcl::CollisionResultd res;
-        fcl::collide(fm.get(), fclIdentity, cs.fcl.get(), toFcl(p.pose), req, res);
-        sum += double(res.numContacts());
-      }
-      return sum;
-    });
-    std::printf("%-34s %12.1f %10.2f\n", "fcl::collide (OBBRSS, contacts)", tFcl, tFcl / tAdj);
-    addEngine("fcl::collide (OBBRSS, contacts)", "BVHModel<OBBRSSd>, enable_contact, num_max_contacts 100000", tFcl,
-              fclAgreement, fclDetail);
+    lastRuns = tm.runs[e];
+    addEngine(names[e], "BVHModel<OBBRSSd>, enable_contact, num_max_contacts 100000", tm.median[e], fclAgreement,
+              fclDetail);
+    ++e;
 #endif
 #if CRUX_BENCH_HAVE_BULLET
-    const double tBt = timeIt(ps.size(), [&] {
-      double sum = 0;
-      for (const ShapePlacement& p : ps) {
-        shapeObject.setWorldTransform(toBt(p.pose));
-        BulletMinDistance cb;
-        cb.m_closestDistanceThreshold = btScalar(margin);
-        bullet.world.contactPairTest(&shapeObject, &bullet.meshObject, cb);
-        sum += cb.points;
-      }
-      return sum;
-    });
-    std::printf("%-34s %12.1f %10.2f\n", "bullet contactPairTest (BVH mesh)", tBt, tBt / tAdj);
-    addEngine("bullet contactPairTest (btBvhTriangleMeshShape)", "margins 0, m_closestDistanceThreshold = margin", tBt,
-              btAgreement, btDetail);
+    lastRuns = tm.runs[e];
+    addEngine("bullet contactPairTest (btBvhTriangleMeshShape)", "margins 0, m_closestDistanceThreshold = margin",
+              tm.median[e], btAgreement, btDetail);
+    ++e;
 #endif
   }
 }

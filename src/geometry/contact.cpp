@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {
@@ -26,21 +27,9 @@ constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 /// sin of the feature angle (kContactFaceAngleCos).
 const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
-/// Rounding budget, in ulps of Real × the pair's coordinate scale, within which a reference
-/// feature must place the points projected onto it (they are returned as Real, whose own
-/// rounding is one ulp): used for sliver triangles and near-parallel edge pairs below.
-constexpr double kOnFeatureUlps = 8;
+using contact_detail::kOnFeatureUlps;    // contact_internal.hpp: shared with triangle_contact.cpp
+using contact_detail::kSliverAreaRatio;
 constexpr double kEpsReal = std::numeric_limits<Real>::epsilon();
-constexpr double kEpsDouble = std::numeric_limits<double>::epsilon();
-
-/// A triangle's unit normal computed in double from (b−a)×(c−a) is tilted by about
-/// 0.3·eps_double·L²/|(b−a)×(c−a)| (L its longest edge; measured, worst of 2e5 random slivers),
-/// which moves points projected onto its plane by that × L. A triangle is used as a REFERENCE
-/// face only when this stays within kOnFeatureUlps/2 Real ulps of L, i.e. when
-/// |(b−a)×(c−a)| >= kSliverAreaRatio·L²; a sliver is clipped as an edge instead (defect 1 of
-/// issue 6: points landed off sliver triangles). About 0.075 (a 1:13 triangle) in double
-/// builds, about 4e-9 in float builds.
-const double kSliverAreaRatio = 0.3 * kEpsDouble / (0.5 * kOnFeatureUlps * kEpsReal);
 
 /// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
 struct Feature {

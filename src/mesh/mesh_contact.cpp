@@ -3,12 +3,16 @@
 
 #include <crux/mesh/mesh_contact.hpp>
 
+#include <crux/geometry/axis_aligned.hpp>
+#include <crux/geometry/box_triangle_contact.hpp>
 #include <crux/geometry/closest_point.hpp>
+#include <crux/geometry/triangle_contact.hpp>
 #include <crux/error.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <tuple>
 
@@ -41,6 +45,25 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
     }
     i = j;
   }
+  opposite_.assign(tris.size() * 3, kNone);
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t nb = neighbors_[3 * std::size_t(t) + e];
+      if (nb == kNone) continue;
+      const std::uint32_t u = tris[t][e], v = tris[t][(e + 1) % 3];
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t w = tris[nb][k];
+        if (w != u && w != v) {
+          opposite_[3 * std::size_t(t) + e] = w;
+          break;
+        }
+      }
+    }
+  const auto& prims = mesh.bvh().primIndices;
+  oppositeBySlot_.assign(opposite_.size(), kNone);
+  for (std::size_t k = 0; k < prims.size(); ++k)
+    for (int e = 0; e < 3; ++e) oppositeBySlot_[3 * k + e] = opposite_[3 * std::size_t(prims[k]) + e];
+  vertexCount_ = mesh.vertices().size();
 }
 
 Real MeshContactManifold::depth() const {
@@ -83,16 +106,132 @@ Real boxSlack(const Aabb& box) {
   return kMeshFeatureRelativeTolerance * scale;
 }
 
+/// "Not reached through a BVH slot" (the brute-force path).
+constexpr std::uint32_t kNoSlot = std::numeric_limits<std::uint32_t>::max();
+
+/// The convex shape in the mesh's frame, in the form the per-triangle routines take: sphere
+/// centre, capsule ends, box centre/axes, or the generic view with the relative pose.
+struct LocalShape {
+  const ConvexShape& shape;
+  Transform rel;   // shape-local -> mesh-local (generic path)
+  Mat3 relR;       // its rotation matrix
+  Vec3 p[2];       // sphere: centre; capsule: ends; box: centre (p[0])
+  Mat3 axes = Mat3::Identity();  // box: axes in the mesh frame (columns)
+  Vec3 half = Vec3::Zero();       // box half extents
+  Real radius = 0;
+  Eigen::Matrix3d boxToLocal = Eigen::Matrix3d::Identity();  // box: mesh frame -> box frame rotation
+  Eigen::Vector3d boxCentre = Eigen::Vector3d::Zero();       // box: centre in the mesh frame
+  double boxSlack = 0;  // box: rounding slack of the face-axis reject (1000 ulps of Real × scale)
+  bool aligned = false;  // the relative rotation is axis-aligned (applied exactly)
+  Triangle mappedTriangle;  // a triangle shape under an aligned rotation, mapped exactly
+
+  LocalShape(const ConvexShape& s, const Transform& meshPose, const Transform& shapePose) : shape(s) {
+    // rel = meshPose⁻¹ ∘ shapePose in double, rounded once.
+    const Eigen::Quaterniond qm = meshPose.rotation.cast<double>(), qs = shapePose.rotation.cast<double>();
+    const Eigen::Quaterniond qr = (qm.conjugate() * qs).normalized();
+    Eigen::Matrix3d Rr = qr.toRotationMatrix();
+    const Eigen::Vector3d dt = shapePose.translation.cast<double>() - meshPose.translation.cast<double>();
+    Eigen::Vector3d tr = qm.conjugate() * dt;
+    rel.rotation = qr.cast<Real>();
+    // The mesh layer's rule (relative_frame.hpp): an axis-aligned relative rotation (quarter and
+    // half turns) is applied as the exact signed permutation, and with an axis-aligned mesh
+    // rotation the relative translation is rounded once, so integer-grid shapes stay on the grid
+    // and touching stays touching (a √½ quaternion would round their coordinates).
+    if (const std::optional<Quat> snapped = snapAxisAligned(rel.rotation.normalized())) {
+      aligned = true;
+      rel.rotation = *snapped;
+      Rr = signedPermutation(*snapped).cast<double>();
+      if (const std::optional<Quat> sm = snapAxisAligned(meshPose.rotation.normalized()))
+        tr = signedPermutation(*sm).cast<double>().transpose() * dt;
+    }
+    rel.translation = tr.cast<Real>();
+    relR = Rr.cast<Real>();
+    if (aligned && s.kind == ConvexKind::Triangle)
+      mappedTriangle = {(Rr * s.p[0].cast<double>() + tr).cast<Real>(), (Rr * s.p[1].cast<double>() + tr).cast<Real>(),
+                        (Rr * s.p[2].cast<double>() + tr).cast<Real>()};
+    radius = s.radius;
+    switch (s.kind) {
+      case ConvexKind::Sphere: p[0] = (Rr * s.p[0].cast<double>() + tr).cast<Real>(); break;
+      case ConvexKind::Capsule:
+        for (int i = 0; i < 2; ++i) p[i] = (Rr * s.p[i].cast<double>() + tr).cast<Real>();
+        break;
+      case ConvexKind::Box:
+        p[0] = (Rr * s.p[0].cast<double>() + tr).cast<Real>();
+        axes = (Rr * s.axes.cast<double>()).cast<Real>();
+        half = s.p[1];
+        boxCentre = Rr * s.p[0].cast<double>() + tr;
+        boxToLocal = (Rr * s.axes.cast<double>()).transpose();
+        boxSlack = double(kMeshFeatureRelativeTolerance) * (boxCentre.norm() + double(half.norm()) + 1);
+        break;
+      default: break;
+    }
+  }
+
+  /// Support point of the whole (rounded) shape along `dir` (mesh frame), as support() does.
+  Vec3 support(const Vec3& dir) const {
+    switch (shape.kind) {
+      case ConvexKind::Sphere: return p[0] + radius * dir.normalized();
+      case ConvexKind::Capsule:
+        return (p[1].dot(dir) > p[0].dot(dir) ? p[1] : p[0]) + radius * dir.normalized();
+      default: return rel.apply(crux::support(shape, rel.rotation.conjugate() * dir));
+    }
+  }
+
+  /// Projection interval [lo, hi] of the shape on the unit direction u (mesh frame).
+  void project(const Vec3& u, Real& lo, Real& hi) const {
+    switch (shape.kind) {
+      case ConvexKind::Sphere: lo = hi = u.dot(p[0]); break;
+      case ConvexKind::Capsule: {
+        const Real a = u.dot(p[0]), b = u.dot(p[1]);
+        lo = std::min(a, b);
+        hi = std::max(a, b);
+        break;
+      }
+      case ConvexKind::Box: {
+        const Real c = u.dot(p[0]);
+        const Vec3 l = axes.transpose() * u;
+        const Real e = half.x() * std::abs(l.x()) + half.y() * std::abs(l.y()) + half.z() * std::abs(l.z());
+        lo = c - e;
+        hi = c + e;
+        return;
+      }
+      default:
+        hi = u.dot(support(u));
+        lo = u.dot(support(-u));
+        return;
+    }
+    lo -= radius;
+    hi += radius;
+  }
+
+  /// The shape's AABB in the mesh frame.
+  Aabb bounds() const {
+    switch (shape.kind) {
+      case ConvexKind::Sphere: return {p[0].array() - radius, p[0].array() + radius};
+      case ConvexKind::Capsule:
+        return {p[0].cwiseMin(p[1]).array() - radius, p[0].cwiseMax(p[1]).array() + radius};
+      case ConvexKind::Box: {
+        const Vec3 e = axes.cwiseAbs() * half;
+        return {p[0] - e, p[0] + e};
+      }
+      default: return shapeBoundsIn(shape, rel);
+    }
+  }
+};
+
+/// Collects per-triangle contacts in the MESH frame (points, normals), corrects internal
+/// edges, merges and reduces there; only the reduced points are mapped to the world.
 struct Collector {
   const Mesh& mesh;
-  const Transform& meshPose;
-  const ConvexShape& shape;
-  const Transform& shapePose;
+  const LocalShape& ls;
   Real margin;
   const MeshAdjacency* adjacency;
   Real mergeTol2;
   MeshContactPoint buf[kMeshContactBuffer];
   int n = 0;
+  /// The deepest point the internal-edge correction dropped (uncorrected), for keepDeepestDropped.
+  MeshContactPoint dropped;
+  bool hasDropped = false;
 
   void add(const MeshContactPoint& p) {
     for (int i = 0; i < n; ++i) {
@@ -112,26 +251,34 @@ struct Collector {
     if (p.separation < buf[worst].separation) buf[worst] = p;
   }
 
-  /// Internal-edge correction of one point (see the header). Returns false to drop it.
-  bool correct(std::uint32_t t, MeshContactPoint& p) const {
-    const Triangle tri = mesh.triangle(t);
+  /// Internal-edge correction of one point, all in the mesh frame (see the header). Returns
+  /// false to drop it.
+  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, MeshContactPoint& p) const {
     const Vec3 e0 = tri.b - tri.a, e1 = tri.c - tri.b, e2 = tri.a - tri.c;
     Vec3 face = e0.cross(tri.c - tri.a);
     const Real len = face.norm();
     if (!(len > 0)) return true;  // degenerate triangle: no face cone
     face /= len;
-    const Vec3 nLocal = meshPose.rotation.conjugate() * p.normal;  // shape -> mesh
-    if (std::abs(face.dot(nLocal)) >= kMeshFaceConeCos) return true;  // within the face cone
+    if (std::abs(face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
     const Real scale = std::max({e0.norm(), e1.norm(), e2.norm()}) +
                        std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(),
                                  tri.c.cwiseAbs().maxCoeff()});
     const Real tol = kMeshFeatureRelativeTolerance * scale;
-    const Vec3 pa = meshPose.inverse().apply(p.pointA);
+    const Vec3& pa = p.pointA;
     bool onEdge[3];
     int edges = 0;
     for (int i = 0; i < 3; ++i) {
-      const Vec3 u = tri[i], v = tri[(i + 1) % 3];
-      const Segment s{u, v};
+      // Cheap prefilter first: farther than 2·tol from the edge's LINE (|w × e|² > 4 tol² |e|²,
+      // in double) means farther than tol from the segment, whatever the rounding; only the
+      // remaining edges take the closest-point test.
+      const Eigen::Vector3d e = (tri[(i + 1) % 3] - tri[i]).template cast<double>();
+      const Eigen::Vector3d w = (pa - tri[i]).template cast<double>();
+      const double t2 = double(tol) * double(tol);
+      if (w.cross(e).squaredNorm() > 4 * t2 * e.squaredNorm()) {
+        onEdge[i] = false;
+        continue;
+      }
+      const Segment s{tri[i], tri[(i + 1) % 3]};
       const Vec3 c = closestPoint(s, pa);
       onEdge[i] = (c - pa).squaredNorm() <= tol * tol;
       edges += onEdge[i];
@@ -140,70 +287,95 @@ struct Collector {
     {
       // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
       // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
-      const Transform rel = meshPose.inverse() * shapePose;
-      const Quat inv = rel.rotation.conjugate();
-      const Real up = face.dot(rel.apply(support(shape, inv * face)) - tri.a);
-      const Real down = -face.dot(rel.apply(support(shape, inv * (-face))) - tri.a);
-      if (down > up) face = -face;
+      Real lo = 0, hi = 0;
+      ls.project(face, lo, hi);
+      const Real base = face.dot(tri.a);
+      if (base - lo > hi - base) face = -face;
     }
     auto active = [&](int i) {
-      const std::uint32_t nb = adjacency->neighbor(t, i);
-      if (nb == MeshAdjacency::kNone) return true;
-      const auto& own = mesh.triangles()[t];
-      const auto& other = mesh.triangles()[nb];
-      const std::uint32_t u = own[i], v = own[(i + 1) % 3];
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t w = other[k];
-        if (w == u || w == v) continue;
-        const Real d = face.dot(mesh.vertices()[w] - tri[i]);
-        return d < -tol;  // convex: the neighbour falls away from the shape's side
-      }
-      return true;  // neighbour without a third vertex (degenerate): treat as boundary
+      // no neighbour, or one without a third vertex (degenerate): treat as a boundary
+      const std::uint32_t w = slot != kNoSlot ? adjacency->oppositeVertexBySlot(slot, i) : adjacency->oppositeVertex(t, i);
+      if (w == MeshAdjacency::kNone) return true;
+      const Real d = face.dot(mesh.vertices()[w] - tri[i]);
+      return d < -tol;  // convex: the neighbour falls away from the shape's side
     };
-    bool isActive = false;
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && active(i)) isActive = true;
-    if (isActive) return true;
-    // Inactive (flat or concave) edge or vertex: use the face normal.
-    const Vec3 fW = meshPose.rotation * face;  // mesh outward, towards the shape
-    const Vec3 n = -fW;                        // B -> A
-    const Vec3 dirLocal = shapePose.rotation.conjugate() * n;
-    const Vec3 pb = shapePose.apply(support(shape, dirLocal));
-    const Real sep = fW.dot(pb - meshPose.apply(tri.a));
+      if (onEdge[i] && active(i)) return true;
+    // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
+    const Vec3 nrm = -face;  // B -> A
+    const Vec3 pb = ls.support(nrm);
+    const Real sep = face.dot(pb - tri.a);
     if (sep > margin) return false;
-    const Vec3 pa2 = pb - sep * fW;
+    const Vec3 pa2 = pb - sep * face;
     // The projection must lie on this triangle: otherwise the triangle beyond the inactive
     // feature (or another one) holds that point and reports it with its own face.
-    if ((closestPoint(tri, meshPose.inverse().apply(pa2)) - meshPose.inverse().apply(pa2)).squaredNorm() > tol * tol)
-      return false;
-    p.normal = n;
+    if ((closestPoint(tri, pa2) - pa2).squaredNorm() > tol * tol) return false;
+    p.normal = nrm;
     p.pointB = pb;
     p.separation = sep;
     p.pointA = pa2;
     return true;
   }
 
-  /// Cheap conservative reject: the triangle's plane separates it from the shape by more than
-  /// the margin (plus rounding slack), so the convex routine would report nothing.
+  /// Cheap conservative reject for the generic path: the triangle's plane separates it from the
+  /// shape by more than the margin (plus rounding slack), so the convex routine reports nothing.
   bool planeSeparates(const Triangle& tri) const {
     const Vec3 nl = (tri.b - tri.a).cross(tri.c - tri.a);
     const Real len = nl.norm();
     if (!(len > 0)) return false;
-    const Vec3 face = meshPose.rotation * (nl / len);
-    const Vec3 a = meshPose.apply(tri.a);
-    const Quat inv = shapePose.rotation.conjugate();
-    const Real up = face.dot(shapePose.apply(support(shape, inv * (-face))) - a);  // shape's lowest above
-    const Real down = -face.dot(shapePose.apply(support(shape, inv * face)) - a);  // shape's highest below
+    const Vec3 face = nl / len;
+    Real lo = 0, hi = 0;
+    ls.project(face, lo, hi);
+    const Real base = face.dot(tri.a);
     const Real slack = kMeshFeatureRelativeTolerance *
-                       (a.cwiseAbs().maxCoeff() + shapePose.translation.cwiseAbs().maxCoeff() + shape.size() +
+                       (tri.a.cwiseAbs().maxCoeff() + ls.rel.translation.cwiseAbs().maxCoeff() + ls.shape.size() +
                         (tri.b - tri.a).norm() + (tri.c - tri.a).norm());
-    return up > margin + slack || down > margin + slack;
+    return lo - base > margin + slack || base - hi > margin + slack;
   }
 
-  void triangle(std::uint32_t t, const Triangle& tri) {
-    if (planeSeparates(tri)) return;
+  /// Contacts of triangle t (in BVH slot `slot`, or kNoSlot) with the shape.
+  void triangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
     ContactManifold m;
-    if (!contacts(ConvexShape(tri), meshPose, shape, shapePose, margin, m)) return;
+    switch (ls.shape.kind) {
+      case ConvexKind::Sphere:
+        if (!sphereTriangleContacts(tri, ls.p[0], ls.radius, margin, m)) return;
+        break;
+      case ConvexKind::Capsule:
+        if (!capsuleTriangleContacts(tri, ls.p[0], ls.p[1], ls.radius, margin, m)) return;
+        break;
+      case ConvexKind::Box: {
+        // The triangle in the box's frame (double, rounded once), the SAT routine there, the
+        // points and normal back to the mesh's frame.
+        const Eigen::Matrix3d& Rt = ls.boxToLocal;
+        const Eigen::Vector3d a = Rt * (tri.a.cast<double>() - ls.boxCentre);
+        const Eigen::Vector3d b = Rt * (tri.b.cast<double>() - ls.boxCentre);
+        const Eigen::Vector3d cc = Rt * (tri.c.cast<double>() - ls.boxCentre);
+        // box face axes first (cheap): the triangle beyond a face of the box by more than the margin
+        const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(cc), hi = a.cwiseMax(b).cwiseMax(cc);
+        const Eigen::Vector3d reach = ls.half.cast<double>().array() + double(margin) + ls.boxSlack;
+        if ((lo.array() > reach.array()).any() || (hi.array() < -reach.array()).any()) return;
+        // (no planeSeparates here: the routine's SAT tests the triangle's normal itself; that
+        // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
+        if (!boxTriangleContacts(ls.half, Triangle{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()}, margin, m)) return;
+        const Eigen::Matrix3d R = Rt.transpose();
+        m.normal = (R * m.normal.cast<double>()).cast<Real>();
+        for (int i = 0; i < m.count; ++i) {
+          m.points[i].pointA = (R * m.points[i].pointA.cast<double>() + ls.boxCentre).cast<Real>();
+          m.points[i].pointB = (R * m.points[i].pointB.cast<double>() + ls.boxCentre).cast<Real>();
+        }
+        break;
+      }
+      default:
+        if (planeSeparates(tri)) return;
+        if (ls.aligned && ls.shape.kind == ConvexKind::Triangle) {
+          if (!contacts(ConvexShape(tri), Transform::identity(), ConvexShape(ls.mappedTriangle), Transform::identity(),
+                        margin, m))
+            return;
+        } else if (!contacts(ConvexShape(tri), Transform::identity(), ls.shape, ls.rel, margin, m)) {
+          return;
+        }
+        break;
+    }
     for (int i = 0; i < m.count; ++i) {
       MeshContactPoint p;
       p.pointA = m.points[i].pointA;
@@ -212,9 +384,32 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (adjacency && !correct(t, p)) continue;
+      if (adjacency) {
+        const MeshContactPoint raw = p;
+        if (!correct(t, slot, tri, p)) {
+          if (!hasDropped || raw.separation < dropped.separation ||
+              (raw.separation == dropped.separation && raw.triangle < dropped.triangle))
+            dropped = raw, hasDropped = true;
+          continue;
+        }
+      }
       add(p);
     }
+  }
+
+  /// The correction never makes the manifold shallower than the deepest raw contact: when the
+  /// deepest point it dropped is deeper than every point kept (or nothing was kept), that point
+  /// is added as the convex routine gave it (its feature's own normal). A dropped point is one
+  /// whose face-normal projection left its triangle; when the neighbours beyond a flat or concave
+  /// vertex or edge do not report it either (e.g. a thin shape poking through at a saddle
+  /// vertex), dropping it would lose a real penetration (found by `crux diff`, docs/diff.md).
+  /// Ghost contacts of a shape sliding over a seam are never deeper than the face contact the
+  /// correction keeps, so they stay dropped.
+  void keepDeepestDropped() {
+    if (!hasDropped) return;
+    for (int i = 0; i < n; ++i)
+      if (buf[i].separation <= dropped.separation) return;
+    add(dropped);
   }
 
   /// Deepest, then the farthest from it, then the point of largest |area| with those two, then
@@ -273,38 +468,104 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency, QueryPath path) {
   out.count = 0;
   validateContactMargin(margin);
-  if (adjacency && adjacency->triangleCount() != mesh.triangleCount())
+  if (adjacency && (adjacency->triangleCount() != mesh.triangleCount() ||
+                    adjacency->vertexCount() != mesh.vertices().size()))
     throw InvalidInput("adjacency: built for a mesh of " + std::to_string(adjacency->triangleCount()) +
-                       " triangles, this mesh has " + std::to_string(mesh.triangleCount()));
+                       " triangles and " + std::to_string(adjacency->vertexCount()) + " vertices, this mesh has " +
+                       std::to_string(mesh.triangleCount()) + " and " + std::to_string(mesh.vertices().size()));
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
-  Collector c{mesh, meshPose, shape, shapePose, margin, adjacency, mergeTol * mergeTol, {}, 0};
+  const LocalShape ls(shape, meshPose, shapePose);
+  Collector c{mesh, ls, margin, adjacency, mergeTol * mergeTol, {}, 0, {}, false};
   if (path == QueryPath::BruteForce) {
-    for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, mesh.triangle(t));
+    for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, kNoSlot, mesh.triangle(t));
   } else {
-    const Transform rel = meshPose.inverse() * shapePose;
-    Aabb query = shapeBoundsIn(shape, rel);
+    Aabb query = ls.bounds();
     const Real grow = margin + boxSlack(query);
     query.min.array() -= grow;
     query.max.array() += grow;
+    // A sphere prunes nodes by its own distance to their boxes (RTCD 5.2.5), tighter than
+    // its cube's; every other shape by its axis-aligned box.
+    const bool isSphere = shape.kind == ConvexKind::Sphere;
+    // (grow holds the margin and a rounding slack; the capsule test adds 1000 ulps more below)
+    const Real reach = (ls.radius + grow) * (1 + kMeshFeatureRelativeTolerance);
     struct Visitor {
       const Mesh& mesh;
       const Aabb& query;
       Collector& c;
+      bool isSphere, isCapsule, isBox;
+      Vec3 centre, end;  // sphere centre; capsule ends; box centre
+      Real reach2;
+      Mat3 axes;         // box axes (mesh frame)
+      Vec3 half;         // box half extents
+      Real boxGrow;      // margin + rounding slack (relative 1000 ulps on the box's scale)
       bool enter(const BvhNode& node, Real& key) {
         key = 0;
-        return boxesOverlap(node.bounds, query);
+        if (isSphere) {
+          const Vec3 d = (node.bounds.min - centre).cwiseMax(centre - node.bounds.max).cwiseMax(Vec3::Zero());
+          return d.squaredNorm() <= reach2;
+        }
+        if (!boxesOverlap(node.bounds, query)) return false;
+        if (isBox) {
+          // the box's own face axes against the node box (the rest of the OBB–AABB SAT, RTCD
+          // 4.4.1): its axis-aligned box is loose when it is rotated
+          const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max) - centre;
+          const Vec3 h = Real(0.5) * (node.bounds.max - node.bounds.min);
+          for (int k = 0; k < 3; ++k) {
+            const Vec3 u = axes.col(k);
+            const Real r = std::abs(u.x()) * h.x() + std::abs(u.y()) * h.y() + std::abs(u.z()) * h.z();
+            if (std::abs(u.dot(c)) > half[k] + r + boxGrow) return false;
+          }
+          return true;
+        }
+        if (!isCapsule) return true;
+        // A capsule also by the distance of its segment to the box's circumscribed sphere (its
+        // axis-aligned box is loose when it is tilted).
+        const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max);
+        const Real e = Real(0.5) * (node.bounds.max - node.bounds.min).norm() * (1 + 4 * std::numeric_limits<Real>::epsilon());
+        const Vec3 ab = end - centre;
+        const Real l2 = ab.squaredNorm();
+        const Real t = l2 > 0 ? std::clamp(ab.dot(c - centre) / l2, Real(0), Real(1)) : Real(0);
+        const Real lim = std::sqrt(reach2) + e;
+        return (centre + t * ab - c).squaredNorm() <= lim * lim;
       }
       bool keep(Real) { return true; }
       bool slot(std::uint32_t k) {
         const Triangle tri = mesh.slotTriangle(k);
-        if (boxesOverlap(bounds(tri), query)) c.triangle(mesh.bvh().primIndices[k], tri);
+        if (isSphere) {
+          const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
+          const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
+          if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
+        } else if (boxesOverlap(bounds(tri), query)) {
+          c.triangle(mesh.bvh().primIndices[k], k, tri);
+        }
         return true;
       }
-    } v{mesh, query, c};
+    } v{mesh,
+        query,
+        c,
+        isSphere,
+        shape.kind == ConvexKind::Capsule,
+        shape.kind == ConvexKind::Box,
+        ls.p[0],
+        ls.p[1],
+        reach * reach,
+        ls.axes,
+        ls.half,
+        grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm())};
     traverseBvhSlots(mesh.bvh(), v);
   }
+  c.keepDeepestDropped();
   c.reduce(out, mergeTol);
+  // Mesh frame -> world: only the reduced points.
+  const Eigen::Matrix3d R = meshPose.rotation.cast<double>().toRotationMatrix();
+  const Eigen::Vector3d tw = meshPose.translation.cast<double>();
+  for (int i = 0; i < out.count; ++i) {
+    MeshContactPoint& p = out.points[i];
+    p.pointA = (R * p.pointA.cast<double>() + tw).cast<Real>();
+    p.pointB = (R * p.pointB.cast<double>() + tw).cast<Real>();
+    p.normal = (R * p.normal.cast<double>()).normalized().cast<Real>();
+  }
   return out.count > 0;
 }
 

@@ -2,9 +2,20 @@
 /// @file mesh_contact.hpp  Contacts and distance between a triangle mesh and a convex shape
 /// (sphere, capsule, box, triangle, convex hull) under rigid transforms, for engine narrow phases.
 ///
-/// Both queries run in the mesh's frame through its BVH and call the convex narrow phase
-/// (contact.hpp / gjk.hpp) on each candidate triangle, so their per-triangle answers are exactly
-/// those of `contacts(triangle, meshPose, shape, shapePose, ...)` and `distance(...)`.
+/// Both queries run in the mesh's frame through its BVH. contacts() maps the shape into the
+/// mesh's frame once (the relative pose in double), computes, corrects, merges and reduces every
+/// point there, and maps only the <= 4 reduced points to the world. Per candidate triangle it
+/// calls a closed-form routine for spheres and capsules (geometry/triangle_contact.hpp), the
+/// separating-axis box routine (geometry/box_triangle_contact.hpp) for boxes, and the generic
+/// GJK/EPA + clipping `contacts()` of contact.hpp for triangles and hulls; all of them answer the
+/// generic routine's manifold (same conventions, features and clipping) up to rounding, tested
+/// in tests/geometry. distance() calls gjk.hpp's `distance()` per triangle, so its per-triangle
+/// answers are exactly those of `distance(triangle, meshPose, shape, shapePose)`.
+///
+/// BVH pruning: nodes by the shape's axis-aligned box in the mesh frame grown by the margin; a
+/// sphere by its own distance to the node box, a capsule also by its segment's distance to the
+/// node box's circumscribed sphere; per triangle a plane test (and for capsules a bounding-sphere
+/// test, for boxes the box's face axes) rejects before any closest-point work.
 ///
 /// Convention (as contact.hpp): A is the mesh, B the convex shape. Every normal is the unit
 /// direction from B to A, i.e. from the shape into the mesh: a shape resting on an upward facing
@@ -24,7 +35,11 @@
 ///     recomputed as the shape's deepest point along the face normal against the triangle's
 ///     plane, and dropped when its separation exceeds the margin or its projection on the plane
 ///     falls outside the triangle (then the triangle under that point reports it, with its own
-///     face normal); so every reported point lies on both surfaces.
+///     face normal); so every reported point lies on both surfaces. One exception keeps the
+///     manifold from getting shallower than the truth: when the deepest dropped point is deeper
+///     than every point kept (or nothing was kept), it is reported uncorrected (its own
+///     feature normal) — a thin shape poking through at a flat or saddle vertex is otherwise
+///     reported by no triangle at all.
 /// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
@@ -60,10 +75,24 @@ class MeshAdjacency {
   explicit MeshAdjacency(const Mesh& mesh);
   /// Neighbour of triangle `t` across edge `edge` (0..2), or kNone.
   std::uint32_t neighbor(std::uint32_t t, int edge) const { return neighbors_[3 * std::size_t(t) + edge]; }
+  /// The neighbour's vertex opposite that edge (a vertex index of the mesh), or kNone when there
+  /// is no neighbour or it has no third vertex (degenerate). Kept next to the neighbour so that
+  /// the contact correction reads one array instead of two (fewer cache misses per query).
+  std::uint32_t oppositeVertex(std::uint32_t t, int edge) const { return opposite_[3 * std::size_t(t) + edge]; }
+  /// oppositeVertex of the triangle in BVH slot k (mesh.bvh().primIndices[k]): the same data in
+  /// the BVH's leaf order, read by the BVH query next to the slot's triangle (cache locality).
+  std::uint32_t oppositeVertexBySlot(std::uint32_t k, int edge) const {
+    return oppositeBySlot_[3 * std::size_t(k) + edge];
+  }
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
+  /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
+  std::size_t vertexCount() const { return vertexCount_; }
 
  private:
   std::vector<std::uint32_t> neighbors_;
+  std::vector<std::uint32_t> opposite_;
+  std::vector<std::uint32_t> oppositeBySlot_;
+  std::size_t vertexCount_ = 0;
 };
 
 /// Cosine of the face normal cone: a contact normal within acos(kMeshFaceConeCos) of the
@@ -101,7 +130,7 @@ struct MeshContactManifold {
 /// Contact points between `mesh` (A, placed by meshPose) and `shape` (B, placed by shapePose)
 /// with separation <= margin (>= 0): BVH query of the shape's AABB in the mesh frame grown by
 /// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when
-/// `adjacency` (built from this mesh; one with another triangle count throws InvalidInput) is given,
+/// `adjacency` (built from this mesh; one with another triangle or vertex count throws InvalidInput) is given,
 /// reduction to 4. `path` BruteForce tests every
 /// triangle (reference). Returns out.count > 0. Throws InvalidInput for a margin that is negative
 /// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws, never

@@ -1,0 +1,515 @@
+// Closed-form sphere–triangle and capsule–triangle contact manifolds (the mesh narrow phase's
+// per-triangle fast path), with contact.hpp's feature selection and clipping rules. Double
+// precision, fixed-size data, no exceptions.
+
+#include <crux/geometry/triangle_contact.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "geometry/contact_internal.hpp"
+#include "geometry/gjk_internal.hpp"
+
+namespace crux {
+namespace {
+
+using detail::V3;
+
+/// sin of the feature angle (kContactFaceAngleCos), as contact.cpp.
+const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
+
+/// The triangle in double with its (unnormalised) normal and degeneracy.
+struct TriD {
+  V3 p[3];
+  V3 m;         // (b - a) × (c - a)
+  double len;   // |m|
+  bool degenerate;
+  explicit TriD(const Triangle& t) {
+    p[0] = t.a.cast<double>();
+    p[1] = t.b.cast<double>();
+    p[2] = t.c.cast<double>();
+    const V3 ab = p[1] - p[0], ac = p[2] - p[0];
+    m = ab.cross(ac);
+    len = m.norm();
+    const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()});
+    degenerate = !(len > kTriangleContactDegenerateRelative * longest);
+  }
+  double maxAbs() const { return std::max({p[0].norm(), p[1].norm(), p[2].norm()}); }
+  V3 centroid() const { return (p[0] + p[1] + p[2]) / 3; }
+};
+
+/// A supporting feature of the triangle or the capsule (at most 3 vertices), as contact.cpp's.
+struct Feature {
+  V3 v[3];
+  std::uint32_t vid[3];
+  int n = 0;
+  V3 normal = V3::Zero();
+  double align = 0;
+  std::uint32_t id = 0;
+};
+
+std::uint32_t vertexId(int i) { return featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(i)); }
+std::uint32_t edgeId(int i, int j) {
+  return featureId(FeatureKind::Edge, static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
+}
+
+/// Vertex `is` of `p`, or the edge (is, others[k]) perpendicular to d within the feature angle.
+void vertexOrEdge(const V3* p, const V3& d, int is, const int* others, int nOthers, Feature& f) {
+  int bestK = -1;
+  double bestCos = kSinTol;
+  for (int k = 0; k < nOthers; ++k) {
+    const V3 e = p[others[k]] - p[is];
+    const double len = e.norm();
+    if (!(len > 0)) continue;
+    const double c = std::abs(e.dot(d)) / len;
+    if (c <= bestCos) {
+      bestCos = c;
+      bestK = k;
+    }
+  }
+  if (bestK < 0) {
+    f.n = 1;
+    f.v[0] = p[is];
+    f.vid[0] = vertexId(is);
+    f.id = f.vid[0];
+    return;
+  }
+  f.n = 2;
+  f.v[0] = p[is];
+  f.v[1] = p[others[bestK]];
+  f.vid[0] = vertexId(is);
+  f.vid[1] = vertexId(others[bestK]);
+  f.id = edgeId(is, others[bestK]);
+}
+
+using contact_detail::kSliverAreaRatio;  // contact.cpp's sliver rule (contact_internal.hpp)
+
+/// The triangle's feature supporting direction d (contact.cpp's rule for a Triangle core against
+/// a shape without faces: a sliver's face is replaced by its supporting edge or vertex).
+void triangleFeature(const TriD& t, const V3& d, Feature& f) {
+  const double d0 = t.p[0].dot(d), d1 = t.p[1].dot(d), d2 = t.p[2].dot(d);
+  const int is = d1 > d0 ? (d2 > d1 ? 2 : 1) : (d2 > d0 ? 2 : 0);
+  const double longest2 = std::max({(t.p[1] - t.p[0]).squaredNorm(), (t.p[2] - t.p[1]).squaredNorm(),
+                                    (t.p[0] - t.p[2]).squaredNorm()});
+  const bool sliver = !(t.len >= kSliverAreaRatio * longest2);
+  // (a degenerate triangle has no face: its computed normal is rounding noise)
+  if (!t.degenerate && !sliver && std::abs(t.m.dot(d)) >= double(kContactFaceAngleCos) * t.len) {
+    const V3 m = t.m / t.len;
+    const bool front = m.dot(d) > 0;
+    const int order[3] = {0, front ? 1 : 2, front ? 2 : 1};
+    f.n = 3;
+    for (int k = 0; k < 3; ++k) {
+      f.v[k] = t.p[order[k]];
+      f.vid[k] = vertexId(order[k]);
+    }
+    f.normal = front ? m : V3(-m);
+    f.align = std::abs(m.dot(d));
+    f.id = featureId(FeatureKind::Face, front ? 0 : 1);
+    return;
+  }
+  const int others[2] = {(is + 1) % 3, (is + 2) % 3};
+  vertexOrEdge(t.p, d, is, others, 2, f);
+}
+
+/// Closest point of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions); `face`
+/// tells whether it is in the face region.
+V3 closestOnTriangle(const V3* t, const V3& p, bool& face) {
+  face = false;
+  const V3 &a = t[0], &b = t[1], &c = t[2];
+  const V3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const V3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const V3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  face = true;
+  const double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+/// Closest point of segment [a, b] to p.
+V3 closestOnSegment(const V3& a, const V3& b, const V3& p) {
+  const V3 ab = b - a;
+  const double l2 = ab.squaredNorm();
+  if (!(l2 > 0)) return a;
+  return a + ab * std::clamp(ab.dot(p - a) / l2, 0.0, 1.0);
+}
+
+/// A fixed unit perpendicular of e (e non-zero).
+V3 perpendicularOf(const V3& e) {
+  const V3 a = std::abs(e.x()) < 0.57 * e.norm() ? V3::UnitX() : V3::UnitY();
+  return e.cross(a).normalized();
+}
+
+/// The longest edge of a degenerate triangle (a point: zero).
+V3 longestEdge(const TriD& t) {
+  V3 best = t.p[1] - t.p[0];
+  for (int i = 1; i < 3; ++i) {
+    const V3 e = t.p[(i + 1) % 3] - t.p[i];
+    if (e.squaredNorm() > best.squaredNorm()) best = e;
+  }
+  return best;
+}
+
+/// The normal (B→A) of a shape whose core touches/lies on the triangle: minus the front face
+/// normal; for a degenerate triangle a fixed perpendicular of its longest edge, or −z.
+V3 onTriangleNormal(const TriD& t) {
+  if (!t.degenerate) return -t.m / t.len;
+  const V3 e = longestEdge(t);
+  if (e.squaredNorm() > 0) return -perpendicularOf(e);
+  return -V3::UnitZ();
+}
+
+/// Fills the single-point manifold (the closest / deepest pair) with contact.cpp's features.
+void singlePoint(const TriD& t, const V3& n, const V3& pa, const V3& pbCore, double dcore, double r, Real margin,
+                 std::uint32_t featureB, ContactManifold& out) {
+  Feature fa;
+  triangleFeature(t, -n, fa);
+  out.normal = n.cast<Real>();
+  out.count = 1;
+  ContactPoint& c = out.points[0];
+  c.pointA = pa.cast<Real>();
+  c.pointB = (pbCore + n * r).cast<Real>();
+  c.separation = static_cast<Real>(dcore - r);
+  c.featureA = fa.id;
+  c.featureB = featureB;
+  (void)margin;
+}
+
+struct ClipVertex {
+  V3 p;
+  std::uint32_t id;
+};
+
+/// Keeps the part of segment `in` (2 vertices) with dot(x - o, m) >= 0 (contact.cpp's clip).
+int clipSegment(const ClipVertex* in, int n, const V3& o, const V3& m, std::uint32_t cutId, ClipVertex* out) {
+  if (n < 2) {
+    if (n == 1 && (in[0].p - o).dot(m) >= 0) {
+      out[0] = in[0];
+      return 1;
+    }
+    return 0;
+  }
+  const double d0 = (in[0].p - o).dot(m), d1 = (in[1].p - o).dot(m);
+  if (d0 < 0 && d1 < 0) return 0;
+  int k = 0;
+  if (d0 >= 0) out[k++] = in[0];
+  if ((d0 < 0) != (d1 < 0)) out[k++] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cutId};
+  if (d1 >= 0) out[k++] = in[1];
+  return k;
+}
+
+}  // namespace
+
+bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
+  out.count = 0;
+  const V3 p = centre.cast<double>();
+  const double r = double(radius), m = double(margin);
+  {
+    // Early plane reject, before anything else (most candidate triangles of a mesh end here):
+    // |(b−a)×(c−a)·(p−a)| > (r + margin + slack)·|(b−a)×(c−a)|, squared, no root. The slack
+    // bounds the tolerance below from above (∞-norms × √3 >= Euclidean norms).
+    // The rounding of the cross product (<= 8 ulps × |ab|₁|ac|₁ per unit of |p − a|₁) is
+    // added, so that nearly collinear triangles, whose computed normal is noise, are never
+    // rejected wrongly.
+    const V3 a = tri.a.cast<double>();
+    const V3 ab = tri.b.cast<double>() - a, ac = tri.c.cast<double>() - a, ap = p - a;
+    const V3 mm = ab.cross(ac);
+    const double h = mm.dot(ap);
+    const double bound = std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()});
+    const double slack = kGjkScaleTolerance * (1.7320508075688773 * (bound + p.cwiseAbs().maxCoeff()) + r);
+    const double reach = r + m + slack;
+    const double err = 8 * std::numeric_limits<double>::epsilon() * ab.lpNorm<1>() * ac.lpNorm<1>() * ap.lpNorm<1>();
+    const double lhs = std::abs(h) - err;
+    if (lhs > 0 && lhs * lhs > reach * reach * mm.squaredNorm()) return false;
+  }
+  const TriD t(tri);
+  const double scale = t.maxAbs() + p.norm() + r;
+  const double tolAbs = kGjkScaleTolerance * scale;
+  V3 q, n;
+  double d;
+  if (!t.degenerate) {
+    const V3 mh = t.m / t.len;
+    const double h = mh.dot(p - t.p[0]);
+    bool face = false;
+    q = closestOnTriangle(t.p, p, face);
+    if (face) {  // exact projection: distance and normal from the plane, not from q - p
+      d = std::abs(h);
+      q = p - h * mh;
+      n = h > 0 ? V3(-mh) : V3(mh);
+    } else {
+      d = (q - p).norm();
+      n = d > 0 ? V3((q - p) / d) : V3::Zero();
+    }
+  } else {
+    q = closestOnSegment(t.p[0], t.p[1], p);
+    for (int i = 1; i < 3; ++i) {
+      const V3 c = closestOnSegment(t.p[i], t.p[(i + 1) % 3], p);
+      if ((c - p).squaredNorm() < (q - p).squaredNorm()) q = c;
+    }
+    d = (q - p).norm();
+    n = d > 0 ? V3((q - p) / d) : V3::Zero();
+  }
+  if (!(d - r <= m)) return false;
+  if (d <= tolAbs) {  // centre on the triangle: the flat case, a deterministic normal
+    d = 0;
+    n = onTriangleNormal(t);
+    q = p;
+  }
+  n.normalize();
+  singlePoint(t, n, q, p, d, r, margin, vertexId(0), out);
+  return true;
+}
+
+bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
+                             ContactManifold& out) {
+  out.count = 0;
+  const V3 s[2] = {p0In.cast<double>(), p1In.cast<double>()};
+  const double r = double(radius), mg = double(margin);
+  {
+    // Early plane reject (as sphereTriangleContacts): both ends beyond radius + margin on the
+    // same side of the triangle's plane, squared, no root.
+    const V3 a = tri.a.cast<double>();
+    const V3 ab = tri.b.cast<double>() - a, ac = tri.c.cast<double>() - a;
+    const V3 mm = ab.cross(ac);
+    const double g0 = mm.dot(s[0] - a), g1 = mm.dot(s[1] - a);
+    const double bound = std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()});
+    const double slack = kGjkScaleTolerance *
+                         (1.7320508075688773 * (bound + std::max(p0In.cwiseAbs().maxCoeff(), p1In.cwiseAbs().maxCoeff())) + r);
+    const double reach = r + mg + slack;
+    // (the cross product's rounding, as in sphereTriangleContacts)
+    const double e8 = 8 * std::numeric_limits<double>::epsilon() * ab.lpNorm<1>() * ac.lpNorm<1>();
+    const double l0 = std::abs(g0) - e8 * (s[0] - a).lpNorm<1>(), l1 = std::abs(g1) - e8 * (s[1] - a).lpNorm<1>();
+    const double lmin = std::min(l0, l1);
+    if (g0 * g1 > 0 && lmin > 0 && lmin * lmin > reach * reach * mm.squaredNorm()) return false;
+    // Bounding-sphere reject: the segment farther from the centroid than the triangle's
+    // circumscribing radius (about the centroid) plus the reach.
+    const V3 b = tri.b.cast<double>(), c = tri.c.cast<double>();
+    const V3 g = (a + b + c) / 3;
+    const double rad = std::sqrt(std::max({(a - g).squaredNorm(), (b - g).squaredNorm(), (c - g).squaredNorm()}));
+    const double lim = rad + reach;
+    if ((closestOnSegment(s[0], s[1], g) - g).squaredNorm() > lim * lim) return false;
+  }
+  const TriD t(tri);
+  const double scale = t.maxAbs() + std::max(s[0].norm(), s[1].norm()) + r;
+  const double tolAbs = kGjkScaleTolerance * scale;
+  V3 mh = V3::Zero();
+  double h0 = 0, h1 = 0;
+  if (!t.degenerate) {
+    mh = t.m / t.len;
+    h0 = mh.dot(s[0] - t.p[0]);
+    h1 = mh.dot(s[1] - t.p[0]);
+    // Both ends beyond the plane on one side by more than radius + margin: nothing to report.
+    if ((h0 > 0 && h1 > 0 && std::min(h0, h1) - r > mg + tolAbs) ||
+        (h0 < 0 && h1 < 0 && std::min(-h0, -h1) - r > mg + tolAbs))
+      return false;
+  }
+  // ---- core distance: segment vs triangle (RTCD 5.1.10's decomposition).
+  V3 pa, pb;
+  double best2 = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    V3 ca, cb;
+    const double d2 = detail::closestSegmentSegment(t.p[i], t.p[(i + 1) % 3], s[0], s[1], ca, cb);
+    if (d2 < best2) {
+      best2 = d2;
+      pa = ca;
+      pb = cb;
+    }
+  }
+  bool crossing = false;
+  if (!t.degenerate) {
+    auto inside = [&](const V3& x) {  // x on the plane: inside the closed triangle
+      for (int i = 0; i < 3; ++i)
+        if (t.m.dot((t.p[(i + 1) % 3] - t.p[i]).cross(x - t.p[i])) < 0) return false;
+      return true;
+    };
+    const double h[2] = {h0, h1};
+    for (int k = 0; k < 2; ++k) {
+      const V3 proj = s[k] - h[k] * mh;
+      if (std::abs(h[k]) * std::abs(h[k]) < best2 && inside(proj)) {
+        best2 = h[k] * h[k];
+        pa = proj;
+        pb = s[k];
+      }
+    }
+    if ((h0 < 0 && h1 > 0) || (h0 > 0 && h1 < 0)) {
+      const V3 x = s[0] + (s[1] - s[0]) * (h0 / (h0 - h1));
+      crossing = inside(x);
+    }
+  }
+  double dcore = crossing ? 0.0 : std::sqrt(best2);
+  V3 n;
+  if (dcore > tolAbs) {
+    if (dcore - r > mg) return false;
+    n = (pa - pb) / dcore;
+  } else {
+    // ---- crossing cores: minimum translation over the faces of the Minkowski difference (SAT).
+    const V3 dseg = s[1] - s[0];
+    double hBest = std::numeric_limits<double>::infinity();
+    V3 uBest = V3::Zero();
+    int axisBest = -1;  // 3: face normal, 0..2: edge i × segment
+    auto consider = [&](const V3& u, int axis) {
+      const double maxA = std::max({u.dot(t.p[0]), u.dot(t.p[1]), u.dot(t.p[2])});
+      const double minB = std::min(u.dot(s[0]), u.dot(s[1]));
+      const double hu = maxA - minB;
+      // The cores meet (distance <= tolAbs), so no axis separates them: an axis that seems to is
+      // the rounding noise of a nearly collinear triangle's normal and is skipped.
+      if (hu < -tolAbs) return;
+      if (hu < hBest) {
+        hBest = hu;
+        uBest = u;
+        axisBest = axis;
+      }
+    };
+    if (!t.degenerate) {
+      consider(mh, 3);
+      consider(-mh, 3);
+    }
+    const double dl2 = dseg.squaredNorm();
+    for (int i = 0; i < 3; ++i) {
+      const V3 e = t.p[(i + 1) % 3] - t.p[i];
+      const V3 c = e.cross(dseg);
+      const double c2 = c.squaredNorm();
+      if (!(c2 > 1e-24 * e.squaredNorm() * dl2)) continue;  // parallel: not a face of the prism
+      const V3 u = c / std::sqrt(c2);
+      consider(u, i);
+      consider(-u, i);
+    }
+    // Flat: the Minkowski difference has no thickness along the best axis (the segment lies in
+    // the triangle's plane, or a degenerate triangle and the segment are coplanar): core depth
+    // 0 along that plane's normal, deterministically oriented (for the face: minus the front
+    // normal, the capsule on the front side); the common point found above.
+    bool flat = axisBest < 0;
+    if (!flat) {
+      const double maxA = std::max({-uBest.dot(t.p[0]), -uBest.dot(t.p[1]), -uBest.dot(t.p[2])});
+      const double minB = std::min(-uBest.dot(s[0]), -uBest.dot(s[1]));
+      flat = hBest + (maxA - minB) <= 2 * tolAbs;
+    }
+    if (flat) {
+      if (axisBest < 0) {
+        // no face of the Minkowski difference at all (a degenerate triangle along the segment,
+        // or a point on it): a fixed perpendicular of the segment (of the triangle's longest
+        // edge for a point capsule), so that the shape is pushed sideways off it
+        n = dseg.squaredNorm() > 0 ? V3(-perpendicularOf(dseg)) : onTriangleNormal(t);
+      } else if (axisBest == 3) {
+        n = onTriangleNormal(t);
+      } else {
+        const V3 c = (t.p[(axisBest + 1) % 3] - t.p[axisBest]).cross(dseg);
+        n = -c.normalized();
+      }
+      dcore = 0;
+      if (crossing) pa = pb = s[0] + (s[1] - s[0]) * (h0 / (h0 - h1));
+    } else {
+      n = -uBest;
+      dcore = -hBest;
+      if (axisBest == 3) {
+        const int k = uBest.dot(s[1]) < uBest.dot(s[0]) ? 1 : 0;  // the deepest end
+        pb = s[k];
+        pa = pb + hBest * uBest;
+      } else {
+        detail::closestSegmentSegment(t.p[axisBest], t.p[(axisBest + 1) % 3], s[0], s[1], pa, pb);
+      }
+    }
+    if (dcore - r > mg) return false;
+  }
+  n.normalize();  // unit to the last ulp, as the generic routine's
+  // ---- features and clipping (contact.cpp's rules for a triangle and a segment).
+  Feature fa, fb;
+  triangleFeature(t, -n, fa);
+  {
+    const int is = s[1].dot(n) > s[0].dot(n) ? 1 : 0;
+    const int other[1] = {1 - is};
+    vertexOrEdge(s, n, is, other, 1, fb);
+  }
+  bool clipFeatures = fa.n >= 2 && fb.n >= 2;
+  if (clipFeatures && fa.n == 2) {
+    const V3 ea = fa.v[1] - fa.v[0], eb = fb.v[1] - fb.v[0];
+    clipFeatures = ea.cross(eb).norm() <= kSinTol * ea.norm() * eb.norm();
+  }
+  if (clipFeatures) {
+    const bool refIsA = fa.n >= 3;
+    const Feature& ref = refIsA ? fa : fb;
+    const Feature& inc = refIsA ? fb : fa;
+    V3 u = refIsA ? V3(-n) : n;
+    V3 nn = n;
+    if (refIsA) {
+      u = ref.normal.normalized();
+      nn = -u;
+    }
+    ClipVertex bufA[4], bufB[4];
+    int cnt = inc.n;
+    for (int i = 0; i < cnt; ++i) bufA[i] = {inc.v[i], inc.vid[i]};
+    ClipVertex* cur = bufA;
+    ClipVertex* nxt = bufB;
+    if (refIsA) {
+      for (int i = 0; i < 3 && cnt > 0; ++i) {
+        const V3 e = ref.v[(i + 1) % 3] - ref.v[i];
+        cnt = clipSegment(cur, cnt, ref.v[i], u.cross(e), inc.id, nxt);
+        std::swap(cur, nxt);
+      }
+    } else {
+      V3 e = ref.v[1] - ref.v[0];
+      e -= u * u.dot(e);
+      cnt = clipSegment(cur, cnt, ref.v[0], e, inc.id, nxt);
+      std::swap(cur, nxt);
+      if (cnt > 0) cnt = clipSegment(cur, cnt, ref.v[1], -e, inc.id, nxt);
+      std::swap(cur, nxt);
+    }
+    int np = 0;
+    const V3 r0 = ref.v[0];
+    // Edge reference (the capsule's segment), as contact.cpp: each point is measured from its
+    // closest point on the segment; a pair of skew edges (offset across the normal beyond the
+    // rounding budget: 8 ulps of Real × scale, widened for the radius) falls back to the single
+    // closest pair.
+    double lateralTol = 0;
+    if (!refIsA) {
+      double scale = r + mg;
+      for (int i = 0; i < 2; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
+      for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
+      const double tol = 8 * double(std::numeric_limits<Real>::epsilon()) * scale;
+      lateralTol = tol + std::sqrt(2 * r * tol);
+    }
+    bool skew = false;
+    for (int i = 0; i < cnt && !skew; ++i) {
+      const V3 q = cur[i].p;
+      double sd = u.dot(q - r0);
+      if (!refIsA) {
+        const V3 e = ref.v[1] - ref.v[0];
+        const double e2 = e.squaredNorm();
+        const double tt = e2 > 0 ? std::clamp(e.dot(q - r0) / e2, 0.0, 1.0) : 0.0;
+        const V3 diff = q - (r0 + tt * e);
+        sd = u.dot(diff);
+        if (!((diff - sd * u).norm() <= lateralTol)) skew = true;
+      }
+      const double sep = sd - r;
+      if (!(sep <= mg)) continue;
+      const V3 onRef = q - sd * u;
+      const V3 ca = refIsA ? onRef : q, cb = refIsA ? q : onRef;
+      ContactPoint& c = out.points[np++];
+      c.pointA = ca.cast<Real>();
+      c.pointB = (cb + nn * r).cast<Real>();
+      c.separation = static_cast<Real>(sep);
+      c.featureA = refIsA ? ref.id : cur[i].id;
+      c.featureB = refIsA ? cur[i].id : ref.id;
+    }
+    if (np > 0 && !skew) {
+      out.normal = nn.cast<Real>();
+      out.count = np;
+      return true;
+    }
+  }
+  singlePoint(t, n, pa, pb, dcore, r, margin, fb.id, out);
+  return true;
+}
+
+}  // namespace crux
