@@ -28,6 +28,12 @@ namespace crux::exact {
 /// its boxes, so its bounds-only answers may be a superset); scene_pairs tests every model pair
 /// (exact box pre-check, then all triangle pairs).
 ///
+/// Volume mode (point_inside, "volume": true on mesh_* and model_*): CGAL::Side_of_triangle_mesh on
+/// the exactly placed closed mesh (exact_volume.hpp). Narrow phase (contacts, distance,
+/// mesh_distance, model_distance): exact_distance.hpp — convex operands as exact core points plus
+/// a radius, distances and penetration depths from the exact hull of their differences, mesh
+/// operands brute force over triangles (contacts: one per triangle within the margin, unreduced).
+///
 /// Booleans are exact. Distances are exact values rounded once (a few ulps of double); the
 /// choice among ray hits whose exact distances differ by less than that (and the max-distance
 /// cut) is made on the rounded distances.

@@ -2,10 +2,13 @@
 // and edge–edge closest points. Fixed-size buffers only; falls back to contacts() (GJK/EPA) when
 // the SAT axis does not realise the distance.
 
+#include <crux/geometry/box_triangle_contact.hpp>
+
 #include <algorithm>
 #include <cmath>
-#include <crux/geometry/box_triangle_contact.hpp>
 #include <limits>
+
+#include "geometry/gjk_internal.hpp"
 
 namespace crux {
 namespace {
@@ -208,37 +211,6 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
   f[1] = {t[bestK], 0, vertexId(bestK)};
   id = edgeId(is, bestK);
   return 2;
-}
-
-/// Closest points of segments [p1, q1] and [p2, q2] (RTCD 5.1.9, with the denominator taken as
-/// |d1 × d2|² so that it is never negative; parallel segments clamp s = 0 first).
-void closestSegmentSegment(const V& p1, const V& q1, const V& p2, const V& q2, V& c1, V& c2) {
-  const V d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0, t = 0;
-  if (a <= 0 && e <= 0) {
-  } else if (a <= 0) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= 0) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2);
-      const double denom = d1.cross(d2).squaredNorm();
-      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  c1 = p1 + d1 * s;
-  c2 = p2 + d2 * t;
 }
 
 enum class AxisKind { BoxFace, TriangleFace, Edge };
@@ -451,7 +423,7 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
     const V b0 = boxVertex(h, idx), b1 = boxVertex(h, idx2);
     const int j2 = (j + 1) % 3;
     V pa, pb;
-    closestSegmentSegment(t[j], t[j2], b0, b1, pa, pb);
+    detail::closestSegmentSegment(t[j], t[j2], b0, b1, pa, pb);  // gjk_internal.hpp (RTCD 5.1.9)
     const V d = pa - pb;
     const double along = d.dot(n);
     if ((d - along * n).norm() <= kRealiseTolerance && std::abs(along - best.sep) <= kRealiseTolerance) {
