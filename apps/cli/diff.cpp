@@ -61,7 +61,7 @@ double maxDiff(const J& a, const J& b) {
 /// How two answers to the same query differ.
 enum class Difference { None, Boolean, Numeric, List, Shape };
 
-// ---- the narrow-phase ops (issue 6): distance, contacts, mesh_distance ---------------------------
+// ---- the narrow-phase ops (issue 6): distance, contacts, mesh_distance, model_distance ------------
 
 /// Distances, depths and witnesses of the narrow-phase ops are compared within kNarrowRelative·s
 /// (s: the case's magnitude) on top of the backends' declared tolerances: issue 6's bound, 1e-6
@@ -75,13 +75,20 @@ constexpr double kNarrowRelative =
 /// manifold normal).
 constexpr double kManifoldAngleSlack = 1 - double(kContactFaceAngleCos);
 
-bool isNarrowOp(std::string_view op) { return op == "distance" || op == "contacts" || op == "mesh_distance"; }
+bool isNarrowOp(std::string_view op) {
+  return op == "distance" || op == "contacts" || op == "mesh_distance" || op == "model_distance";
+}
+
+/// mesh_distance and model_distance: two meshes (placed by transforms / by models), answer
+/// `found` (within the optional max) and the distance with its witness points.
+bool isMeshPairDistance(std::string_view op) { return op == "mesh_distance" || op == "model_distance"; }
 
 /// The boolean part of a narrow-phase answer: contacts: any point within the margin;
-/// mesh_distance: found (within max); distance: touching or overlapping (distance <= 0).
+/// mesh_distance, model_distance: found (within max); distance: touching or overlapping
+/// (distance <= 0).
 bool narrowVerdict(std::string_view op, const J& a) {
   if (op == "contacts") return a.contains("contacts") && !a["contacts"].empty();
-  if (op == "mesh_distance") return a.value("found", false);
+  if (isMeshPairDistance(op)) return a.value("found", false);
   return a.contains("distance") && a["distance"].get<double>() <= 0;
 }
 
@@ -93,10 +100,10 @@ double narrowNumber(std::string_view op, const J& a) {
   return deepest;
 }
 
-/// Compares narrow-phase answers: the verdict exactly (contacts, mesh_distance), the distance
+/// Compares narrow-phase answers: the verdict exactly (contacts, mesh/model_distance), the distance
 /// or deepest depth within `tolerance`. Witness points are checked separately (witnessProblem).
 Difference compareNarrow(std::string_view op, const J& got, const J& exact, double tolerance) {
-  const char* key = op == "contacts" ? "contacts" : op == "mesh_distance" ? "found" : "distance";
+  const char* key = op == "contacts" ? "contacts" : isMeshPairDistance(op) ? "found" : "distance";
   if (!got.contains(key)) return Difference::Shape;
   if (op != "distance" && narrowVerdict(op, got) != narrowVerdict(op, exact)) return Difference::Boolean;
   if (op != "distance" && !narrowVerdict(op, exact)) return Difference::None;
@@ -414,13 +421,75 @@ double gapToOperand(const DiffCase& c, const J& operand, const Vec3d& world) {
   return std::numeric_limits<double>::quiet_NaN();  // hull: not checked
 }
 
-/// Checks the witness of a distance / mesh_distance answer: point_a on A and point_b on B
+/// A model's mesh operand as the setup lines place it: {"mesh": its mesh, "transform": its world
+/// transform} (parent_world ∘ local, composed in double from add_model, set_transform and
+/// set_parent lines; set_parent keeps the world pose). Null when the model is not defined.
+J modelOperand(const DiffCase& c, const std::string& name) {
+  struct Pose {
+    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+    Vec3d t = Vec3d::Zero();
+  };
+  struct ModelLine {
+    std::string mesh, parent;
+    Pose local;
+  };
+  std::map<std::string, ModelLine> models;
+  auto readPose = [](const J& tr) {
+    Pose p;
+    if (!tr.is_object()) return p;
+    if (tr.contains("translation")) p.t = toVec(tr["translation"]);
+    if (tr.contains("rotation")) {
+      const J& q = tr["rotation"];
+      p.q = Eigen::Quaterniond(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>())
+                .normalized();
+    }
+    return p;
+  };
+  std::function<Pose(const std::string&, int)> world = [&](const std::string& m, int depth) {
+    const auto it = models.find(m);
+    if (it == models.end() || depth > 64) return Pose{};
+    const Pose& l = it->second.local;
+    if (it->second.parent.empty()) return l;
+    const Pose p = world(it->second.parent, depth + 1);
+    return Pose{p.q * l.q, p.q * l.t + p.t};
+  };
+  for (const auto& line : c.setup) {
+    const J m = J::parse(line, nullptr, false);
+    if (!m.is_object()) continue;
+    const std::string op = m.value("op", "");
+    if (op == "add_model" && m.contains("name") && m["name"].is_string()) {
+      ModelLine& d = models[m["name"].get<std::string>()];
+      d.mesh = m.value("mesh", "");
+      d.parent = m.contains("parent") && m["parent"].is_string() ? m["parent"].get<std::string>() : "";
+      d.local = readPose(m.contains("transform") ? m["transform"] : J());
+    } else if ((op == "set_transform" || op == "set_parent") && m.contains("model") && m["model"].is_string()) {
+      const std::string who = m["model"].get<std::string>();
+      const auto it = models.find(who);
+      if (it == models.end()) continue;
+      if (op == "set_transform") {
+        it->second.local = readPose(m.contains("transform") ? m["transform"] : J());
+      } else {
+        const Pose w = world(who, 0);
+        it->second.parent = m.contains("parent") && m["parent"].is_string() ? m["parent"].get<std::string>() : "";
+        const Pose p = it->second.parent.empty() ? Pose{} : world(it->second.parent, 0);
+        it->second.local = Pose{p.q.conjugate() * w.q, p.q.conjugate() * (w.t - p.t)};
+      }
+    }
+  }
+  if (!models.count(name)) return J();
+  const Pose w = world(name, 0);
+  return J{{"mesh", models[name].mesh},
+           {"transform",
+            {{"rotation", {w.q.w(), w.q.x(), w.q.y(), w.q.z()}}, {"translation", {w.t.x(), w.t.y(), w.t.z()}}}}};
+}
+
+/// Checks the witness of a distance / mesh_distance / model_distance answer: point_a on A and point_b on B
 /// (within `tolerance` of the shape; for a mesh, of its surface), and |point_a − point_b| =
 /// |distance|. Returns "" when it holds, else which part fails; sets *onSphere when the point
 /// off its shape belongs to a sphere operand.
 std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, double tolerance, bool* onSphere) {
   if (c.op == "contacts" || !answer.contains("point_a") || !answer.contains("point_b")) return "";
-  if (c.op == "mesh_distance" && !answer.value("found", false)) return "";
+  if (isMeshPairDistance(c.op) && !answer.value("found", false)) return "";
   const Vec3d pa = toVec(answer["point_a"]), pb = toVec(answer["point_b"]);
   const double d = answer["distance"].get<double>();
   std::ostringstream out;
@@ -433,6 +502,9 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
       operand = J{{"mesh", query[side]}};
       const std::string tk = std::string("transform_") + side;
       if (query.contains(tk)) operand["transform"] = query[tk];
+    } else if (c.op == "model_distance") {
+      operand = query[side].is_string() ? modelOperand(c, query[side].get<std::string>()) : J();
+      if (operand.is_null()) continue;
     } else {
       operand = query[side];
     }
@@ -541,6 +613,44 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
     if (!tb.is_object()) tb = J::object();
     if (!tb.contains("translation")) tb["translation"] = J::array({0, 0, 0});
     moveVec(tb["translation"], offset);
+  } else if (c.op == "model_distance") {
+    // move model b (model a when b is an ancestor of a, which would carry a along): its local
+    // translation in the last line that sets it, i.e. by R_parent·offset in the world
+    if (!q.contains("a") || !q["a"].is_string() || !q.contains("b") || !q["b"].is_string()) return std::nullopt;
+    const std::string a = q["a"].get<std::string>();
+    std::string who = q["b"].get<std::string>();
+    std::map<std::string, std::string> parent;
+    for (const auto& line : out.setup) {
+      const J m = J::parse(line, nullptr, false);
+      if (!m.is_object()) continue;
+      const std::string op = m.value("op", "");
+      const J* child = op == "add_model" ? &m["name"] : op == "set_parent" ? &m["model"] : nullptr;
+      if (child && child->is_string())
+        parent[child->get<std::string>()] = m.contains("parent") && m["parent"].is_string() ? m["parent"].get<std::string>() : "";
+    }
+    std::string up = a;
+    for (std::size_t hops = 0; hops <= parent.size() && parent.count(up); ++hops) {
+      up = parent[up];
+      if (up == who) {
+        who = a;
+        break;
+      }
+    }
+    for (auto line = out.setup.rbegin(); line != out.setup.rend(); ++line) {
+      J m = J::parse(*line, nullptr, false);
+      if (!m.is_object()) continue;
+      const std::string op = m.value("op", "");
+      const bool sets = (op == "add_model" && m.value("name", "") == who) ||
+                        (op == "set_transform" && m.value("model", "") == who);
+      if (!sets) continue;
+      J& tr = m["transform"];
+      if (!tr.is_object()) tr = J::object();
+      if (!tr.contains("translation")) tr["translation"] = J::array({0, 0, 0});
+      moveVec(tr["translation"], offset);
+      *line = m.dump();
+      return out;
+    }
+    return std::nullopt;
   } else if (c.op == "scene_pairs") {
     // move the last model added
     for (auto line = out.setup.rbegin(); line != out.setup.rend(); ++line) {
@@ -734,7 +844,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // the distance agrees but its points are not a witness of it: no tolerance probe rescues that
     detail << "; witness: " << witness;
     if (native) return {Verdict::CruxWrong, "witness-off-shape", detail.str()};
-    const bool fclPenetrating = backend == "fcl" && narrowNumber(c.op, exact) < 0;
+    // FCL computes no nearest points for shapes in collision: penetrating convex pairs, and mesh
+    // pairs that touch or cross (exact distance 0), get points of some colliding triangle pair
+    const bool fclPenetrating =
+        backend == "fcl" && (narrowNumber(c.op, exact) < 0 || (isMeshPairDistance(c.op) && narrowNumber(c.op, exact) == 0));
     return {Verdict::PeerWrong,
             fclPenetrating ? "nearest-points-in-collision"
             : backend == "fcl" && onSphere ? "sphere-local-point"
@@ -755,7 +868,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   const Verdict verdict = within ? Verdict::WithinTolerance : Verdict::PeerWrong;
   auto peer = [&](const char* cause) { return Classification{verdict, cause, detail.str()}; };
   if (narrow) {
-    const bool meshOperand = c.op == "mesh_distance" || query["a"].contains("mesh") || query["b"].contains("mesh");
+    const bool meshOperand = isMeshPairDistance(c.op) || query["a"].contains("mesh") || query["b"].contains("mesh");
     // FCL 0.7: a mesh (BVHModel) against a penetrating shape gets a bogus distance (docs/batch.md)
     if (fcl && c.op == "distance" && meshOperand && narrowNumber(c.op, exact) < 0) return peer("mesh-penetration");
     // Bullet's contactPairTest: one unreduced point per touching triangle, internal-edge

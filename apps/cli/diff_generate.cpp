@@ -830,10 +830,30 @@ World buildModels(Rng& rng, bool general, bool chain, DiffCase& c) {
   return w;
 }
 
+/// A `model_distance` query between two distinct models of `w` (world space, each placed by its
+/// composed parent chain), 20 % with a `max` (an integer on grid cases, so an integer distance
+/// exactly at the bound is decided).
+J modelDistanceQuery(const World& w, bool general, Rng& rng) {
+  J q = request("model_distance");
+  const int count = int(w.models.size());
+  const int a = rng.integer(0, count - 1);
+  const int b = (a + rng.integer(1, count - 1)) % count;
+  q["a"] = w.models[std::size_t(a)].name;
+  q["b"] = w.models[std::size_t(b)].name;
+  if (rng.chance(0.2)) q["max"] = num(general ? toFloat(rng.uniform(0, 2)) : double(rng.integer(0, 3)));
+  return q;
+}
+
 DiffCase hierarchyCase(std::string_view op, Rng& rng) {
   DiffCase c;
   const bool general = rng.chance(0.3);
   World w = buildModels(rng, general, true, c);
+  c.exactGrid = !general;
+  c.featureSize = general ? 0.3 : 1;
+  if (op == "model_distance") {
+    c.query = modelDistanceQuery(w, general, rng).dump();
+    return c;
+  }
   const int target = rng.integer(0, int(w.models.size()) - 1);
   J q = request(op);
   q["model"] = w.models[std::size_t(target)].name;
@@ -846,8 +866,6 @@ DiffCase hierarchyCase(std::string_view op, Rng& rng) {
               q);
   }
   c.query = q.dump();
-  c.exactGrid = !general;
-  c.featureSize = general ? 0.3 : 1;
   return c;
 }
 
@@ -855,6 +873,12 @@ DiffCase sceneCase(std::string_view op, Rng& rng) {
   DiffCase c;
   const bool general = rng.chance(0.3);
   World w = buildModels(rng, general, false, c);
+  c.exactGrid = !general;
+  c.featureSize = general ? 0.3 : 1;
+  if (op == "model_distance") {
+    c.query = modelDistanceQuery(w, general, rng).dump();
+    return c;
+  }
   J q = request(op);
   if (op != "scene_pairs") {
     const int target = rng.integer(0, int(w.models.size()) - 1);
@@ -871,12 +895,10 @@ DiffCase sceneCase(std::string_view op, Rng& rng) {
     }
   }
   c.query = q.dump();
-  c.exactGrid = !general;
-  c.featureSize = general ? 0.3 : 1;
   return c;
 }
 
-// ---- narrow phase (issue 6): distance, contacts, mesh_distance ------------------------------------
+// ---- narrow phase (issue 6): distance, contacts, mesh_distance (model_distance: above) -------------
 
 /// A convex operand of the narrow-phase ops (docs/batch.md "Operands") around `at`: a sphere,
 /// box, capsule, hull (4–8 points) or triangle, on the grid (integer coordinates, signed
@@ -1073,7 +1095,9 @@ DiffCase narrowMeshCase(std::string_view op, Rng& rng, DiffGenerator& g) {
   return c;
 }
 
-bool isNarrowOp(std::string_view op) { return op == "distance" || op == "contacts" || op == "mesh_distance"; }
+bool isNarrowOp(std::string_view op) {
+  return op == "distance" || op == "contacts" || op == "mesh_distance" || op == "model_distance";
+}
 
 const std::vector<std::string_view> kMeshOps = {"mesh_ray",      "mesh_segment", "mesh_sphere", "mesh_aabb",
                                                 "mesh_obb",      "mesh_plane",   "mesh_triangle", "mesh_mesh",
@@ -1084,8 +1108,9 @@ const std::vector<std::string_view> kPrimitiveAndNarrowOps = {
     "closest_point_triangle", "triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_plane",
     "triangle_triangle",      "ray_triangle",    "segment_triangle", "distance", "contacts"};
 const std::vector<std::string_view> kModelOps = {"model_ray", "model_segment",  "model_sphere", "model_aabb",
-                                                 "model_obb", "model_plane",    "model_triangle", "children"};
-const std::vector<std::string_view> kSceneOps = {"scene_ray", "scene_query", "scene_pairs"};
+                                                 "model_obb", "model_plane",    "model_triangle", "children",
+                                                 "model_distance"};
+const std::vector<std::string_view> kSceneOps = {"scene_ray", "scene_query", "scene_pairs", "model_distance"};
 
 }  // namespace
 
@@ -1123,14 +1148,14 @@ std::optional<DiffCase> generateCase(std::string_view family, std::uint64_t seed
   Rng rng{caseSeed(seed, index)};
   const std::string_view op = ops[rng.next() % ops.size()];
   DiffCase c;
-  if (isNarrowOp(op)) {
-    c = family == "mesh" ? narrowMeshCase(op, rng, generator) : narrowConvexCase(family, op, rng);
-  } else if (family == "mesh") {
-    c = meshCase(op, rng, generator);
-  } else if (family == "hierarchy") {
+  if (family == "hierarchy") {
     c = hierarchyCase(op, rng);
   } else if (family == "scene") {
     c = sceneCase(op, rng);
+  } else if (isNarrowOp(op)) {
+    c = family == "mesh" ? narrowMeshCase(op, rng, generator) : narrowConvexCase(family, op, rng);
+  } else if (family == "mesh") {
+    c = meshCase(op, rng, generator);
   } else {
     c = primitiveCase(family, op, rng);
   }

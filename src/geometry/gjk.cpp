@@ -1,9 +1,12 @@
 // GJK with the signed-volume distance subalgorithm (Montanari, Petrinic, Barbieri, ACM TOG 2017),
 // closed-form point/segment core pairs (RTCD 5.1.9), and the public distance()/overlaps().
 
+#include <crux/geometry/axis_aligned.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "geometry/gjk_internal.hpp"
 
@@ -12,11 +15,22 @@ namespace detail {
 
 // ---- Placed ------------------------------------------------------------------------------------
 
+namespace {
+
+/// The pose's rotation matrix in double. One of the 24 axis-aligned rotations (axis_aligned.hpp:
+/// the rule the model and mesh layers and the exact backend use) is applied as its exact signed
+/// permutation: a quarter turn's √½ quaternion components would otherwise round integer-grid
+/// coordinates by a few ulps (a pair touching at separation == margin came out beyond it).
+M3 poseRotation(const Quat& q) {
+  if (q.w() == 1 && q.vec().isZero(0)) return M3::Identity();
+  if (const std::optional<Quat> s = snapAxisAligned(q)) return signedPermutation(*s).cast<double>();
+  return q.cast<double>().toRotationMatrix();
+}
+
+}  // namespace
+
 Placed::Placed(const ConvexShape& s, const Transform& pose)
-    : shape(&s),
-      R(pose.rotation.cast<double>().toRotationMatrix()),
-      t(pose.translation.cast<double>()),
-      radius(double(s.radius)) {
+    : shape(&s), R(poseRotation(pose.rotation)), t(pose.translation.cast<double>()), radius(double(s.radius)) {
   switch (s.kind) {
     case ConvexKind::Sphere: p[0] = R * s.p[0].cast<double>() + t; break;
     case ConvexKind::Capsule:

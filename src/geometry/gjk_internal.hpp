@@ -20,6 +20,7 @@ struct Placed {
   double radius = 0;
   double size = 0;  // radius of a ball about t holding the shape
 
+  /// Places s at pose (an axis-aligned rotation is applied as its exact signed permutation).
   Placed(const ConvexShape& s, const Transform& pose);
   /// World core vertex maximising dot(x, d); index receives the vertex index.
   V3 support(const V3& d, int* index) const;

@@ -11,12 +11,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iomanip>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
 #include <limits>
 #include <memory>
 #include <random>
 #include <sstream>
+#include <vector>
 
 namespace crux {
 namespace {
@@ -449,6 +451,133 @@ TEST(ContactsIssue6, RandomSliverTrianglesStayOnBothShapes) {
   }
   EXPECT_GT(found, n / 3);
   std::printf("slivers: %d contacts of %d, %d with > 1 point\n", found, n, multi);
+}
+
+// ---- quarter turns on the integer grid (issue 6: found by `crux diff`) ---------------------------
+
+/// The 24 rotations mapping coordinate axes to signed coordinate axes: the exact integer matrix
+/// (a permutation with signs, determinant +1, built here by hand) and the unit quaternion a user
+/// types for it, whose ½ and √½ components are rounded to Real.
+struct GridTurn {
+  Eigen::Matrix3i m;
+  Quat q;
+};
+
+std::vector<GridTurn> gridTurns() {
+  std::vector<GridTurn> out;
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& p : perms)
+    for (int s = 0; s < 8; ++s) {
+      Eigen::Matrix3i m = Eigen::Matrix3i::Zero();
+      for (int i = 0; i < 3; ++i) m(i, p[i]) = ((s >> i) & 1) ? -1 : 1;
+      if (m.cast<double>().determinant() != 1) continue;
+      const Eigen::Matrix3d md = m.cast<double>();
+      out.push_back({m, Quat(Eigen::Quaterniond(md).cast<Real>())});
+    }
+  return out;
+}
+
+Vec3 toVec3(const Eigen::Vector3i& v) { return v.cast<Real>(); }
+
+TEST(ContactsIssue6, QuarterTurnFlatBoxesTouchingAtTheMarginHaveAContact) {
+  // The `crux diff` case of docs/diff.md: two flat boxes (segments along z once placed), b under
+  // a quarter turn about x typed as (√½, √½, 0, 0); a spans z in [-1, 1], b z in [2, 6]: the
+  // separation is exactly 1 = margin, so the speculative contact is reported (exact backend: one
+  // contact at separation 1). The quaternion's rounded √½ used to place b a few ulps farther.
+  Mat3 axesA, axesB;
+  axesA << 0, 1, 0, 1, 0, 0, 0, 0, 1;  // columns u, v, w
+  axesB << 0, 0, -1, 0, 1, 0, 1, 0, 0;
+  const Obb a{Vec3(0, 0, 0), Vec3(0, 0, 1), axesA};
+  const Obb b{Vec3(0, 3, 0), Vec3(0, 2, 0), axesB};
+  const Real h = std::sqrt(Real(0.5));
+  const Transform tb = at(0, 0, 1, Quat(h, h, 0, 0));
+  ContactManifold m;
+  ASSERT_TRUE(contacts(a, Transform{}, b, tb, 1, m)) << str(m);
+  ASSERT_GE(m.count, 1);
+  for (int i = 0; i < m.count; ++i) {
+    EXPECT_EQ(m.points[i].separation, 1) << str(m);
+    EXPECT_EQ(m.points[i].pointA, Vec3(0, 0, 1)) << str(m);
+    EXPECT_EQ(m.points[i].pointB, Vec3(0, 0, 2)) << str(m);
+  }
+  EXPECT_EQ(distance(a, Transform{}, b, tb).distance, 1);
+  EXPECT_FALSE(contacts(a, Transform{}, b, tb, Real(0.5), m)) << str(m);
+}
+
+TEST(ContactsIssue6, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMargin) {
+  // Integer boxes (half extents 0..2, flat ones included, signed-permutation frames) placed by
+  // quarter-turn quaternions and integer translations, b put at an integer gap vector g from a
+  // (per axis: apart by g_i, or the intervals overlapping / touching when g_i = 0) with |g| an
+  // integer (0..3, or 5 = |(3, 4, 0)|). The hand-derived separation is |g|: contacts with
+  // margin |g| must report a contact (no tolerance on the verdict: grid inputs), margin |g| − 1
+  // none; the contact's separation and distance() are |g| within a few ulps. Both poses are
+  // quarter turns, so the world boxes are axis-aligned.
+  const std::vector<GridTurn> turns = gridTurns();
+  ASSERT_EQ(turns.size(), 24u);
+  std::mt19937_64 rng(20261122);
+  auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  const Eigen::Vector3i gaps[] = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}, {3, 4, 0}, {4, 0, 3}};
+  const int n = 3000;
+  // coordinates stay below 16: a few ulps of that scale
+  const Real kRounding = 16 * std::numeric_limits<Real>::epsilon() * 16;
+  int failures = 0, withContacts = 0;
+  for (int k = 0; k < n && failures < 5; ++k) {
+    const GridTurn& frameA = turns[std::size_t(pick(0, 23))];
+    const GridTurn& frameB = turns[std::size_t(pick(0, 23))];
+    const GridTurn& poseA = turns[std::size_t(pick(0, 23))];
+    const GridTurn& poseB = turns[std::size_t(pick(0, 23))];
+    const Eigen::Vector3i cA(pick(-2, 2), pick(-2, 2), pick(-2, 2)), cB(pick(-2, 2), pick(-2, 2), pick(-2, 2));
+    const Eigen::Vector3i hA(pick(0, 2), pick(0, 2), pick(0, 2)), hB(pick(0, 2), pick(0, 2), pick(0, 2));
+    const Eigen::Vector3i tA(pick(-3, 3), pick(-3, 3), pick(-3, 3));
+    // world boxes: centre M·c + t, half |M·F|·h
+    const Eigen::Matrix3i worldA = poseA.m * frameA.m, worldB = poseB.m * frameB.m;
+    const Eigen::Vector3i centerA = poseA.m * cA + tA;
+    const Eigen::Vector3i halfA = worldA.cwiseAbs() * hA, halfB = worldB.cwiseAbs() * hB;
+    Eigen::Vector3i g = gaps[pick(0, 5)];
+    std::shuffle(g.data(), g.data() + 3, rng);
+    Eigen::Vector3i centerB;
+    for (int i = 0; i < 3; ++i) {
+      const int loA = centerA[i] - halfA[i], hiA = centerA[i] + halfA[i];
+      int loB;
+      if (g[i] > 0) loB = pick(0, 1) ? hiA + g[i] : loA - g[i] - 2 * halfB[i];
+      else loB = pick(loA - 2 * halfB[i], hiA);  // touching or overlapping intervals
+      centerB[i] = loB + halfB[i];
+    }
+    const Eigen::Vector3i tB = centerB - poseB.m * cB;
+    const Obb a{toVec3(cA), toVec3(hA), frameA.m.cast<Real>()}, b{toVec3(cB), toVec3(hB), frameB.m.cast<Real>()};
+    Transform ta, tb;
+    ta.rotation = poseA.q;
+    ta.translation = toVec3(tA);
+    tb.rotation = poseB.q;
+    tb.translation = toVec3(tB);
+    const int dist = int(std::lround(std::sqrt(double(g.squaredNorm()))));
+    ContactManifold m;
+    const bool found = contacts(a, ta, b, tb, Real(dist), m);
+    // the verdict is exact: a contact at margin |g|, none at |g| − 1
+    ContactManifold none;
+    const bool verdictOk = found && m.count >= 1 && !(dist > 0 && contacts(a, ta, b, tb, Real(dist - 1), none));
+    // the numbers within rounding (GJK's barycentric combinations round in double builds)
+    Real deepest = std::numeric_limits<Real>::infinity();
+    for (int i = 0; i < m.count; ++i) deepest = std::min(deepest, m.points[i].separation);
+    const Real d = distance(a, ta, b, tb).distance;
+    // (gap 0: the boxes touch or overlap, so separation and distance are <= 0)
+    const bool numbersOk = dist == 0 ? (!found || deepest <= kRounding) && d <= kRounding
+                                     : (!found || std::abs(deepest - Real(dist)) <= kRounding) &&
+                                           std::abs(d - Real(dist)) <= kRounding;
+    withContacts += found ? 1 : 0;
+    if (!verdictOk || !numbersOk) {
+      ++failures;
+      ADD_FAILURE() << (verdictOk ? "numbers" : "VERDICT") << " case " << k << ": a centre " << str(toVec3(cA))
+                    << " half " << str(toVec3(hA)) << " axes\n"
+                    << frameA.m << "\n pose rotation " << str(poseA.q.vec()) << " w " << poseA.q.w()
+                    << " translation " << str(toVec3(tA)) << "\n b centre " << str(toVec3(cB)) << " half "
+                    << str(toVec3(hB)) << " axes\n"
+                    << frameB.m << "\n pose rotation " << str(poseB.q.vec()) << " w " << poseB.q.w()
+                    << " translation " << str(toVec3(tB)) << "\n gap " << g.transpose() << " margin " << dist
+                    << ": found " << found << ", " << str(m) << "\n distance " << std::setprecision(17) << double(d);
+    }
+  }
+  EXPECT_EQ(failures, 0);
+  EXPECT_EQ(withContacts, n);
 }
 
 }  // namespace

@@ -20,7 +20,9 @@
 ///
 /// Conventions: `normal` is the unit direction from B to A; for every point,
 /// pointA - pointB = separation·normal (separation < 0 is penetration; depth = -separation).
-/// Rounded shapes (sphere, capsule) report points on their surfaces.
+/// Rounded shapes (sphere, capsule) report points on their surfaces. Poses are applied as in
+/// gjk.hpp: an axis-aligned rotation (quarter and half turns) as its exact signed permutation, so
+/// a grid pair at separation exactly = margin has its contact.
 
 #include <crux/geometry/gjk.hpp>
 

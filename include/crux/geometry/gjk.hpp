@@ -14,6 +14,10 @@
 /// `normal` is the unit direction from B to A (moving A by -distance·normal makes the shapes
 /// touch), and pointA - pointB = distance·normal. Queries never throw and never allocate; they
 /// assume validated shapes (validate(...)) and unit rotations.
+///
+/// Poses: a rotation within kAxisAlignedRotationTolerance of one of the 24 axis-aligned rotations
+/// (axis_aligned.hpp, the model and mesh layers' rule) is applied as its exact signed permutation,
+/// so integer-grid shapes under quarter and half turns keep exact coordinates.
 
 #include <crux/geometry/convex.hpp>
 
