@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "geometry/gjk_internal.hpp"
@@ -195,9 +197,13 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
   for (int k = 1; k <= 2; ++k) {
     const int o = (is + k) % 3;
     const V e = t[o] - t[is];
-    const double len = e.norm();
+    const double ed = e.dot(d), e2 = e.squaredNorm();
+    // Cheap reject (no square root): beyond the feature angle with room to spare for rounding,
+    // so the exact test below would reject it too (bestCos only decreases from sin 2°).
+    if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) continue;
+    const double len = std::sqrt(e2);
     if (!(len > 0)) continue;
-    const double c = std::abs(e.dot(d)) / len;
+    const double c = std::abs(ed) / len;
     if (c <= bestCos) {
       bestCos = c;
       bestK = o;
@@ -222,6 +228,25 @@ struct Axis {
   V n = V::UnitZ();  // unit, box -> triangle
 };
 
+/// scale = 2^−e and unscale = 2^e with S·scale in [0.5, 1) (frexp's exponent e; 1 and 1 for
+/// S = 0, inf or NaN), by the bits of S when both are normal doubles, else by frexp/ldexp.
+inline void powerOfTwoScale(double S, double& scale, double& unscale) {
+  if (!(S > 0) || !std::isfinite(S)) return;
+  std::uint64_t bits;
+  std::memcpy(&bits, &S, sizeof bits);
+  const int e = int((bits >> 52) & 0x7FF) - 1022;  // S normal: S = m·2^e, m in [0.5, 1)
+  if (e >= -1021 && e <= 1022) {  // 2^±e both normal (else frexp/ldexp, as before)
+    const std::uint64_t down = std::uint64_t(1023 - e) << 52, up = std::uint64_t(1023 + e) << 52;
+    std::memcpy(&scale, &down, sizeof scale);
+    std::memcpy(&unscale, &up, sizeof unscale);
+    return;
+  }
+  int exponent = 0;
+  std::frexp(S, &exponent);
+  scale = std::ldexp(1.0, -exponent);
+  unscale = std::ldexp(1.0, exponent);
+}
+
 /// Separation numerator of the triangle from the box along the unnormalised axis a: the larger
 /// of the two sides (separation = numerator / |a|); `sign` receives the side (+1: triangle
 /// along +a).
@@ -234,10 +259,31 @@ inline double axisNumerator(const V* t, const V& h, const V& a, double& sign) {
   return std::max(pos, neg);
 }
 
+/// Edge axis a = e_I × e (box axis I, triangle edge e; C0, C1, C2 = e × t_0, t_1, t_2, whose
+/// I-th components are the triangle vertices' projections on a, as (e_I × e)·p = (e × p)_I): the
+/// separation numerator (separation = num / |a|), its side, |a|², whether the axis is usable
+/// (not parallel), and whether it separates beyond the margin m (m2 = m²). Compile-time I keeps
+/// every component in a register.
+template <int I>
+inline bool edgeAxis(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double minA2, double m2,
+                     double* num, double* sgn, double* a2, bool* valid) {
+  constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
+  const double lo = std::min(C0[I], std::min(C1[I], C2[I])), hi = std::max(C0[I], std::max(C1[I], C2[I]));
+  const double r = h[u] * std::abs(e[v]) + h[v] * std::abs(e[u]);
+  const double pos = lo - r, neg = -r - hi;
+  const double nm = std::max(pos, neg), aa = e[v] * e[v] + e[u] * e[u];
+  num[I] = nm;
+  sgn[I] = pos >= neg ? 1.0 : -1.0;
+  a2[I] = aa;
+  const bool ok = (aa > minA2) & (aa > 0);  // parallel (or zero) edges drop out
+  valid[I] = ok;
+  return ok & (nm >= 0) & (nm * nm > m2 * aa);  // num / |a| > m: separating beyond the margin
+}
+
 /// num / sqrt(a2) > bound, without the square root or the division (a2 > 0).
 inline bool exceeds(double num, double a2, double bound) {
-  if (num >= 0) return bound < 0 || num * num > bound * bound * a2;
-  return bound < 0 && num * num < bound * bound * a2;
+  const double nn = num * num, bb = bound * bound * a2;
+  return num >= 0 ? ((bound < 0) | (nn > bb)) : ((bound < 0) & (nn < bb));
 }
 
 /// The GJK/EPA pair (gjk.hpp's distance(), as contacts() uses): one point, the closest (or
@@ -275,9 +321,8 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
   // Exact power-of-two rescaling to a length scale in [0.5, 1).
   double S = std::max({double(half.cwiseAbs().maxCoeff()), double(tri.a.cwiseAbs().maxCoeff()),
                        double(tri.b.cwiseAbs().maxCoeff()), double(tri.c.cwiseAbs().maxCoeff())});
-  int exponent = 0;
-  if (S > 0 && std::isfinite(S)) std::frexp(S, &exponent);
-  const double scale = std::ldexp(1.0, -exponent), unscale = std::ldexp(1.0, exponent);
+  double scale = 1, unscale = 1;
+  powerOfTwoScale(S, scale, unscale);
   const V h = half.cast<double>().cwiseAbs() * scale;
   const V t[3] = {tri.a.cast<double>() * scale, tri.b.cast<double>() * scale, tri.c.cast<double>() * scale};
   const double m = std::isfinite(double(margin)) ? double(margin) * scale : std::numeric_limits<double>::infinity();
@@ -316,30 +361,46 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
   }
   Axis best = face;
   {
-    double bound = face.sep + bias;  // an edge axis must exceed this
+    // The 9 edge axes a = e_i × E_j, all at once and without branches (RTCD §5.2.9 with the
+    // triple-product form of Akenine-Möller's triangle–box test): a vertex p projects to
+    // a·p = (E_j × p)_i, so the cross products E_j × t_k give the triangle's projection
+    // interval on the 3 axes of edge j at once; the box's radius is h_u|E_v| + h_v|E_u| and
+    // |a|² = E_u² + E_v² (u, v the two other axes). The edge's own two vertices project to the
+    // same value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike
+    // (a segment triangle's two copies of its edge tie, and the first wins).
+    double num[9], a2[9], sgn[9];
+    bool valid[9];
+    bool separated = false;
+    const double m2 = m * m;
     for (int j = 0; j < 3; ++j) {
-      const double e2 = E[j].squaredNorm();
-      for (int i = 0; i < 3; ++i) {
-        V a = V::Zero();  // unit(i) × E[j], exact
-        const int u = (i + 1) % 3, v = (i + 2) % 3;
-        a[u] = -E[j][v];
-        a[v] = E[j][u];
-        const double a2 = a[u] * a[u] + a[v] * a[v];
-        if (!(a2 > kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2) || !(a2 > 0)) continue;
-        double sign = 1;
-        const double num = axisNumerator(t, h, a, sign);
-        if (exceeds(num, a2, m)) return false;  // separating beyond the margin
-        if (!exceeds(num, a2, bound)) continue;
-        const double len = std::sqrt(a2);
-        const double sep = num / len;
-        if (!(sep > bound)) continue;
-        bound = sep;
-        best.kind = AxisKind::Edge;
-        best.i = i;
-        best.j = j;
-        best.sep = sep;
-        best.n = a * (sign / len);
-      }
+      const V& e = E[j];
+      const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
+      const double e2 = e.squaredNorm();
+      const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
+      separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+      separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+      separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+    }
+    if (separated) return false;
+    double bound = face.sep + bias;  // an edge axis must exceed this
+    bool any = false;                // some axis beats the initial bound (the bound only grows)
+    for (int k = 0; k < 9; ++k) any |= valid[k] & exceeds(num[k], a2[k], bound);
+    for (int k = 0; any && k < 9; ++k) {
+      if (!valid[k] || !exceeds(num[k], a2[k], bound)) continue;
+      const double len = std::sqrt(a2[k]);
+      const double sep = num[k] / len;
+      if (!(sep > bound)) continue;
+      const int i = k % 3, j = k / 3;
+      const int u = (i + 1) % 3, v = (i + 2) % 3;
+      V a = V::Zero();  // unit(i) × E[j], exact
+      a[u] = -E[j][v];
+      a[v] = E[j][u];
+      bound = sep;
+      best.kind = AxisKind::Edge;
+      best.i = i;
+      best.j = j;
+      best.sep = sep;
+      best.n = a * (sgn[k] / len);
     }
   }
   // An edge axis within the feature angle of the best face axis gives way to that face, as
@@ -364,7 +425,13 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
     const double s = n[k];  // ±1
     int cnt = triangleFeature(t, normal, hasFace ? normalLen : 0.0, -n, cur, incId);
     for (int q = 0; q < cnt; ++q) cur[q].sep = s * cur[q].p[k] - h[k];
-    for (int side = 1; side <= 2 && cnt > 0; ++side) {
+    const bool vertex = cnt == 1;
+    if (vertex) {  // a vertex (the usual case): the four side planes' tests, as clip() makes them
+      const int a1 = (k + 1) % 3, a2 = (k + 2) % 3;
+      const V& p = cur[0].p;
+      if (p[a1] + h[a1] < 0 || h[a1] - p[a1] < 0 || p[a2] + h[a2] < 0 || h[a2] - p[a2] < 0) cnt = 0;
+    }
+    for (int side = 1; side <= 2 && cnt > 0 && !vertex; ++side) {  // an edge or the face
       const int a = (k + side) % 3;
       const double ha = h[a];
       cnt = clip(

@@ -307,6 +307,45 @@ TEST(BoxTriangleContact, SegmentTriangleAcrossACornerIsAnEdgeEdgeContact) {
   EXPECT_NEAR(double(m.points[0].separation), 0.95 * std::sqrt(2.0) - std::sqrt(2.0), 16 * kEpsReal);
 }
 
+TEST(BoxTriangleContact, RepeatedCornerSegmentReportsItsFirstEdge) {
+  // A triangle with b == c is the segment ab, present twice among the SAT's edges: as edge
+  // (0,1) and as edge (2,0). Both copies' axes must get the same separation (all three corners
+  // projected on each), so the first, edge (0,1), wins the tie. Found while speeding up the
+  // edge axes: projecting only an edge's first corner and the opposite one made the copies
+  // differ by an ulp and the second win on these cases (random, 17 digits).
+  struct Seg {
+    double half[3], a[3], b[3];
+    double margin;
+  };
+  const Seg cases[] = {
+      {{0.15248043835163116, 0.20511634647846222, 0.12665635347366333},
+       {0.68461126089096069, 0.32755276560783386, -1.9302594661712646},
+       {-0.52184563875198364, 0.0015091508394107223, 1.5411454439163208},
+       0.20000000298023224},
+      {{1.0004466772079468, 0.80531412363052368, 0.60821843147277832},
+       {1.7929775714874268, 0.24653197824954987, -0.40365183353424072},
+       {-0.021730678156018257, 1.2534226179122925, -0.17776615917682648},
+       0.0099999997764825821},
+      {{0.56222420930862427, 0.73872083425521851, 1.039616584777832},
+       {-0.63463866710662842, 1.7233678102493286, -0.65244203805923462},
+       {0.38736176490783691, 0.00027703650994226336, 0.0076805893331766129},
+       0},
+  };
+  for (const Seg& s : cases) {
+    Case c;
+    c.half = Vec3(Real(s.half[0]), Real(s.half[1]), Real(s.half[2]));
+    const Vec3 a(Real(s.a[0]), Real(s.a[1]), Real(s.a[2])), b(Real(s.b[0]), Real(s.b[1]), Real(s.b[2]));
+    c.tri = Triangle{a, b, b};
+    c.margin = Real(s.margin);
+    ContactManifold m;
+    ASSERT_TRUE(boxTriangleContacts(c.half, c.tri, c.margin, m)) << describe(c);
+    ASSERT_TRUE(wellFormed(c, m)) << describe(c);
+    ASSERT_EQ(m.count, 1) << describe(c) << "\n" << describe(m);
+    EXPECT_EQ(m.points[0].featureA, featureId(FeatureKind::Edge, 0 * 64 + 1)) << describe(c) << "\n" << describe(m);
+    EXPECT_EQ(m.points[0].featureB >> 24, std::uint32_t(FeatureKind::Edge)) << describe(c) << "\n" << describe(m);
+  }
+}
+
 TEST(BoxTriangleContact, FlatBoxIsAClosedRectangle) {
   // half z = 0: the box is the square |x|, |y| <= 1 in z = 0; a triangle crossing it.
   Case c;
