@@ -1,5 +1,6 @@
 // Contact manifolds of convex pairs: GJK/EPA normal, supporting features, reference-feature
-// clipping (Sutherland–Hodgman), reduction to 4 points. Fixed-size buffers only.
+// clipping (Sutherland–Hodgman), coincident points merged (the deepest kept), reduction to 4
+// points. Fixed-size buffers only.
 
 #include <crux/geometry/contact.hpp>
 
@@ -79,6 +80,58 @@ void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int n
                                                                           std::max(is, others[bestK])));
 }
 
+/// Rounding budget of a feature's coordinates: kOnFeatureUlps ulps of Real × its largest |coordinate|.
+double coincidenceTolerance(const V3* v, int n, double scale) {
+  for (int i = 0; i < n; ++i) scale = std::max(scale, v[i].cwiseAbs().maxCoeff());
+  return kOnFeatureUlps * kEpsReal * scale;
+}
+
+/// A face whose loop has coincident corners (a box with a zero half extent across it, e.g. the
+/// end face of a segment-like box) bounds no area there: its zero-length edges would clip
+/// nothing and leave points off the shape, and its coincident corners would be duplicate
+/// contact points. Consecutive corners within the rounding budget are merged (the first kept);
+/// a loop left with two corners is that edge, with one that vertex.
+void collapseFace(Feature& f) {
+  if (f.n < 3) return;
+  const double tol = coincidenceTolerance(f.v, f.n, 0);
+  int k = 0;
+  for (int i = 0; i < f.n; ++i) {
+    if (k > 0 && (f.v[i] - f.v[k - 1]).norm() <= tol) continue;
+    f.v[k] = f.v[i];
+    f.vid[k] = f.vid[i];
+    ++k;
+  }
+  while (k > 1 && (f.v[k - 1] - f.v[0]).norm() <= tol) --k;
+  if (k >= 3) {
+    f.n = k;
+    return;
+  }
+  f.n = k;
+  if (k == 1) {
+    f.id = f.vid[0];
+    return;
+  }
+  const std::uint32_t i0 = f.vid[0] & 0xFFFFFFu, i1 = f.vid[1] & 0xFFFFFFu;
+  f.id = featureId(FeatureKind::Edge, std::min(i0, i1) * 64 + std::max(i0, i1));
+}
+
+/// Removes the points of pts[0, count) that coincide with another on both bodies (pointA and
+/// pointB within `tol` of it), keeping the deepest (smallest separation) of each such group, so
+/// that an engine never gets two constraints at one place. Order is otherwise kept.
+void removeCoincident(ContactPoint* pts, int& count, double tol) {
+  int k = 0;
+  for (int i = 0; i < count; ++i) {
+    int same = -1;
+    for (int j = 0; j < k && same < 0; ++j)
+      if ((pts[i].pointA - pts[j].pointA).template cast<double>().norm() <= tol &&
+          (pts[i].pointB - pts[j].pointB).template cast<double>().norm() <= tol)
+        same = j;
+    if (same < 0) pts[k++] = pts[i];
+    else if (pts[i].separation < pts[same].separation) pts[same] = pts[i];
+  }
+  count = k;
+}
+
 /// The feature of P's core that supports direction d (unit, world). With allowFace false a
 /// triangle gives its supporting vertex or edge, never its face.
 void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace = true) {
@@ -136,6 +189,7 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
         f.normal = pos ? V3(P.axes.col(k)) : V3(-P.axes.col(k));
         f.align = std::abs(l[k]);
         f.id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (pos ? 1 : 0)));
+        collapseFace(f);
         return;
       }
       const int others[3] = {is ^ 1, is ^ 2, is ^ 4};
@@ -165,6 +219,7 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
         f.normal = P.R * hf.normal.cast<double>();
         f.align = bestAlign;
         f.id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(bestFace));
+        collapseFace(f);
         return;
       }
       // Neighbours of the support vertex along face loops.
@@ -338,14 +393,12 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     // (defect 2 of issue 6: points outside a box). When that offset exceeds the rounding budget
     // (kOnFeatureUlps; for a rounded reference, the offset whose effect on its surface is that
     // budget), the pair falls back to the single GJK/EPA point.
+    // The pair's rounding budget: also the distance within which two points are one (below).
+    double scale = rA + rB + m;
+    for (int i = 0; i < ref.n; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
+    const double tol = coincidenceTolerance(inc.v, inc.n, scale);
     double lateralTol = 0;
-    if (ref.n == 2) {
-      double scale = rA + rB + m;
-      for (int i = 0; i < 2; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
-      for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
-      const double tol = kOnFeatureUlps * kEpsReal * scale;
-      lateralTol = tol + std::sqrt(2 * (refIsA ? rA : rB) * tol);
-    }
+    if (ref.n == 2) lateralTol = tol + std::sqrt(2 * (refIsA ? rA : rB) * tol);
     bool skew = false;
     for (int i = 0; i < cnt && !skew; ++i) {
       const V3 q = cur[i].p;
@@ -370,6 +423,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
       c.featureB = refIsA ? cur[i].id : ref.id;
     }
     if (np > 0 && !skew) {
+      removeCoincident(pts, np, tol);
       reduce(pts, np, u);
       out.normal = n.cast<Real>();
       out.count = np;

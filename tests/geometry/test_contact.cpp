@@ -2,7 +2,9 @@
 // capsule and sphere resting on a box, parallel capsules, a triangle on a box, hull on hull,
 // speculative margin) and seeded properties over random pairs (every point on both shapes,
 // pointA - pointB = separation·normal, separation <= margin, at most 4 points), plus the
-// issue-6 regressions: sliver triangles and nearly parallel, offset edges (triangle vs box).
+// issue-6 regressions: sliver triangles and nearly parallel, offset edges (triangle vs box),
+// quarter-turn grid boxes at the margin, and degenerate shapes (flat / segment / point boxes,
+// zero-radius capsules, collinear and coplanar hulls) giving no coincident contact points.
 
 #include <crux/error.hpp>
 
@@ -18,6 +20,7 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 namespace crux {
@@ -578,6 +581,189 @@ TEST(ContactsIssue6, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMargin) {
   }
   EXPECT_EQ(failures, 0);
   EXPECT_EQ(withContacts, n);
+}
+
+
+// ---- degenerate shapes: no duplicate contact points (issue 6) ----------------------------------
+
+/// The full shape, 17 digits: kind, radius, core vertices in the local frame.
+std::string str(const ConvexShape& s) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "kind " << int(s.kind) << " radius " << s.radius << " vertices";
+  for (int i = 0; i < s.vertexCount(); ++i) os << " " << str(s.vertex(i));
+  return os.str();
+}
+
+/// Index pair (i, j) of two points of `m` that coincide on both bodies within `tol`, or (-1, -1).
+std::pair<int, int> coincidentPoints(const ContactManifold& m, double tol) {
+  for (int i = 0; i < m.count; ++i)
+    for (int j = i + 1; j < m.count; ++j)
+      if ((m.points[i].pointA - m.points[j].pointA).cast<double>().norm() <= tol &&
+          (m.points[i].pointB - m.points[j].pointB).cast<double>().norm() <= tol)
+        return {i, j};
+  return {-1, -1};
+}
+
+TEST(ContactsDegenerate, FlatBoxesUnderQuarterTurnsGiveDistinctPointsAndTheExactDepth) {
+  // Integer boxes with one, two or three zero half extents (a rectangle, a segment, a point) and
+  // full boxes, in signed-permutation frames, placed by quarter-turn quaternions at integer
+  // translations near each other: the world boxes are axis-aligned, so the hand-derived signed
+  // distance is that of two intervals per axis (separated: the norm of the per-axis gaps;
+  // overlapping: minus the smallest per-axis overlap). A flat box's face has coincident corners;
+  // the manifold must still never hold two points at the same place on both bodies, and its
+  // deepest point must have that signed distance (within rounding).
+  const std::vector<GridTurn> turns = gridTurns();
+  std::mt19937_64 rng(61122);
+  auto pick = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  const int n = 4000;
+  const Real kRounding = 16 * std::numeric_limits<Real>::epsilon() * 16;  // coordinates below 16
+  int failures = 0, withContacts = 0, multi = 0;
+  for (int k = 0; k < n && failures < 5; ++k) {
+    Eigen::Vector3i h[2], c[2], t[2];
+    const GridTurn* frame[2];
+    const GridTurn* pose[2];
+    Eigen::Vector3i lo[2], hi[2];
+    for (int s = 0; s < 2; ++s) {
+      h[s] = Eigen::Vector3i(pick(0, 2), pick(0, 2), pick(0, 2));
+      const int zeros = pick(0, 3);  // force that many zero half extents
+      for (int z = 0; z < zeros; ++z) h[s][pick(0, 2)] = 0;
+      c[s] = Eigen::Vector3i(pick(-1, 1), pick(-1, 1), pick(-1, 1));
+      t[s] = Eigen::Vector3i(pick(-1, 1), pick(-1, 1), pick(-1, 1));  // near each other
+      frame[s] = &turns[std::size_t(pick(0, 23))];
+      pose[s] = &turns[std::size_t(pick(0, 23))];
+      const Eigen::Vector3i centre = pose[s]->m * c[s] + t[s];
+      const Eigen::Vector3i half = (pose[s]->m * frame[s]->m).cwiseAbs() * h[s];
+      lo[s] = centre - half;
+      hi[s] = centre + half;
+    }
+    double gap2 = 0, overlap = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      const int g = std::max({0, lo[1][i] - hi[0][i], lo[0][i] - hi[1][i]});
+      gap2 += double(g) * g;
+      overlap = std::min(overlap, double(std::min(hi[0][i] - lo[1][i], hi[1][i] - lo[0][i])));
+    }
+    const double expected = gap2 > 0 ? std::sqrt(gap2) : -overlap;
+    const Obb a{toVec3(c[0]), toVec3(h[0]), frame[0]->m.cast<Real>()};
+    const Obb b{toVec3(c[1]), toVec3(h[1]), frame[1]->m.cast<Real>()};
+    Transform ta, tb;
+    ta.rotation = pose[0]->q;
+    ta.translation = toVec3(t[0]);
+    tb.rotation = pose[1]->q;
+    tb.translation = toVec3(t[1]);
+    const Real margin = 1;
+    ContactManifold m;
+    const bool found = contacts(a, ta, b, tb, margin, m);
+    Real deepest = std::numeric_limits<Real>::infinity();
+    for (int i = 0; i < m.count; ++i) deepest = std::min(deepest, m.points[i].separation);
+    const std::pair<int, int> dup = coincidentPoints(m, 4 * double(kRounding));
+    const bool ok = found == (expected <= double(margin)) && dup.first < 0 &&
+                    (!found || std::abs(double(deepest) - expected) <= double(kRounding));
+    withContacts += found ? 1 : 0;
+    multi += m.count > 1 ? 1 : 0;
+    if (!ok) {
+      ++failures;
+      ADD_FAILURE() << "case " << k << ": a centre " << str(toVec3(c[0])) << " half " << str(toVec3(h[0]))
+                    << " axes\n" << frame[0]->m << "\n pose rotation " << str(pose[0]->q.vec()) << " w "
+                    << pose[0]->q.w() << " translation " << str(toVec3(t[0])) << "\n b centre "
+                    << str(toVec3(c[1])) << " half " << str(toVec3(h[1])) << " axes\n" << frame[1]->m
+                    << "\n pose rotation " << str(pose[1]->q.vec()) << " w " << pose[1]->q.w() << " translation "
+                    << str(toVec3(t[1])) << "\n margin " << margin << ", expected signed distance "
+                    << std::setprecision(17) << expected << ", coincident points " << dup.first << " "
+                    << dup.second << ", found " << found << ", " << str(m);
+    }
+  }
+  EXPECT_EQ(failures, 0);
+  EXPECT_GT(withContacts, n / 4);
+  EXPECT_GT(multi, n / 20);
+  std::printf("flat boxes: %d contacts of %d, %d with > 1 point\n", withContacts, n, multi);
+}
+
+TEST(ContactsDegenerate, RandomDegenerateShapesGiveDistinctPoints) {
+  // Random poses of degenerate convex shapes — boxes with zero half extents (1 or 2 axes), zero-
+  // radius capsules (segments), triangles, hulls of coplanar and of collinear points, a point
+  // hull — against each other and against full boxes, half of the pairs under one rotation
+  // (parallel features: clipping). No manifold may hold two points that coincide on both
+  // bodies; every point lies on both shapes, and the deepest agrees with GJK/EPA up to the
+  // feature angle (as in ContactsProperty.RandomPairs).
+  std::mt19937_64 rng(6061);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> g;
+  auto v = [&](double s) { return Vec3(Real(u(rng) * s), Real(u(rng) * s), Real(u(rng) * s)); };
+  auto rot = [&] { return Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().cast<Real>(); };
+  std::vector<std::unique_ptr<ConvexHull>> hulls;
+  auto hullOf = [&](std::vector<Vec3> pts) -> ConvexShape {
+    hulls.push_back(std::make_unique<ConvexHull>(ConvexHull::build(pts)));
+    return *hulls.back();
+  };
+  auto make = [&](int kind) -> ConvexShape {
+    switch (kind) {
+      case 0: {  // flat box: one zero half extent
+        Vec3 h = v(1).cwiseAbs() + Vec3::Constant(Real(0.1));
+        h[std::uniform_int_distribution<int>(0, 2)(rng)] = 0;
+        return Obb{v(0.2), h, Mat3::Identity()};
+      }
+      case 1: {  // segment box: two zero half extents
+        Vec3 h = Vec3::Zero();
+        h[std::uniform_int_distribution<int>(0, 2)(rng)] = Real(0.2 + std::abs(u(rng)));
+        return Obb{v(0.2), h, Mat3::Identity()};
+      }
+      case 2: return Capsule{v(1), v(1), 0};
+      case 3: return Triangle{v(1), v(1), v(1)};
+      case 4: {  // coplanar points (z = 0 before the pose): a polygon hull
+        std::vector<Vec3> pts;
+        for (int q = 0; q < 8; ++q) pts.emplace_back(Real(u(rng)), Real(u(rng)), 0);
+        return hullOf(pts);
+      }
+      case 5: {  // collinear points: a segment hull
+        const Vec3 d = v(1);
+        std::vector<Vec3> pts;
+        for (int q = 0; q < 5; ++q) pts.push_back(d * Real(u(rng)));
+        return hullOf(pts);
+      }
+      case 6: return hullOf({v(0.5)});  // a point
+      default: return Obb{v(0.2), v(1).cwiseAbs() + Vec3::Constant(Real(0.1)), Mat3::Identity()};
+    }
+  };
+  const int n = 6000;
+  int withPoints = 0, multi = 0, failures = 0;
+  for (int i = 0; i < n && failures < 5; ++i) {
+    const int ka = int(std::abs(u(rng)) * 7), kb = int(std::abs(u(rng)) * 8);
+    const ConvexShape a = make(ka), b = make(kb);
+    Transform ta, tb;
+    ta.rotation = rot();
+    tb.rotation = i % 2 == 0 ? ta.rotation : rot();
+    ta.translation = v(0.5);
+    tb.translation = v(0.5);
+    const Real margin = Real(0.05);
+    ContactManifold m;
+    if (!contacts(a, ta, b, tb, margin, m)) continue;
+    ++withPoints;
+    multi += m.count > 1 ? 1 : 0;
+    const DistanceResult d = distance(a, ta, b, tb);
+    const double S = double(a.size() + b.size()) + (ta.translation - tb.translation).cast<double>().norm();
+    const double tol = 64 * kEps * S + 1e-9 * S;
+    const std::pair<int, int> dup = coincidentPoints(m, tol);
+    double minSep = INFINITY, off = 0;
+    for (int k = 0; k < m.count; ++k) {
+      minSep = std::min(minSep, double(m.points[k].separation));
+      if (a.kind != ConvexKind::Triangle) off = std::max(off, distanceToShape(a, ta, m.points[k].pointA));
+      off = std::max(off, distanceToShape(b, tb, m.points[k].pointB));
+    }
+    if (dup.first >= 0 || off > tol || !(std::abs(minSep - double(d.distance)) <= 0.035 * S)) {
+      ++failures;
+      ADD_FAILURE() << "pair " << i << " kinds " << ka << " " << kb << " (shape kinds " << int(a.kind) << " "
+                    << int(b.kind) << "): coincident points " << dup.first << " " << dup.second
+                    << ", off the shapes by " << std::setprecision(17) << off << ", distance " << double(d.distance)
+                    << "\n a translation " << str(ta.translation) << " rotation " << str(ta.rotation.vec()) << " w "
+                    << ta.rotation.w() << "\n b translation " << str(tb.translation) << " rotation "
+                    << str(tb.rotation.vec()) << " w " << tb.rotation.w() << "\n" << str(m);
+    }
+  }
+  EXPECT_EQ(failures, 0);
+  EXPECT_GT(withPoints, n / 10);
+  EXPECT_GT(multi, n / 50);
+  std::printf("degenerate shapes: %d contacts of %d, %d with > 1 point\n", withPoints, n, multi);
 }
 
 }  // namespace
