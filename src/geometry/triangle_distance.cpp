@@ -114,10 +114,9 @@ void vertexFace(const Tri& from, const Tri& to, bool swap, Candidate& best) {
   if (!to.hasFace) return;
   for (int i = 0; i < 3; ++i) {
     const V3& p = from.v[i];
-    if (!to.projectsInside(p)) continue;
     const double sd = to.side(p);
     const double d2 = sd * sd / to.n2;
-    if (!(d2 < best.d2)) continue;
+    if (!(d2 < best.d2) || !to.projectsInside(p)) continue;  // the cheap test first
     const V3 q = p - (sd / to.n2) * to.n;
     const std::uint32_t fv = featureId(FeatureKind::Vertex, std::uint32_t(i)), ff = featureId(FeatureKind::Face, 0);
     if (swap) offer(best, d2, q, p, ff, fv);

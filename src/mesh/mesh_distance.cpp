@@ -14,6 +14,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace crux {
@@ -62,7 +63,8 @@ Real boxBoxLowerBound(const Aabb& a, const Aabb& b, const Relative& rel, Real pa
 /// Separating-axis lower bound on the distance between two triangles (same frame): the largest
 /// gap of their projections on the line of their centroids and on each triangle's normal (for
 /// nearly parallel facing triangles the normal is the nearly exact axis); -inf when none separates.
-Real triangleLowerBound(const Triangle& a, const Triangle& b) {
+/// The normals (b − a) × (c − a) of a and b are passed in (computed once per triangle of a leaf pair).
+Real triangleLowerBound(const Triangle& a, const Vec3& na, const Triangle& b, const Vec3& nb) {
   auto gap = [&](const Vec3& u) {
     const Real len = u.norm();
     if (!(len > 0)) return -kNoLimit;
@@ -71,8 +73,8 @@ Real triangleLowerBound(const Triangle& a, const Triangle& b) {
     return std::max(loB - hiA, loA - hiB) / len;
   };
   const Real centres = gap((b.a + b.b + b.c) - (a.a + a.b + a.c));
-  const Real normalA = gap((a.b - a.a).cross(a.c - a.a));
-  const Real normalB = gap((b.b - b.a).cross(b.c - b.a));
+  const Real normalA = gap(na);
+  const Real normalB = gap(nb);
   return std::max({centres, normalA, normalB});
 }
 
@@ -129,13 +131,18 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   const Real scale = std::max(mesh_detail::maxAbs(ba.nodes[0].bounds),
                               mesh_detail::maxAbs(bb.nodes[0].bounds) + rel.t.cwiseAbs().maxCoeff());
   const Real pad = mesh_detail::kNodeBoxPad * scale;
-  auto size = [](const BvhNode& n) { return (n.bounds.max - n.bounds.min).sum(); };
+  // Node size for the split rule: the box's summed extents (oriented with both accelerators).
+  auto size = [](const auto& n) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(n)>, BvhNode>) return (n.bounds.max - n.bounds.min).sum();
+    else return 2 * n.half.sum();
+  };
   // Both nodes of a pair are split when neither is this many times the other's size.
-  constexpr Real kSplitBothRatio = 2;
+  constexpr Real kSplitBothRatio = 1.5;
 
   constexpr std::uint32_t kChunk = 16;
   Triangle mapped[kChunk];
   Aabb mappedBox[kChunk];
+  Vec3 mappedNormal[kChunk];
   // Node pair bound, cheapest first, each part refining only pairs that survive the previous:
   //  - with both accelerators (oriented boxes A, B): the separating-axis gap on the line of the
   //    box centres, then the Euclidean gap between A and the box around B in A's frame
@@ -144,13 +151,30 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   //  - otherwise the axis-aligned box gaps (boxBoxLowerBound), then, with one accelerator, its
   //    oriented box and the other node's box projected on the line of their centres;
   //  - when either node is a leaf, the gap of the two nodes' projections on the line of their
-  //    axis-aligned box centres u, where a leaf projects its actual corners (b's in b's frame on
-  //    Rᵀu, offset by u·t: nothing is mapped) and an inner node its box. A tangent surface patch
-  //    is much thinner along u than its box (the role RSS volumes play in FCL/PQP).
+  //    box centres u (oriented boxes' with both accelerators, else axis-aligned), where a leaf
+  //    projects its actual corners (b's in b's frame on Rᵀu, offset by u·t: nothing is mapped)
+  //    and an inner node its box. A tangent surface patch is much thinner along u than its box
+  //    (the role RSS volumes play in FCL/PQP).
+  // With both accelerators the descent reads only their 64-byte nodes (box, child link) and
+  // leaf-ordered corners, never the BVH's nodes or the mesh's index/vertex arrays, and prunes
+  // without waiting for divisions and square roots (squared or multiplied-out comparisons).
   // (Projecting the corners of parents of two leaves too cut node visits by 30% but cost more
-  // than it saved on bunny00.)
-  const MeshDistanceAccel::Box* obbA = accelA ? accelA->boxes().data() : nullptr;
-  const MeshDistanceAccel::Box* obbB = accelB ? accelB->boxes().data() : nullptr;
+  // than it saved on bunny00; treating nodes of <= 8 or 16 triangles as leaves was no faster.)
+  using Node = MeshDistanceAccel::Node;
+  const Node* obbA = accelA ? accelA->nodes().data() : nullptr;
+  const Node* obbB = accelB ? accelB->nodes().data() : nullptr;
+  const bool both = obbA && obbB;
+  // Triangle corners in slot order: the accelerator's leaf-ordered copy when there is one.
+  const Vec3* cornersA = accelA ? accelA->corners().data() : nullptr;
+  const Vec3* cornersB = accelB ? accelB->corners().data() : nullptr;
+  const MeshDistanceAccel::Range* rangeA = accelA ? accelA->leafRanges().data() : nullptr;
+  const MeshDistanceAccel::Range* rangeB = accelB ? accelB->leafRanges().data() : nullptr;
+  auto triA = [&](std::uint32_t k) {
+    return cornersA ? Triangle{cornersA[3 * k], cornersA[3 * k + 1], cornersA[3 * k + 2]} : a.slotTriangle(k);
+  };
+  auto triB = [&](std::uint32_t k) {
+    return cornersB ? Triangle{cornersB[3 * k], cornersB[3 * k + 1], cornersB[3 * k + 2]} : b.slotTriangle(k);
+  };
   // Two oriented boxes seen from each other: the offset of the centres d = map(B.center) −
   // A.center in a's box frame (dA = A.axesᵀ·d) and in b's (dB = B.axesᵀ·Rᵀ·d), and the factors
   // of C = A.axesᵀ·R·B.axes = M·B.axes (b's axes in a's box frame), formed only when needed.
@@ -162,34 +186,70 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   // The frame of boxes ia, ib given M = A.axesᵀ·R, e = A.axesᵀ·(t − A.center) and
   // g = Rᵀ·(t − A.center): dA = M·B.center + e, dB = B.axes ᵀ·(B.center + g).
   auto obbFrame = [&](std::uint32_t ib, const Mat3& M, const Vec3& e, const Vec3& g) {
-    const MeshDistanceAccel::Box& B = obbB[ib];
+    const Node& B = obbB[ib];
     return ObbFrame{M * B.center + e, B.axes.transpose() * (B.center + g), &M, &B.axes};
   };
   auto nodeBound = [&](std::uint32_t ia, std::uint32_t ib, const ObbFrame* f) {
-    const BvhNode& na = ba.nodes[ia];
-    const BvhNode& nb = bb.nodes[ib];
     Real bound = -kNoLimit;
     if (f) {
       // Both oriented boxes: the separating-axis gap on the line of centres, then the Euclidean
       // gap between A and the box around B in A's frame (|C|·h_B) and the same in B's frame.
-      const Vec3& hA = obbA[ia].half;
-      const Vec3& hB = obbB[ib].half;
+      // Only the accelerators' nodes are read (one cache line each in float builds).
+      const Node& A = obbA[ia];
+      const Node& B = obbB[ib];
+      const Vec3& hA = A.half;
+      const Vec3& hB = B.half;
       const Vec3 aA = f->dA.cwiseAbs(), aB = f->dB.cwiseAbs();
       const Real len2 = f->dA.squaredNorm();
+      const Real extent = hA.dot(aA) + hB.dot(aB);  // both boxes' radii on d, times |d|
+      Real len = 0;
       if (len2 > 0) {
-        const Real len = std::sqrt(len2);
-        bound = len - (hA.dot(aA) + hB.dot(aB)) / len - pad;
-        if (bound > best.limit) return bound;
+        len = std::sqrt(len2);
+        // bound = len − extent/len − pad > limit, decided without waiting for the division
+        // (a pruned pair's bound is only compared with the limit: +inf stands for it).
+        if (len2 - extent > (best.limit + pad) * len) return kNoLimit;
+        bound = len - extent / len - pad;
       }
       const Mat3 C = *f->M * *f->axesB;
       const Mat3 absC = C.cwiseAbs();
-      const Vec3 gapA = (aA - hA - absC * hB).cwiseMax(Vec3::Zero());
-      bound = std::max(bound, std::sqrt(gapA.squaredNorm()) - pad);
-      if (bound > best.limit) return bound;
-      const Vec3 gapB = (aB - hB - absC.transpose() * hA).cwiseMax(Vec3::Zero());
-      bound = std::max(bound, std::sqrt(gapB.squaredNorm()) - pad);
-      if (bound > best.limit) return bound;
-    } else {
+      // (Compared squared with (limit + pad)²: one square root for the survivors.)
+      const Real keep = best.limit + pad, keep2 = keep * keep;
+      const Real gapA2 = (aA - hA - absC * hB).cwiseMax(Vec3::Zero()).squaredNorm();
+      if (gapA2 > keep2) return kNoLimit;
+      const Real gapB2 = (aB - hB - absC.transpose() * hA).cwiseMax(Vec3::Zero()).squaredNorm();
+      if (gapB2 > keep2) return kNoLimit;
+      bound = std::max(bound, std::sqrt(std::max(gapA2, gapB2)) - pad);
+      const bool leafA = A.child == MeshDistanceAccel::kLeaf, leafB = B.child == MeshDistanceAccel::kLeaf;
+      if (!leafA && !leafB) return bound;
+      // A leaf projects its actual corners on the line of centres u = A.axes·dA (in a's frame;
+      // b's corners on Rᵀu in b's frame, offset by u·t), an inner node its box (the radii of
+      // the first bound: |A.axesᵀu| = |dA|, |B.axesᵀRᵀu| = |dB|).
+      const Vec3 u = A.axes * f->dA;
+      const Real lenU = u.norm();
+      if (!(lenU > 0)) return bound;
+      const Vec3 ub = rel.R.transpose() * u;
+      Real hiA, loB;
+      if (leafA) {
+        hiA = -kNoLimit;
+        const MeshDistanceAccel::Range& ra = rangeA[ia];
+        for (const Vec3 *p = cornersA + 3 * ra.first, *pe = p + 3 * ra.count; p < pe; ++p)
+          hiA = std::max(hiA, u.dot(*p));
+      } else {
+        hiA = u.dot(A.center) + hA.dot(aA);
+      }
+      if (leafB) {
+        loB = kNoLimit;
+        const MeshDistanceAccel::Range& rb = rangeB[ib];
+        for (const Vec3 *p = cornersB + 3 * rb.first, *pe = p + 3 * rb.count; p < pe; ++p)
+          loB = std::min(loB, ub.dot(*p));
+      } else {
+        loB = ub.dot(B.center) - hB.dot(aB);
+      }
+      return std::max(bound, (loB + u.dot(rel.t) - hiA) / lenU - pad);
+    }
+    const BvhNode& na = ba.nodes[ia];
+    const BvhNode& nb = bb.nodes[ib];
+    {
       bound = boxBoxLowerBound(na.bounds, nb.bounds, rel, pad);
       if (bound > best.limit) return bound;  // refine only survivors
     }
@@ -233,19 +293,22 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     }
     return std::max(bound, (loB + u.dot(rel.t) - hiA) / len - pad);
   };
-  auto leafPair = [&](const BvhNode& na, const BvhNode& nb) {
-    for (std::uint32_t j0 = nb.first, je = nb.first + nb.count; j0 < je; j0 += kChunk) {
+  // All triangle pairs of two leaves (slot ranges [firstA, +countA) and [firstB, +countB)).
+  auto leafPair = [&](std::uint32_t firstA, std::uint32_t countA, std::uint32_t firstB, std::uint32_t countB) {
+    for (std::uint32_t j0 = firstB, je = firstB + countB; j0 < je; j0 += kChunk) {
       const std::uint32_t m = std::min(kChunk, je - j0);
       for (std::uint32_t k = 0; k < m; ++k) {
-        mapped[k] = rel.map(b.slotTriangle(j0 + k));
+        mapped[k] = rel.map(triB(j0 + k));
         mappedBox[k] = bounds(mapped[k]);
+        mappedNormal[k] = (mapped[k].b - mapped[k].a).cross(mapped[k].c - mapped[k].a);
       }
-      for (std::uint32_t i = na.first, ie = na.first + na.count; i < ie; ++i) {
-        const Triangle ta = a.slotTriangle(i);
+      for (std::uint32_t i = firstA, ie = firstA + countA; i < ie; ++i) {
+        const Triangle ta = triA(i);
         const Aabb boxA = bounds(ta);
+        const Vec3 normalA = (ta.b - ta.a).cross(ta.c - ta.a);
         for (std::uint32_t k = 0; k < m; ++k) {
           if (aabbDistance(boxA, mappedBox[k]) - pad > best.limit) continue;
-          if (triangleLowerBound(ta, mapped[k]) - pad > best.limit) continue;
+          if (triangleLowerBound(ta, normalA, mapped[k], mappedNormal[k]) - pad > best.limit) continue;
           best.offer(ta, mapped[k], ba.primIndices[i], bb.primIndices[j0 + k]);
           if (best.done) return;
         }
@@ -261,26 +324,39 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   // nodes are split when they are of similar size (the four pairs share the frame products),
   // else the larger one (RTCD 6.3.2).
   auto children = [&](const Pair& p, Pair* out) -> int {
-    const BvhNode& na = ba.nodes[p.a];
-    const BvhNode& nb = bb.nodes[p.b];
     std::uint32_t as[2] = {p.a, p.a}, bs[2] = {p.b, p.b};
     int nA = 1, nB = 1;
-    const Real sa = size(na), sb = size(nb);
-    if (!na.isLeaf() && (nb.isLeaf() || sa >= kSplitBothRatio * sb)) {
-      as[0] = na.first, as[1] = na.first + 1, nA = 2;
-    } else if (!nb.isLeaf() && (na.isLeaf() || sb >= kSplitBothRatio * sa)) {
-      bs[0] = nb.first, bs[1] = nb.first + 1, nB = 2;
+    bool leafA, leafB;
+    std::uint32_t firstA, firstB;
+    Real sa, sb;
+    if (both) {
+      const Node& na = obbA[p.a];
+      const Node& nb = obbB[p.b];
+      leafA = na.child == MeshDistanceAccel::kLeaf, leafB = nb.child == MeshDistanceAccel::kLeaf;
+      firstA = na.child, firstB = nb.child;
+      sa = size(na), sb = size(nb);
     } else {
-      as[0] = na.first, as[1] = na.first + 1, nA = 2;
-      bs[0] = nb.first, bs[1] = nb.first + 1, nB = 2;
+      const BvhNode& na = ba.nodes[p.a];
+      const BvhNode& nb = bb.nodes[p.b];
+      leafA = na.isLeaf(), leafB = nb.isLeaf();
+      firstA = na.first, firstB = nb.first;
+      sa = size(na), sb = size(nb);
+    }
+    if (!leafA && (leafB || sa >= kSplitBothRatio * sb)) {
+      as[0] = firstA, as[1] = firstA + 1, nA = 2;
+    } else if (!leafB && (leafA || sb >= kSplitBothRatio * sa)) {
+      bs[0] = firstB, bs[1] = firstB + 1, nB = 2;
+    } else {
+      as[0] = firstA, as[1] = firstA + 1, nA = 2;
+      bs[0] = firstB, bs[1] = firstB + 1, nB = 2;
     }
     int n = 0;
-    if (obbA && obbB) {
+    if (both) {
       // Per child of a: M = A.axesᵀ·R, e = A.axesᵀ·(t − cA), g = Rᵀ·(t − cA); then per child of
       // b: dA = M·cB + e, dB = B.axesᵀ·(cB + g), C = M·B.axes (formed only when needed).
       Mat3 M[2];
       for (int i = 0; i < nA; ++i) {
-        const MeshDistanceAccel::Box& A = obbA[as[i]];
+        const Node& A = obbA[as[i]];
         M[i] = A.axes.transpose() * rel.R;
         const Vec3 off = rel.t - A.center;
         const Vec3 e = A.axes.transpose() * off, g = rel.R.transpose() * off;
@@ -301,6 +377,15 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   // Starts loading the children of a pair's nodes (and their boxes) while other work proceeds.
   auto prefetch = [&](const Pair& p) {
 #if defined(__GNUC__)
+    if (both) {
+      const Node& na = obbA[p.a];
+      const Node& nb = obbB[p.b];
+      if (na.child != MeshDistanceAccel::kLeaf)
+        __builtin_prefetch(&obbA[na.child]), __builtin_prefetch(&obbA[na.child + 1]);
+      if (nb.child != MeshDistanceAccel::kLeaf)
+        __builtin_prefetch(&obbB[nb.child]), __builtin_prefetch(&obbB[nb.child + 1]);
+      return;
+    }
     const BvhNode& na = ba.nodes[p.a];
     const BvhNode& nb = bb.nodes[p.b];
     if (!na.isLeaf()) {
@@ -315,7 +400,19 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     (void)p;
 #endif
   };
-  auto isLeafPair = [&](const Pair& p) { return ba.nodes[p.a].isLeaf() && bb.nodes[p.b].isLeaf(); };
+  auto visitLeaves = [&](const Pair& p) {
+    if (both) {
+      leafPair(rangeA[p.a].first, rangeA[p.a].count, rangeB[p.b].first, rangeB[p.b].count);
+    } else {
+      const BvhNode& na = ba.nodes[p.a];
+      const BvhNode& nb = bb.nodes[p.b];
+      leafPair(na.first, na.count, nb.first, nb.count);
+    }
+  };
+  auto isLeafPair = [&](const Pair& p) {
+    return both ? obbA[p.a].child == MeshDistanceAccel::kLeaf && obbB[p.b].child == MeshDistanceAccel::kLeaf
+                : ba.nodes[p.a].isLeaf() && bb.nodes[p.b].isLeaf();
+  };
 
   // Depth-first from one pair, nearest child pair first, the others deferred on a fixed stack
   // (each step defers at most three pairs per level of either tree).
@@ -325,7 +422,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     for (;;) {
       bool advanced = false;
       if (isLeafPair(cur)) {
-        leafPair(ba.nodes[cur.a], bb.nodes[cur.b]);
+        visitLeaves(cur);
         if (best.done) return;
       } else {
         Pair c[4];
@@ -346,7 +443,9 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     }
   };
 
-  // Best-first over a fixed-capacity min-heap of pending pairs ordered by bound, each popped pair
+  // Best-first over a fixed-capacity min-heap (4-ary: half the levels of a binary heap, and the
+  // four children of a slot share a cache line or two; 5–10% faster than std::push_heap/pop_heap
+  // here) of pending pairs ordered by bound, each popped pair
   // followed down its nearest child pair (a dive): the search ends as soon as the smallest
   // pending bound exceeds the best distance. A pair that finds the heap full is searched
   // depth-first at once (same answer, no allocation). (Strict best-first — stop a dive when the
@@ -355,17 +454,41 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   constexpr int kHeapCapacity = 1024;
   Pair heap[kHeapCapacity];
   int count = 0;
-  auto later = [](const Pair& x, const Pair& y) { return x.bound > y.bound; };
   auto push = [&](const Pair& p) {
     if (count < kHeapCapacity) {
-      heap[count++] = p;
-      std::push_heap(heap, heap + count, later);
+      int i = count++;
+      while (i > 0) {
+        const int parent = (i - 1) >> 2;
+        if (!(heap[parent].bound > p.bound)) break;
+        heap[i] = heap[parent];
+        i = parent;
+      }
+      heap[i] = p;
     } else {
       depthFirst(p);
     }
   };
+  // Removes and returns the pair of least bound (count > 0).
+  auto popMin = [&]() {
+    const Pair top = heap[0];
+    const Pair last = heap[--count];
+    int i = 0;
+    for (;;) {
+      const int c0 = 4 * i + 1;
+      if (c0 >= count) break;
+      int m = c0;
+      const int ce = std::min(c0 + 4, count);
+      for (int c = c0 + 1; c < ce; ++c)
+        if (heap[c].bound < heap[m].bound) m = c;
+      if (!(heap[m].bound < last.bound)) break;
+      heap[i] = heap[m];
+      i = m;
+    }
+    heap[i] = last;
+    return top;
+  };
   Pair root{0, 0, 0};
-  if (obbA && obbB) {
+  if (both) {
     const Mat3 M = obbA[0].axes.transpose() * rel.R;
     const Vec3 off = rel.t - obbA[0].center;
     const ObbFrame f = obbFrame(0, M, obbA[0].axes.transpose() * off, rel.R.transpose() * off);
@@ -376,13 +499,12 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   if (root.bound > best.limit) return;
   push(root);
   while (count > 0 && !best.done) {
-    std::pop_heap(heap, heap + count, later);
-    Pair p = heap[--count];
+    Pair p = popMin();
     if (p.bound > best.limit) return;  // every pending pair is at least as far
     // Dive: follow the nearer child pair while it survives, queueing the other.
     for (;;) {
       if (isLeafPair(p)) {
-        leafPair(ba.nodes[p.a], bb.nodes[p.b]);
+        visitLeaves(p);
         break;
       }
       Pair c[4];
@@ -406,7 +528,12 @@ void validateDistanceBound(Real value, const char* field) {
 
 MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
   const Bvh& bvh = mesh.bvh();
-  boxes_.resize(bvh.nodes.size());
+  nodes_.resize(bvh.nodes.size());
+  corners_.resize(3 * mesh.triangleCount());
+  for (std::uint32_t k = 0; k < mesh.triangleCount(); ++k) {
+    const Triangle t = mesh.slotTriangle(k);
+    corners_[3 * k] = t.a, corners_[3 * k + 1] = t.b, corners_[3 * k + 2] = t.c;
+  }
   std::vector<std::uint32_t> stack;
   // Calls f(corner) for every corner of every triangle under node n (in double).
   auto corners = [&](std::uint32_t n, auto&& f) {
@@ -440,7 +567,8 @@ MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
     if (eig.info() == Eigen::Success && eig.eigenvectors().allFinite()) axes = eig.eigenvectors();
     // The box is fitted to the axes as stored (rounded to Real), so it holds every corner exactly
     // as the query projects it, up to the query's own rounding pad.
-    Box& box = boxes_[n];
+    Node& box = nodes_[n];
+    box.child = bvh.nodes[n].isLeaf() ? kLeaf : bvh.nodes[n].first;
     box.axes = axes.cast<Real>();
     const Eigen::Matrix3d used = box.axes.cast<double>();
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -458,19 +586,24 @@ MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
     const double grow = kPad * (c.cwiseAbs().maxCoeff() + half.maxCoeff());
     box.half = (half.array() + grow).matrix().cast<Real>();
   }
+  ranges_.assign(bvh.nodes.size(), Range{});
+  for (std::size_t n = 0; n < bvh.nodes.size(); ++n)
+    if (bvh.nodes[n].isLeaf()) ranges_[n] = {bvh.nodes[n].first, bvh.nodes[n].count};
 }
 
 MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb,
                                 const MeshDistanceOptions& options) {
   validateDistanceBound(options.maxDistance, "maxDistance");
   validateDistanceBound(options.stopDistance, "stopDistance");
-  if (options.accelA && options.accelA->boxes().size() != a.bvh().nodes.size())
+  if (options.accelA && (options.accelA->nodes().size() != a.bvh().nodes.size() ||
+                         options.accelA->corners().size() != 3 * a.triangleCount()))
     throw InvalidInput("mesh distance options.accelA was not built from mesh a (" +
-                       std::to_string(options.accelA->boxes().size()) + " nodes, mesh has " +
+                       std::to_string(options.accelA->nodes().size()) + " nodes, mesh has " +
                        std::to_string(a.bvh().nodes.size()) + ")");
-  if (options.accelB && options.accelB->boxes().size() != b.bvh().nodes.size())
+  if (options.accelB && (options.accelB->nodes().size() != b.bvh().nodes.size() ||
+                         options.accelB->corners().size() != 3 * b.triangleCount()))
     throw InvalidInput("mesh distance options.accelB was not built from mesh b (" +
-                       std::to_string(options.accelB->boxes().size()) + " nodes, mesh has " +
+                       std::to_string(options.accelB->nodes().size()) + " nodes, mesh has " +
                        std::to_string(b.bvh().nodes.size()) + ")");
   const Relative rel(ta, tb);
   Best best{options.maxDistance, options.stopDistance, {}, false};

@@ -29,24 +29,39 @@ namespace crux {
 /// (principal axes of their covariance, Gottschalk, Lin & Manocha, "OBBTree", 1996), for the
 /// distance query's node bounds: a nearly flat surface patch gets a thin box, so pairs of patches
 /// are bounded almost as tightly as FCL's RSS volumes do, where the BVH's axis-aligned boxes are
-/// as thick as the patch is wide. Built once per mesh (O(n log n) time, 60 bytes per node in
-/// float builds) and kept by the caller next to the mesh, like MeshAdjacency: a Mesh holds no
-/// lazily built cache. Must be rebuilt after Mesh::setVertices.
+/// as thick as the patch is wide. Built once per mesh (O(n log n) time, 64 bytes per node and
+/// 36 per triangle in float builds) and kept by the caller next to the mesh, like
+/// MeshAdjacency: a Mesh holds no lazily built cache. Must be rebuilt after Mesh::setVertices.
 class MeshDistanceAccel {
  public:
-  /// One node's box: centre, unit axes (columns), half extents along them.
-  struct Box {
-    Vec3 center = Vec3::Zero();
+  /// One node's box: centre, unit axes (columns), half extents along them; `child` is the
+  /// node's first child (the second is child + 1, as in the BVH) or kLeaf. One cache line per
+  /// node in float builds, so a node pair's bound reads one line per node.
+  struct alignas(64) Node {
     Mat3 axes = Mat3::Identity();
+    Vec3 center = Vec3::Zero();
     Vec3 half = Vec3::Zero();
+    std::uint32_t child = kLeaf;
   };
+  static constexpr std::uint32_t kLeaf = 0xffffffffu;
   MeshDistanceAccel() = default;
-  /// Fits a box to every node of mesh.bvh().
+  /// Fits a box to every node of mesh.bvh() and copies the triangle corners in BVH slot order.
   explicit MeshDistanceAccel(const Mesh& mesh);
-  const std::vector<Box>& boxes() const { return boxes_; }
+  const std::vector<Node>& nodes() const { return nodes_; }
+  /// The corners of the triangle in BVH slot k are corners()[3k], [3k+1], [3k+2] (a copy of
+  /// Mesh::slotTriangle(k) laid out in leaf order: a leaf's triangles are read contiguously).
+  const std::vector<Vec3>& corners() const { return corners_; }
+  /// For a leaf (child == kLeaf): its triangles are slots [first, first + count) (the BVH
+  /// leaf's, kept next to the boxes so the query reads no BvhNode).
+  struct Range {
+    std::uint32_t first = 0, count = 0;
+  };
+  const std::vector<Range>& leafRanges() const { return ranges_; }
 
  private:
-  std::vector<Box> boxes_;
+  std::vector<Node> nodes_;
+  std::vector<Vec3> corners_;
+  std::vector<Range> ranges_;
 };
 
 /// Parameters of distance(Mesh, Transform, Mesh, Transform, options).
