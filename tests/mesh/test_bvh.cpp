@@ -18,6 +18,8 @@
 #include <random>
 #include <vector>
 
+#include "support/test_scale.hpp"  // CRUX_TEST_SCALE: smaller inputs in the sanitizer stage
+
 namespace crux {
 namespace {
 
@@ -135,7 +137,8 @@ TEST(Bvh, SinglePrimitiveIsARootLeaf) {
 
 TEST(Bvh, RandomBoxesKeepEveryInvariant) {
   std::mt19937_64 rng(0xB1B1);
-  const std::size_t sizes[] = {2, 3, 5, 17, 100, 1000, 20000};
+  // The largest size is most of the time: CRUX_TEST_SCALE (the sanitizer stage) shrinks it.
+  const std::size_t sizes[] = {2, 3, 5, 17, 100, 1000, std::size_t(test::scaledCases(20000, 2000))};
   const std::uint32_t leafSizes[] = {1, 2, 4, 8, 16};
   const std::uint32_t binCounts[] = {2, 16, 64};
   for (std::size_t n : sizes)
@@ -186,11 +189,11 @@ TEST(Bvh, AllIdenticalTrianglesStayWithinDepthBound) {
 
 TEST(Bvh, HundredThousandCollinearPointsStayWithinDepthBound) {
   // Degenerate triangles that are points on one line: zero-area boxes (the SAH measure falls
-  // back to length), uniformly and geometrically spaced.
+  // back to length), uniformly and geometrically spaced. 10,000 under CRUX_TEST_SCALE = 0.1.
   for (int spacing = 0; spacing < 2; ++spacing) {
     SCOPED_TRACE(spacing == 0 ? "uniform" : "geometric");
     std::vector<Aabb> prims;
-    for (int i = 0; i < 100000; ++i) {
+    for (int i = 0, n = test::scaledCases(100000, 10000); i < n; ++i) {
       const Real x = spacing == 0 ? Real(i) : Real(std::pow(1.0005, i));
       const Vec3 p(x, 2 * x, -x);
       prims.push_back({p, p});
@@ -376,27 +379,36 @@ TEST(BvhParallel, ParallelBuildEqualsSerialBitForBit) {
     std::vector<Aabb> prims;
     BvhBuildOptions options;
   };
+  // Sizes scale with CRUX_TEST_SCALE (the sanitizer stage) but stay above the builder's parallel
+  // thresholds of src/mesh/bvh.cpp, so every parallel path still runs: 33,000 primitives exceed
+  // kParallelBinMin (32,768: the root is binned in parallel chunks), 10,000 exceed
+  // 2 × kParallelSubtreeMin (4,096: subtrees built as parallel tasks).
+  const auto size = [](int full, int floor) { return std::size_t(test::scaledCases(full, floor)); };
   std::vector<Case> cases;
-  cases.push_back({"random boxes", randomBoxes(150000, rng), {}});
+  // Scaled down, the plain random boxes are left to the next case (the same boxes with signed zeros).
+  if (test::testScale() >= 1) cases.push_back({"random boxes", randomBoxes(150000, rng), {}});
   // Signed zeros: min/max of -0 and +0 depend on operand order, the parallel binning merges in
   // another order than the serial loop.
-  std::vector<Aabb> zeros = randomBoxes(60000, rng);
+  std::vector<Aabb> zeros = randomBoxes(size(60000, 33000), rng);
   for (std::size_t i = 0; i < zeros.size(); i += 3) zeros[i].min.x() = i % 2 ? Real(-0.0) : Real(0.0);
   for (std::size_t i = 0; i < zeros.size(); i += 3) zeros[i].max.x() = std::max(zeros[i].max.x(), Real(0));
   cases.push_back({"signed zeros", zeros, {}});
-  cases.push_back({"identical boxes", std::vector<Aabb>(50000, Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}), {}});
+  cases.push_back({"identical boxes", std::vector<Aabb>(size(50000, 10000), Aabb{Vec3(0, 0, 0), Vec3(1, 1, 0)}), {}});
   BvhBuildOptions twoBins;
   twoBins.bins = 2;
-  cases.push_back({"exponential clusters, 2 bins", exponentialClusters(60000, 120), twoBins});
+  cases.push_back({"exponential clusters, 2 bins", exponentialClusters(int(size(60000, 33000)), 120), twoBins});
   BvhBuildOptions bigLeaves;
   bigLeaves.maxLeafSize = 5000;  // leaves above the parallel subtree cut-off
   bigLeaves.traversalCost = 1e6;
-  cases.push_back({"leaves larger than the parallel cut-off", randomBoxes(40000, rng), bigLeaves});
+  cases.push_back({"leaves larger than the parallel cut-off", randomBoxes(size(40000, 12000), rng), bigLeaves});
+  // 2 threads, and every core when there are more (results must not depend on the count). On a
+  // 2-core machine that is 2 twice: scaled down, each count is built once.
+  std::vector<int> threadCounts{2, std::max(2, tbb::info::default_concurrency())};
+  if (test::testScale() < 1 && threadCounts[1] == threadCounts[0]) threadCounts.pop_back();
   for (const Case& c : cases) {
-    SCOPED_TRACE(c.name);
+    SCOPED_TRACE(c.name + (" (" + std::to_string(c.prims.size()) + " primitives)"));
     const Bvh serial = buildWithThreads(c.prims, c.options, 1);
-    // 2 threads, and every core when there are more (results must not depend on the count).
-    for (const int threads : {2, std::max(2, tbb::info::default_concurrency())}) {
+    for (const int threads : threadCounts) {
       SCOPED_TRACE("threads " + std::to_string(threads));
       const Bvh parallel = buildWithThreads(c.prims, c.options, threads);
       expectIdentical(serial, parallel);

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
+#include "support/test_scale.hpp"          // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
 
 namespace crux {
 namespace {
@@ -569,7 +570,8 @@ void checkMeshMesh(Family f, bool rigid, std::uint64_t seed, Rate& rate, int rou
 TEST(MeshMeshProperty, TranslatedMeshesMatchBruteForceGeometryAndOracle) {
   for (Family f : kFamilies) {
     Rate rate;
-    checkMeshMesh(f, false, 0x3E5 + 100 * std::uint64_t(f == Family::GeneralPosition), rate, 100);
+    checkMeshMesh(f, false, 0x3E5 + 100 * std::uint64_t(f == Family::GeneralPosition), rate,
+                  test::scaledCases(100, 20));
     expectMeaningful(rate, std::string("mesh-mesh translated (") + name(f) + ")");
   }
 }
@@ -577,7 +579,8 @@ TEST(MeshMeshProperty, TranslatedMeshesMatchBruteForceGeometryAndOracle) {
 TEST(MeshMeshProperty, RigidlyMovedMeshesMatchBruteForce) {
   for (Family f : kFamilies) {
     Rate rate;
-    checkMeshMesh(f, true, 0x3E6 + 100 * std::uint64_t(f == Family::GeneralPosition), rate, 100);
+    checkMeshMesh(f, true, 0x3E6 + 100 * std::uint64_t(f == Family::GeneralPosition), rate,
+                  test::scaledCases(100, 20));
     expectMeaningful(rate, std::string("mesh-mesh rigid (") + name(f) + ")");
   }
 }
@@ -1027,7 +1030,8 @@ void checkRealMeshShapes(const Mesh& m, const std::vector<Shape>& shapes) {
   EXPECT_LT(hits, int(shapes.size()));
 }
 
-void checkRealMesh(const Mesh& m, int rays, std::uint64_t seed) {
+/// `rays` rays, then `shapes` queries of each shape kind, BVH vs brute force.
+void checkRealMesh(const Mesh& m, int rays, int shapes, std::uint64_t seed) {
   checkRealMeshRays(m, rays, seed);
   std::mt19937_64 rng(seed + 1);
   std::uniform_real_distribution<Real> u(0, 1);
@@ -1041,7 +1045,7 @@ void checkRealMesh(const Mesh& m, int rays, std::uint64_t seed) {
   std::vector<Plane> planes;
   std::vector<Triangle> triangles;
   Gen g(Family::GeneralPosition, seed + 2);
-  for (int i = 0; i < 60; ++i) {
+  for (int i = 0; i < shapes; ++i) {
     const Vec3 p = inBounds();
     spheres.push_back({p, u(rng) * e.norm() * Real(0.05)});
     boxes.push_back({p, p + e * Real(0.05) * u(rng)});
@@ -1063,14 +1067,15 @@ TEST(MeshQueryRealMesh, Bunny00MatchesBruteForce) {
   const std::string path = std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off";
   const std::optional<Mesh> m = loadIfPresent(path);
   if (!m) GTEST_SKIP() << "missing " << path << " (run scripts/setup)";
-  checkRealMesh(*m, 300, 0xB077);
+  // Each brute-force query tests all 75k triangles: CRUX_TEST_SCALE trims the counts under ASan.
+  checkRealMesh(*m, test::scaledCases(300, 30), test::scaledCases(60, 10), 0xB077);
 }
 
 TEST(MeshQueryRealMesh, AssimpSpiderObjMatchesBruteForce) {
   const std::string path = "/usr/share/assimp/models/OBJ/spider.obj";
   const std::optional<Mesh> m = loadIfPresent(path);
   if (!m) GTEST_SKIP() << "missing " << path << " (apt-get install assimp-testmodels)";
-  checkRealMesh(*m, 1000, 0x5B1D);
+  checkRealMesh(*m, 1000, 60, 0x5B1D);
 }
 
 TEST(MeshQueryRealMesh, BunnyAgainstItselfMovedMatchesPerTriangleQueries) {

@@ -33,6 +33,8 @@
 #include <vector>
 #include <world_factory.hpp>
 
+#include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer scenes in the sanitizer stage
+
 namespace crux {
 namespace {
 
@@ -756,7 +758,8 @@ TEST(ExactWorldModels, IntegerGridAgreesWithCrux) {
   if (!native) std::printf("note: the native world does not answer model ops yet: compared with crux::Scene only\n");
   std::map<std::string, Rate> rates;
   IntegerGridDriver driver(0x5eed2026u);
-  driver.run(150, rates, native);
+  // At least 60 scenes: the model_ray hit rate is 0.75 over 150, 0.78 over 60, 0.81 over 30.
+  driver.run(test::scaledCases(150, 60), rates, native);
   std::printf("%d disagreements\n", driver.failures);
   EXPECT_EQ(driver.failures, 0);
   for (const auto& [op, rate] : rates) {

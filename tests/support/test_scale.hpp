@@ -10,13 +10,19 @@
 
 namespace crux::test {
 
-/// `cases` scaled by CRUX_TEST_SCALE, rounded, at least `minimum` (so hit-rate checks still see
-/// enough cases). An unset, unparsable or non-positive CRUX_TEST_SCALE means 1.
-inline int scaledCases(int cases, int minimum = 1000) {
+/// The factor CRUX_TEST_SCALE, clamped to (0, 1000]. An unset, unparsable or non-positive value
+/// means 1. For tests that scale something other than a count (a sample of data files).
+inline double testScale() {
   const char* env = std::getenv("CRUX_TEST_SCALE");
-  double scale = env ? std::strtod(env, nullptr) : 1.0;
-  if (!(scale > 0) || !std::isfinite(scale)) scale = 1.0;
-  return std::max(std::min(cases, minimum), int(std::lround(cases * std::min(scale, 1e3))));
+  const double scale = env ? std::strtod(env, nullptr) : 1.0;
+  if (!(scale > 0) || !std::isfinite(scale)) return 1.0;
+  return std::min(scale, 1e3);
+}
+
+/// `cases` scaled by CRUX_TEST_SCALE, rounded, at least `minimum` (so hit-rate checks still see
+/// enough cases; a `minimum` above `cases` is capped at `cases`, so a scale <= 1 never adds cases).
+inline int scaledCases(int cases, int minimum = 1000) {
+  return std::max(std::min(cases, minimum), int(std::lround(cases * testScale())));
 }
 
 }  // namespace crux::test

@@ -35,6 +35,8 @@
 #include <utility>
 #include <vector>
 
+#include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
+
 namespace crux {
 namespace {
 
@@ -303,7 +305,7 @@ TEST(NativeWorld, AgreesWithTheExactBackend) {
     };
     // Query shapes are placed near the triangle (around its first corner) so that hits and
     // misses are both frequent; in the integer family every coordinate stays an integer.
-    for (int i = 0; i < 4000; ++i) {
+    for (int i = 0, n = test::scaledCases(4000, 400); i < n; ++i) {
       const Triangle t = g.triangle(3);
       const std::string c = str(t);
       const Vec3 p = g.point(4);
@@ -336,7 +338,7 @@ TEST(NativeWorld, AgreesWithTheExactBackend) {
         EXPECT_NEAR(rn->t, re->t, tol * 8) << c << " " << str(aimed);
       }
     }
-    for (int m = 0; m < 8; ++m) {
+    for (int m = 0, meshes = test::scaledCases(8, 2); m < meshes; ++m) {
       const auto mesh = g.mesh(30, "m");
       const auto other = g.mesh(20, "n");
       const MeshHandle hn = native->addMesh("m", mesh), he = exact->addMesh("m", mesh);
