@@ -23,14 +23,19 @@ const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kCont
 struct TriD {
   V3 p[3];
   V3 m;         // (b - a) × (c - a)
-  double len;   // |m|
-  bool degenerate;
+  double len = 0;   // |m|
+  bool degenerate = true;
+  TriD() = default;
   explicit TriD(const Triangle& t) {
     p[0] = t.a.cast<double>();
     p[1] = t.b.cast<double>();
     p[2] = t.c.cast<double>();
     const V3 ab = p[1] - p[0], ac = p[2] - p[0];
     m = ab.cross(ac);
+    finish(ab, ac);
+  }
+  /// len and degenerate from p and m = ab × ac.
+  void finish(const V3& ab, const V3& ac) {
     len = m.norm();
     const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()});
     degenerate = !(len > kTriangleContactDegenerateRelative * longest);
@@ -112,27 +117,33 @@ void triangleFeature(const TriD& t, const V3& d, Feature& f) {
   vertexOrEdge(t.p, d, is, others, 2, f);
 }
 
-/// Closest point of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions); `face`
-/// tells whether it is in the face region.
-V3 closestOnTriangle(const V3* t, const V3& p, bool& face) {
-  face = false;
+/// Closest point of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions); `region`
+/// tells which: -1 the face, 0..2 the edge from corner i to corner i+1 (mod 3), 3..5 the
+/// vertex region − 3.
+V3 closestOnTriangle(const V3* t, const V3& p, int& region) {
   const V3 &a = t[0], &b = t[1], &c = t[2];
   const V3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  region = 3;
   if (d1 <= 0 && d2 <= 0) return a;
   const V3 bp = p - b;
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  region = 4;
   if (d3 >= 0 && d4 <= d3) return b;
   const double vc = d1 * d4 - d3 * d2;
+  region = 0;
   if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
   const V3 cp = p - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  region = 5;
   if (d6 >= 0 && d5 <= d6) return c;
   const double vb = d5 * d2 - d1 * d6;
+  region = 2;
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
   const double va = d3 * d6 - d5 * d4;
+  region = 1;
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  face = true;
+  region = -1;
   const double denom = 1 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
@@ -211,10 +222,21 @@ int clipSegment(const ClipVertex* in, int n, const V3& o, const V3& m, std::uint
 
 }  // namespace
 
-bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
-  out.count = 0;
-  const V3 p = centre.cast<double>();
-  const double r = double(radius), m = double(margin);
+namespace {
+
+/// The closest-point core shared by sphereTriangleContacts and sphereTriangleContact: false when
+/// the triangle is beyond radius + margin; else the triangle in double, the closest point q,
+/// the unit normal n (B→A), the centre's distance d (0 in the flat case) and the region of q
+/// (SphereTriangleContact::region).
+bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V3& q, V3& n, double& d, int& region) {
+  // (the triangle in double and its cross product are computed once, for the test and for t)
+  t.p[0] = tri.a.cast<double>();
+  t.p[1] = tri.b.cast<double>();
+  t.p[2] = tri.c.cast<double>();
+  const V3 ab = t.p[1] - t.p[0], ac = t.p[2] - t.p[0];
+  t.m = ab.cross(ac);
+  const double bound = std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()});
+  const double pMax = p.cwiseAbs().maxCoeff();
   {
     // Early plane reject, before anything else (most candidate triangles of a mesh end here):
     // |(b−a)×(c−a)·(p−a)| > (r + margin + slack)·|(b−a)×(c−a)|, squared, no root. The slack
@@ -222,34 +244,34 @@ bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius
     // The rounding of the cross product (<= 8 ulps × |ab|₁|ac|₁ per unit of |p − a|₁) is
     // added, so that nearly collinear triangles, whose computed normal is noise, are never
     // rejected wrongly.
-    const V3 a = tri.a.cast<double>();
-    const V3 ab = tri.b.cast<double>() - a, ac = tri.c.cast<double>() - a, ap = p - a;
-    const V3 mm = ab.cross(ac);
+    const V3 ap = p - t.p[0];
+    const V3& mm = t.m;
     const double h = mm.dot(ap);
-    const double bound = std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()});
-    const double slack = kGjkScaleTolerance * (1.7320508075688773 * (bound + p.cwiseAbs().maxCoeff()) + r);
+    const double slack = kGjkScaleTolerance * (1.7320508075688773 * (bound + pMax) + r);
     const double reach = r + m + slack;
     const double err = 8 * std::numeric_limits<double>::epsilon() * ab.lpNorm<1>() * ac.lpNorm<1>() * ap.lpNorm<1>();
     const double lhs = std::abs(h) - err;
     if (lhs > 0 && lhs * lhs > reach * reach * mm.squaredNorm()) return false;
   }
-  const TriD t(tri);
-  const double scale = t.maxAbs() + p.norm() + r;
-  const double tolAbs = kGjkScaleTolerance * scale;
-  V3 q, n;
-  double d;
+  t.finish(ab, ac);
+  region = SphereTriangleContact::kDegenerate;
   if (!t.degenerate) {
-    const V3 mh = t.m / t.len;
-    const double h = mh.dot(p - t.p[0]);
-    bool face = false;
-    q = closestOnTriangle(t.p, p, face);
-    if (face) {  // exact projection: distance and normal from the plane, not from q - p
+    q = closestOnTriangle(t.p, p, region);
+    if (region == SphereTriangleContact::kFace) {  // exact projection: distance and normal from the plane, not from q - p
+      const V3 mh = t.m / t.len;
+      const double h = mh.dot(p - t.p[0]);
       d = std::abs(h);
       q = p - h * mh;
       n = h > 0 ? V3(-mh) : V3(mh);
     } else {
-      d = (q - p).norm();
-      n = d > 0 ? V3((q - p) / d) : V3::Zero();
+      const V3 qp = q - p;
+      const double d2 = qp.squaredNorm();
+      // clearly beyond radius + margin (by 1e-12 relative, far above the rounding of the exact
+      // test below): out before the root and the division
+      const double reach = r + m;
+      if (d2 > reach * reach * (1 + 1e-12)) return false;
+      d = std::sqrt(d2);
+      n = d > 0 ? V3(qp * (1 / d)) : V3::Zero();
     }
   } else {
     q = closestOnSegment(t.p[0], t.p[1], p);
@@ -261,13 +283,50 @@ bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius
     n = d > 0 ? V3((q - p) / d) : V3::Zero();
   }
   if (!(d - r <= m)) return false;
-  if (d <= tolAbs) {  // centre on the triangle: the flat case, a deterministic normal
-    d = 0;
+  // The flat case: the centre on the triangle within kGjkScaleTolerance × the pair's scale
+  // (max |vertex| + |centre| + radius; its square roots are taken only when d is below a bound
+  // of that tolerance from ∞-norms: 2·|x|∞ > √3·|x|∞ >= |x|).
+  const double upper = 2 * (bound + pMax) + r;
+  if (d <= kGjkScaleTolerance * upper && d <= kGjkScaleTolerance * (t.maxAbs() + p.norm() + r)) {
+    d = 0;  // centre on the triangle: a deterministic normal
     n = onTriangleNormal(t);
     q = p;
+    if (!t.degenerate) region = SphereTriangleContact::kFace;
   }
-  n.normalize();
+  // n is unit (to rounding) on every path: ±the unit face normal, (q − p)/|q − p|, or
+  // onTriangleNormal's; the degenerate path's (q − p)/d below a point or segment
+  return true;
+}
+
+}  // namespace
+
+bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
+  out.count = 0;
+  const V3 p = centre.cast<double>();
+  const double r = double(radius);
+  TriD t;
+  V3 q, n;
+  double d = 0;
+  int region = 0;
+  if (!sphereCore(tri, p, r, double(margin), t, q, n, d, region)) return false;
   singlePoint(t, n, q, p, d, r, margin, vertexId(0), out);
+  return true;
+}
+
+bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+                           SphereTriangleContact& out) {
+  const V3 p = centre.cast<double>();
+  const double r = double(radius);
+  TriD t;
+  V3 q, n;
+  double d = 0;
+  if (!sphereCore(tri, p, r, double(margin), t, q, n, d, out.region)) return false;
+  if (!t.degenerate) out.face = (t.m * (1 / t.len)).cast<Real>();
+  // as singlePoint, without the feature ids
+  out.normal = n.cast<Real>();
+  out.pointA = q.cast<Real>();
+  out.pointB = (p + n * r).cast<Real>();
+  out.separation = static_cast<Real>(d - r);
   return true;
 }
 
@@ -471,14 +530,12 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     // closest point on the segment; a pair of skew edges (offset across the normal beyond the
     // rounding budget: 8 ulps of Real × scale, widened for the radius) falls back to the single
     // closest pair.
+    double scale = r + mg;
+    for (int i = 0; i < ref.n; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
+    for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
+    const double tol = contact_detail::kOnFeatureUlps * double(std::numeric_limits<Real>::epsilon()) * scale;
     double lateralTol = 0;
-    if (!refIsA) {
-      double scale = r + mg;
-      for (int i = 0; i < 2; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
-      for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
-      const double tol = 8 * double(std::numeric_limits<Real>::epsilon()) * scale;
-      lateralTol = tol + std::sqrt(2 * r * tol);
-    }
+    if (!refIsA) lateralTol = tol + std::sqrt(2 * r * tol);
     bool skew = false;
     for (int i = 0; i < cnt && !skew; ++i) {
       const V3 q = cur[i].p;
@@ -503,8 +560,20 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
       c.featureB = refIsA ? cur[i].id : ref.id;
     }
     if (np > 0 && !skew) {
+      // Points coinciding on both bodies (within tol) are one, the deepest kept (contact.cpp's
+      // removeCoincident): e.g. a clipped end landing on the triangle's vertex.
+      int k = 0;
+      for (int i = 0; i < np; ++i) {
+        int same = -1;
+        for (int j = 0; j < k && same < 0; ++j)
+          if ((out.points[i].pointA - out.points[j].pointA).template cast<double>().norm() <= tol &&
+              (out.points[i].pointB - out.points[j].pointB).template cast<double>().norm() <= tol)
+            same = j;
+        if (same < 0) out.points[k++] = out.points[i];
+        else if (out.points[i].separation < out.points[same].separation) out.points[same] = out.points[i];
+      }
       out.normal = nn.cast<Real>();
-      out.count = np;
+      out.count = k;
       return true;
     }
   }

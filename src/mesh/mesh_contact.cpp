@@ -232,27 +232,61 @@ struct Collector {
   /// The deepest point the internal-edge correction dropped (uncorrected), for keepDeepestDropped.
   MeshContactPoint dropped;
   bool hasDropped = false;
+  /// buf[i].pointA by coordinate, for add()'s merge scan.
+  Real ax[kMeshContactBuffer], ay[kMeshContactBuffer], az[kMeshContactBuffer];
+
+  void set(int i, const MeshContactPoint& p) {
+    buf[i] = p;
+    ax[i] = p.pointA.x();
+    ay[i] = p.pointA.y();
+    az[i] = p.pointA.z();
+  }
 
   void add(const MeshContactPoint& p) {
+    // The squared distances to every buffered point first and how many are within the merge
+    // tolerance (a branch-free loop the compiler vectorises); only then, when some are, the
+    // first of those with the same normal.
+    Real d2[kMeshContactBuffer];
+    const Real x = p.pointA.x(), y = p.pointA.y(), z = p.pointA.z();
+    int close = 0;
     for (int i = 0; i < n; ++i) {
-      MeshContactPoint& q = buf[i];
-      if ((q.pointA - p.pointA).squaredNorm() <= mergeTol2 && q.normal.dot(p.normal) >= kContactFaceAngleCos) {
-        if (p.separation < q.separation || (p.separation == q.separation && p.triangle < q.triangle)) q = p;
+      const Real dx = ax[i] - x, dy = ay[i] - y, dz = az[i] - z;
+      d2[i] = dx * dx + dy * dy + dz * dz;
+      close += d2[i] <= mergeTol2;
+    }
+    for (int i = 0; close > 0 && i < n; ++i) {
+      if (d2[i] <= mergeTol2 && buf[i].normal.dot(p.normal) >= kContactFaceAngleCos) {
+        const MeshContactPoint& q = buf[i];
+        if (p.separation < q.separation || (p.separation == q.separation && p.triangle < q.triangle)) set(i, p);
         return;
       }
     }
     if (n < kMeshContactBuffer) {
-      buf[n++] = p;
+      set(n++, p);
       return;
     }
     int worst = 0;  // full: replace the shallowest when p is deeper
     for (int i = 1; i < n; ++i)
       if (buf[i].separation > buf[worst].separation) worst = i;
-    if (p.separation < buf[worst].separation) buf[worst] = p;
+    if (p.separation < buf[worst].separation) set(worst, p);
+  }
+
+  /// Whether `pa` lies within tol of edge i (corner i to corner i+1 mod 3) of tri.
+  static bool onEdgeWithin(const Triangle& tri, int i, const Vec3& pa, Real tol) {
+    // Cheap prefilter first: farther than 2·tol from the edge's LINE (|w × e|² > 4 tol² |e|²,
+    // in double) means farther than tol from the segment, whatever the rounding; only the
+    // remaining edges take the closest-point test.
+    const Eigen::Vector3d e = (tri[(i + 1) % 3] - tri[i]).template cast<double>();
+    const Eigen::Vector3d w = (pa - tri[i]).template cast<double>();
+    const double t2 = double(tol) * double(tol);
+    if (w.cross(e).squaredNorm() > 4 * t2 * e.squaredNorm()) return false;
+    const Segment s{tri[i], tri[(i + 1) % 3]};
+    const Vec3 c = closestPoint(s, pa);
+    return (c - pa).squaredNorm() <= tol * tol;
   }
 
   /// Internal-edge correction of one point, all in the mesh frame (see the header). Returns
-  /// false to drop it.
+  /// false to drop it (p is then unchanged: it changes only when kept with the face normal).
   bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, MeshContactPoint& p) const {
     const Vec3 e0 = tri.b - tri.a, e1 = tri.c - tri.b, e2 = tri.a - tri.c;
     Vec3 face = e0.cross(tri.c - tri.a);
@@ -268,19 +302,7 @@ struct Collector {
     bool onEdge[3];
     int edges = 0;
     for (int i = 0; i < 3; ++i) {
-      // Cheap prefilter first: farther than 2·tol from the edge's LINE (|w × e|² > 4 tol² |e|²,
-      // in double) means farther than tol from the segment, whatever the rounding; only the
-      // remaining edges take the closest-point test.
-      const Eigen::Vector3d e = (tri[(i + 1) % 3] - tri[i]).template cast<double>();
-      const Eigen::Vector3d w = (pa - tri[i]).template cast<double>();
-      const double t2 = double(tol) * double(tol);
-      if (w.cross(e).squaredNorm() > 4 * t2 * e.squaredNorm()) {
-        onEdge[i] = false;
-        continue;
-      }
-      const Segment s{tri[i], tri[(i + 1) % 3]};
-      const Vec3 c = closestPoint(s, pa);
-      onEdge[i] = (c - pa).squaredNorm() <= tol * tol;
+      onEdge[i] = onEdgeWithin(tri, i, pa, tol);
       edges += onEdge[i];
     }
     if (edges == 0) return true;  // face interior: the convex routine's normal stands
@@ -292,15 +314,8 @@ struct Collector {
       const Real base = face.dot(tri.a);
       if (base - lo > hi - base) face = -face;
     }
-    auto active = [&](int i) {
-      // no neighbour, or one without a third vertex (degenerate): treat as a boundary
-      const std::uint32_t w = slot != kNoSlot ? adjacency->oppositeVertexBySlot(slot, i) : adjacency->oppositeVertex(t, i);
-      if (w == MeshAdjacency::kNone) return true;
-      const Real d = face.dot(mesh.vertices()[w] - tri[i]);
-      return d < -tol;  // convex: the neighbour falls away from the shape's side
-    };
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && active(i)) return true;
+      if (onEdge[i] && activeEdge(t, slot, tri, face, i, tol)) return true;
     // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
     const Vec3 nrm = -face;  // B -> A
     const Vec3 pb = ls.support(nrm);
@@ -333,13 +348,102 @@ struct Collector {
     return lo - base > margin + slack || base - hi > margin + slack;
   }
 
+  /// The sphere's contact with triangle t (its own path: one point, no feature ids to compute;
+  /// a face-region point has the face normal, so it skips the correction; a degenerate
+  /// triangle, which has no regions, takes the generic correct()).
+  void sphereTriangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
+    SphereTriangleContact h;
+    if (!sphereTriangleContact(tri, ls.p[0], ls.radius, margin, h)) return;
+    MeshContactPoint p;
+    p.pointA = h.pointA;
+    p.pointB = h.pointB;
+    p.normal = h.normal;
+    p.separation = h.separation;
+    p.triangle = t;
+    p.featureB = featureId(FeatureKind::Vertex, 0);
+    // (correct() and correctSphere() change p only when they keep it: a dropped p is the raw point)
+    if (adjacency && h.region != SphereTriangleContact::kFace &&
+        !(h.region == SphereTriangleContact::kDegenerate ? correct(t, slot, tri, p) : correctSphere(t, slot, tri, h, p))) {
+      drop(p);
+      return;
+    }
+    add(p);
+  }
+
+  /// Whether edge i of triangle t is active (see the header): no neighbour (or a degenerate
+  /// one), or the neighbour's opposite vertex below the plane of `face` (the unit normal on the
+  /// shape's side) by more than tol.
+  bool activeEdge(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Vec3& face, int i, Real tol) const {
+    const std::uint32_t w = slot != kNoSlot ? adjacency->oppositeVertexBySlot(slot, i) : adjacency->oppositeVertex(t, i);
+    if (w == MeshAdjacency::kNone) return true;
+    const Real d = face.dot(mesh.vertices()[w] - tri[i]);
+    return d < -tol;  // convex: the neighbour falls away from the shape's side
+  }
+
+  /// correct() for a sphere whose closest point lies in an edge or corner region of a
+  /// non-degenerate triangle: the same rule, with the region's edge (a corner's two edges) known
+  /// to hold the point, the face normal from the sphere routine, and the face-normal projection (the
+  /// centre's projection on the plane, which lies outside the triangle as the centre is outside
+  /// the face region) tested against the region's edge line or corner first.
+  bool correctSphere(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const SphereTriangleContact& h,
+                     MeshContactPoint& p) const {
+    if (std::abs(h.face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
+    // correct()'s tolerance: (longest edge + largest |coordinate|) × kMeshFeatureRelativeTolerance
+    // (one square root: the largest root is the root of the largest square)
+    const Real longest2 = std::max({(tri.b - tri.a).squaredNorm(), (tri.c - tri.b).squaredNorm(), (tri.a - tri.c).squaredNorm()});
+    const Real scale = std::sqrt(longest2) + std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(),
+                                                       tri.c.cwiseAbs().maxCoeff()});
+    const Real tol = kMeshFeatureRelativeTolerance * scale;
+    const Real tol2 = tol * tol;
+    // the region's edge (or the corner's two edges); any other edge by correct()'s test (a
+    // point near a sharp corner can be within tol of the next edge)
+    bool onEdge[3] = {false, false, false};
+    const int region = h.region;
+    if (region < 3) onEdge[region] = true;
+    else onEdge[region - 3] = onEdge[(region - 1) % 3] = true;
+    for (int i = 0; i < 3; ++i)
+      if (!onEdge[i]) onEdge[i] = onEdgeWithin(tri, i, p.pointA, tol);
+    // the side of the plane the sphere is on: its centre's (correct()'s rule for a sphere)
+    const Vec3 face = h.face.dot(ls.p[0]) < h.face.dot(tri.a) ? Vec3(-h.face) : h.face;
+    for (int i = 0; i < 3; ++i)
+      if (onEdge[i] && activeEdge(t, slot, tri, face, i, tol)) return true;
+    // Inactive: the face normal, the sphere's deepest point along it and its projection.
+    const Vec3 nrm = -face;  // B -> A
+    const Vec3 pb = ls.support(nrm);
+    const Real sep = face.dot(pb - tri.a);
+    if (sep > margin) return false;
+    const Vec3 pa2 = pb - sep * face;
+    // Farther than 2 tol from the region's edge line (or corner) is farther than tol from the
+    // triangle (the projection lies beyond that line, up to rounding); else the exact test.
+    if (region < 3) {
+      const Eigen::Vector3d e = (tri[(region + 1) % 3] - tri[region]).template cast<double>();
+      const Eigen::Vector3d w = (pa2 - tri[region]).template cast<double>();
+      if (w.cross(e).squaredNorm() > 4 * double(tol2) * e.squaredNorm()) return false;
+    } else if ((pa2 - tri[region - 3]).template cast<double>().squaredNorm() > 4 * double(tol2)) {
+      return false;
+    }
+    if ((closestPoint(tri, pa2) - pa2).squaredNorm() > tol2) return false;
+    p.normal = nrm;
+    p.pointB = pb;
+    p.separation = sep;
+    p.pointA = pa2;
+    return true;
+  }
+
+  /// Keeps the deepest point the correction dropped (lowest triangle among equals).
+  void drop(const MeshContactPoint& raw) {
+    if (!hasDropped || raw.separation < dropped.separation ||
+        (raw.separation == dropped.separation && raw.triangle < dropped.triangle))
+      dropped = raw, hasDropped = true;
+  }
+
   /// Contacts of triangle t (in BVH slot `slot`, or kNoSlot) with the shape.
   void triangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
     ContactManifold m;
     switch (ls.shape.kind) {
       case ConvexKind::Sphere:
-        if (!sphereTriangleContacts(tri, ls.p[0], ls.radius, margin, m)) return;
-        break;
+        sphereTriangle(t, slot, tri);
+        return;
       case ConvexKind::Capsule:
         if (!capsuleTriangleContacts(tri, ls.p[0], ls.p[1], ls.radius, margin, m)) return;
         break;
@@ -384,14 +488,9 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (adjacency) {
-        const MeshContactPoint raw = p;
-        if (!correct(t, slot, tri, p)) {
-          if (!hasDropped || raw.separation < dropped.separation ||
-              (raw.separation == dropped.separation && raw.triangle < dropped.triangle))
-            dropped = raw, hasDropped = true;
-          continue;
-        }
+      if (adjacency && !correct(t, slot, tri, p)) {
+        drop(p);  // unchanged: the raw point
+        continue;
       }
       add(p);
     }
@@ -476,7 +575,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);
-  Collector c{mesh, ls, margin, adjacency, mergeTol * mergeTol, {}, 0, {}, false};
+  Collector c{mesh, ls, margin, adjacency, mergeTol * mergeTol, {}, 0, {}, false, {}, {}, {}};
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, kNoSlot, mesh.triangle(t));
   } else {

@@ -121,6 +121,7 @@ double segmentDistance(const Eigen::Vector3d& p1, const Eigen::Vector3d& q1, con
 /// Statistics of a family.
 struct Stats {
   int cases = 0, hits = 0, normalsCompared = 0, manifoldsCompared = 0, twoPoints = 0;
+  int regions[3] = {0, 0, 0};  // sphereTriangleContact's regions met: face, edge, corner
   double worstSep = 0, worstAngle = 0;
 };
 
@@ -189,7 +190,10 @@ void compare(const Triangle& tri, const ConvexShape& shape, Real margin, const C
     const double sinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
     const double overhang = mine.count == 1 ? 0 : sinTol * (double((core1 - core0).norm()) + double(shape.radius));
     ASSERT_LE(onB, double(shape.radius) + overhang + tol) << "pointB outside the shape, point " << i << " " << full;
-    ASSERT_GE(onB, double(shape.radius) * (mine.count == 1 ? 1 : double(kContactFaceAngleCos)) - tol)
+    // (the clip bound for every count: since contact.cpp merges coincident clipped points, a
+    // clipped manifold can be left with one point; its separation and points are compared with
+    // the generic routine's below)
+    ASSERT_GE(onB, double(shape.radius) * double(kContactFaceAngleCos) - tol)
         << "pointB inside the shape, point " << i << " " << full;
   }
   // Normals, when well conditioned (|core distance| or depth not near zero).
@@ -315,8 +319,34 @@ TEST(TriangleContact, SphereAgreesWithGenericRoutine) {
          << " margin " << double(margin);
     compare(tri, Sphere{c, radius}, margin, m, info.str(), st);
     if (HasFatalFailure()) return;
+    // The mesh's form: the same point bit for bit, and the region the point lies in.
+    SphereTriangleContact h;
+    ASSERT_EQ(sphereTriangleContact(tri, c, radius, margin, h), m.count > 0) << info.str();
+    if (m.count == 0) continue;
+    ASSERT_EQ(h.pointA, m.points[0].pointA) << info.str();
+    ASSERT_EQ(h.pointB, m.points[0].pointB) << info.str();
+    ASSERT_EQ(h.normal, m.normal) << info.str();
+    ASSERT_EQ(h.separation, m.points[0].separation) << info.str();
+    const double tol =
+        kAgreeRelative * (double(std::max({tri.a.norm(), tri.b.norm(), tri.c.norm()})) + double(c.norm()) + double(radius));
+    if (h.region == SphereTriangleContact::kFace) {
+      ASSERT_NEAR(std::abs(double(h.normal.dot(h.face))), 1.0, 16 * kEpsReal) << info.str();
+      ++st.regions[0];
+    } else if (h.region >= 3) {
+      ASSERT_LE(double((h.pointA - tri[h.region - 3]).norm()), tol) << info.str();
+      ++st.regions[2];
+    } else if (h.region >= 0) {
+      const Segment e{tri[h.region], tri[(h.region + 1) % 3]};
+      ASSERT_LE(double((closestPoint(e, h.pointA) - h.pointA).norm()), tol) << info.str();
+      ++st.regions[1];
+    } else {
+      ASSERT_EQ(h.region, SphereTriangleContact::kDegenerate) << info.str();
+      ASSERT_NE(family, 0) << "a general triangle is not degenerate " << info.str();
+    }
   }
   report("sphere", st);
+  std::printf("sphere regions: %d face, %d edge, %d corner\n", st.regions[0], st.regions[1], st.regions[2]);
+  for (const int r : st.regions) EXPECT_GT(r, n / 200);
   EXPECT_GT(st.hits, n / 3);
   EXPECT_GT(st.manifoldsCompared, n / 4);
 }

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
+#include "support/test_scale.hpp"
 
 namespace crux {
 namespace {
@@ -453,6 +454,62 @@ TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
     }
   }
   EXPECT_GT(hits, 0);
+}
+
+// The sphere's internal-edge correction takes the features a point lies on from the sphere
+// routine's Voronoi region (correctSphere); every other shape runs the generic per-edge tests.
+// A capsule whose segment is a point is that same sphere through the generic path: both
+// manifolds must agree point for point (separations, normals, positions).
+TEST(MeshContact, SphereCorrectionAgreesWithTheGenericOneOnAPointCapsule) {
+  const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
+  const MeshAdjacency adjacency(bunny);
+  const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
+  std::mt19937 rng(20261122);
+  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(bunny.triangleCount() - 1));
+  std::uniform_real_distribution<double> u(0, 1);
+  const int cases = test::scaledCases(1500, 300);
+  int compared = 0, corrected = 0;
+  for (int k = 0; k < cases; ++k) {
+    const Triangle t = bunny.triangle(pick(rng));
+    const Vec3 n = (t.b - t.a).cross(t.c - t.a).normalized();
+    const Real r = Real((0.01 + 0.05 * u(rng)) * double(diag));
+    const Real margin = Real(0.01) * r;
+    Transform meshPose;
+    meshPose.rotation = randomRotation(rng);
+    meshPose.translation = Vec3(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+    // the centre above a point of the triangle, from 0.3 r inside to the margin outside
+    const Real w1 = Real(u(rng)), w2 = Real(u(rng)) * (1 - w1);
+    const Vec3 q = t.a + w1 * (t.b - t.a) + w2 * (t.c - t.a) + (r * Real(0.7 + 0.3 * u(rng)) + margin * Real(u(rng))) * n;
+    const Vec3 centre = meshPose.apply(q);
+    MeshContactManifold sphere, capsule;
+    contacts(bunny, meshPose, Sphere{centre, r}, Transform::identity(), margin, sphere, &adjacency);
+    contacts(bunny, meshPose, Capsule{centre, centre, r}, Transform::identity(), margin, capsule, &adjacency);
+    std::ostringstream info;
+    info.precision(17);
+    info << "case " << k << " centre " << str(centre) << " radius " << double(r) << " margin " << double(margin)
+         << " meshPose " << str(meshPose);
+    ASSERT_EQ(sphere.count, capsule.count) << info.str();
+    const Real agree = kPerTriangleAgreement * (centre.norm() + meshPose.translation.norm() + r + 5);
+    for (int i = 0; i < sphere.count; ++i) {
+      const MeshContactPoint &a = sphere.points[i], &b = capsule.points[i];
+      // (the triangle may differ: equal separations at a shared edge or corner are ordered by
+      // triangle index, and the two routines round differently)
+      ASSERT_NEAR(a.separation, b.separation, agree) << info.str() << " point " << i;
+      ASSERT_LE((a.pointA - b.pointA).norm(), agree) << info.str() << " point " << i;
+      ASSERT_GE(a.normal.dot(b.normal), 1 - 100 * kEps) << info.str() << " point " << i;
+    }
+    MeshContactManifold raw;
+    contacts(bunny, meshPose, Sphere{centre, r}, Transform::identity(), margin, raw);
+    bool changed = raw.count != sphere.count;
+    for (int i = 0; !changed && i < raw.count; ++i)
+      changed = raw.points[i].triangle != sphere.points[i].triangle ||
+                raw.points[i].normal.dot(sphere.points[i].normal) < 1 - 100 * kEps;
+    corrected += changed;
+    compared += sphere.count > 0;
+  }
+  std::printf("%d of %d placements compared, %d changed by the correction\n", compared, cases, corrected);
+  EXPECT_GT(compared, cases * 9 / 10);
+  EXPECT_GT(corrected, cases / 4);
 }
 
 TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: shared machine)

@@ -37,6 +37,28 @@ inline constexpr double kTriangleContactDegenerateRelative = 64 * std::numeric_l
 /// Returns out.count > 0 (count is 0 or 1). `margin` must be >= 0 (not checked: fast path).
 bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out);
 
+/// One sphere–triangle contact without feature ids (the mesh narrow phase's form).
+struct SphereTriangleContact {
+  Vec3 pointA = Vec3::Zero();  ///< on the triangle
+  Vec3 pointB = Vec3::Zero();  ///< on the sphere
+  Vec3 normal = Vec3::UnitZ(); ///< unit, B→A
+  Real separation = 0;         ///< signed, <= margin
+  static constexpr int kFace = -1;        ///< region: the face (or the centre on the triangle)
+  static constexpr int kDegenerate = -2;  ///< region: a degenerate triangle (no face, no regions)
+  /// Where the closest point of the triangle lies (its Voronoi region, RTCD 5.1.5): kFace (the
+  /// normal is ± the face normal), 0..2 the edge from corner i to corner i+1 (mod 3) (a, b, c
+  /// = corners 0, 1, 2), 3..5 the corner region − 3, or kDegenerate.
+  int region = kDegenerate;
+  /// Unit face normal (b−a)×(c−a)/|…| (computed in double, rounded to Real) unless kDegenerate.
+  Vec3 face = Vec3::UnitZ();
+};
+
+/// sphereTriangleContacts without the feature ids (featureA's computation is skipped): the
+/// same point, normal and separation bit for bit, plus the closest point's region and the face
+/// normal. For the mesh narrow phase, whose points carry the triangle index instead.
+bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+                           SphereTriangleContact& out);
+
 /// Capsule (segment [p0, p1] ⊕ ball of `radius`) against a triangle.
 ///   - Separated cores: the closest points of the segment and the triangle (the minimum over
 ///     the segment–edge pairs, RTCD 5.1.9, and the endpoint–face projections inside the face;
@@ -48,7 +70,9 @@ bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius
 /// Then, as contact.hpp: the triangle face (or a parallel edge) and the capsule's segment, when
 /// the segment is perpendicular to the normal within kContactFaceAngleCos, are clipped against
 /// each other (up to 2 points, a capsule lying along the face), else the one closest/deepest
-/// pair. Returns out.count > 0. `margin` must be >= 0 (not checked: fast path).
+/// pair; clipped points coinciding on both bodies (within contact.cpp's rounding budget) are
+/// one, the deepest kept, as contact.cpp. Returns out.count > 0. `margin` must be >= 0 (not
+/// checked: fast path).
 bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0, const Vec3& p1, Real radius, Real margin,
                              ContactManifold& out);
 

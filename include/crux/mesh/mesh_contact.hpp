@@ -40,6 +40,11 @@
 ///     than every point kept (or nothing was kept), it is reported uncorrected (its own
 ///     feature normal) — a thin shape poking through at a flat or saddle vertex is otherwise
 ///     reported by no triangle at all.
+/// For a sphere the features a point lies on come from the sphere routine's Voronoi region
+/// (sphereTriangleContact: a face-region point has the face normal and is never corrected; an
+/// edge region's edge or a corner's two edges hold the point, other edges take the per-edge
+/// test), the same rule with fewer closest-point tests (tested against a point capsule, which
+/// takes the per-edge path).
 /// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
