@@ -8,8 +8,8 @@
 /// followed down its nearest child pair, and the search ends when the smallest pending bound
 /// exceeds the best distance. Bounds: b's node box as an OBB in a's frame (Euclidean box gaps);
 /// with MeshDistanceAccel on both sides instead the two oriented boxes (gap on the line of
-/// centres, then Euclidean gaps in either box's frame); at leaves, the triangles' corners
-/// projected on the line of centres. Leaf pairs call
+/// centres, then, for pairs close against their size, Euclidean gaps in either box's frame); at
+/// leaves, the triangles' corners projected on the line of centres. Leaf pairs call
 /// closestPoints(Triangle, Triangle) (triangle_distance.hpp), so the answer is exactly the
 /// minimum over all triangle pairs of that function (the brute-force path, QueryPath::BruteForce,
 /// computes it literally). Intersecting surfaces give distance 0 with a common point.
