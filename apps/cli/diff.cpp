@@ -541,6 +541,13 @@ void moveVec(J& v, const Vec3d& off) {
   for (std::size_t i = 0; i < 3; ++i) v[i] = v[i].get<double>() + off[Eigen::Index(i)];
 }
 
+/// Moves a protocol transform object (created when absent, identity) by off.
+void moveTransform(J& transform, const Vec3d& off) {
+  if (!transform.is_object()) transform = J::object();
+  if (!transform.contains("translation")) transform["translation"] = J::array({0, 0, 0});
+  moveVec(transform["translation"], off);
+}
+
 /// Moves a shape field of a query object; returns false when there is none.
 bool moveShape(J& q, const Vec3d& off) {
   bool moved = false;
@@ -605,14 +612,10 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
   if (c.op == "distance" || c.op == "contacts") {
     if (!q.contains("b") || !q["b"].is_object()) return std::nullopt;
     J& tb = q["b"]["transform"];
-    if (!tb.is_object()) tb = J::object();
-    if (!tb.contains("translation")) tb["translation"] = J::array({0, 0, 0});
-    moveVec(tb["translation"], offset);
+    moveTransform(tb, offset);
   } else if (c.op == "mesh_mesh" || c.op == "mesh_distance") {
     J& tb = q["transform_b"];
-    if (!tb.is_object()) tb = J::object();
-    if (!tb.contains("translation")) tb["translation"] = J::array({0, 0, 0});
-    moveVec(tb["translation"], offset);
+    moveTransform(tb, offset);
   } else if (c.op == "model_distance") {
     // move model b (model a when b is an ancestor of a, which would carry a along): its local
     // translation in the last line that sets it, i.e. by R_parent·offset in the world
@@ -643,10 +646,7 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
       const bool sets = (op == "add_model" && m.value("name", "") == who) ||
                         (op == "set_transform" && m.value("model", "") == who);
       if (!sets) continue;
-      J& tr = m["transform"];
-      if (!tr.is_object()) tr = J::object();
-      if (!tr.contains("translation")) tr["translation"] = J::array({0, 0, 0});
-      moveVec(tr["translation"], offset);
+      moveTransform(m["transform"], offset);
       *line = m.dump();
       return out;
     }
@@ -656,17 +656,12 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
     for (auto line = out.setup.rbegin(); line != out.setup.rend(); ++line) {
       J m = J::parse(*line, nullptr, false);
       if (!m.is_object() || m.value("op", "") != "add_model") continue;
-      J& tr = m["transform"];
-      if (!tr.is_object()) tr = J::object();
-      if (!tr.contains("translation")) tr["translation"] = J::array({0, 0, 0});
-      moveVec(tr["translation"], offset);
+      moveTransform(m["transform"], offset);
       *line = m.dump();
       return out;
     }
     return std::nullopt;
   } else {
-    const J qt = q.contains("triangle") && c.op == "triangle_triangle" ? J() : J();
-    (void)qt;
     bool moved = moveShape(q, offset);
     if (c.op == "triangle_triangle" && q.contains("b")) {
       for (auto& p : q["b"]) moveVec(p, offset);
