@@ -29,6 +29,7 @@ constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
 using contact_detail::kOnFeatureUlps;    // contact_internal.hpp: shared with triangle_contact.cpp
+using contact_detail::removeCoincident;  // contact_internal.hpp: also the capsule–triangle routine's
 using contact_detail::kSliverAreaRatio;
 constexpr double kEpsReal = std::numeric_limits<Real>::epsilon();
 
@@ -113,23 +114,6 @@ void collapseFace(Feature& f) {
   }
   const std::uint32_t i0 = f.vid[0] & 0xFFFFFFu, i1 = f.vid[1] & 0xFFFFFFu;
   f.id = featureId(FeatureKind::Edge, std::min(i0, i1) * 64 + std::max(i0, i1));
-}
-
-/// Removes the points of pts[0, count) that coincide with another on both bodies (pointA and
-/// pointB within `tol` of it), keeping the deepest (smallest separation) of each such group, so
-/// that an engine never gets two constraints at one place. Order is otherwise kept.
-void removeCoincident(ContactPoint* pts, int& count, double tol) {
-  int k = 0;
-  for (int i = 0; i < count; ++i) {
-    int same = -1;
-    for (int j = 0; j < k && same < 0; ++j)
-      if ((pts[i].pointA - pts[j].pointA).template cast<double>().norm() <= tol &&
-          (pts[i].pointB - pts[j].pointB).template cast<double>().norm() <= tol)
-        same = j;
-    if (same < 0) pts[k++] = pts[i];
-    else if (pts[i].separation < pts[same].separation) pts[same] = pts[i];
-  }
-  count = k;
 }
 
 /// The feature of P's core that supports direction d (unit, world). With allowFace false a

@@ -1,7 +1,9 @@
 // Rules shared by the generic contact clipping (contact.cpp) and the closed-form triangle
-// contacts (triangle_contact.cpp), which must classify triangle features identically.
+// contacts (triangle_contact.cpp), which must classify triangle features and merge coincident
+// points identically.
 #pragma once
 
+#include <crux/geometry/contact.hpp>
 #include <crux/math.hpp>
 
 #include <limits>
@@ -22,5 +24,22 @@ inline constexpr double kOnFeatureUlps = 8;
 /// triangles). About 0.075 (a 1:13 triangle) in double builds, about 4e-9 in float builds.
 inline constexpr double kSliverAreaRatio =
     0.3 * std::numeric_limits<double>::epsilon() / (0.5 * kOnFeatureUlps * double(std::numeric_limits<Real>::epsilon()));
+
+/// Removes the points of pts[0, count) that coincide with another on both bodies (pointA and
+/// pointB within `tol` of it), keeping the deepest (smallest separation) of each such group, so
+/// that an engine never gets two constraints at one place. Order is otherwise kept.
+inline void removeCoincident(ContactPoint* pts, int& count, double tol) {
+  int k = 0;
+  for (int i = 0; i < count; ++i) {
+    int same = -1;
+    for (int j = 0; j < k && same < 0; ++j)
+      if ((pts[i].pointA - pts[j].pointA).template cast<double>().norm() <= tol &&
+          (pts[i].pointB - pts[j].pointB).template cast<double>().norm() <= tol)
+        same = j;
+    if (same < 0) pts[k++] = pts[i];
+    else if (pts[i].separation < pts[same].separation) pts[same] = pts[i];
+  }
+  count = k;
+}
 
 }  // namespace crux::contact_detail

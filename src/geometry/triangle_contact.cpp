@@ -561,19 +561,10 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     }
     if (np > 0 && !skew) {
       // Points coinciding on both bodies (within tol) are one, the deepest kept (contact.cpp's
-      // removeCoincident): e.g. a clipped end landing on the triangle's vertex.
-      int k = 0;
-      for (int i = 0; i < np; ++i) {
-        int same = -1;
-        for (int j = 0; j < k && same < 0; ++j)
-          if ((out.points[i].pointA - out.points[j].pointA).template cast<double>().norm() <= tol &&
-              (out.points[i].pointB - out.points[j].pointB).template cast<double>().norm() <= tol)
-            same = j;
-        if (same < 0) out.points[k++] = out.points[i];
-        else if (out.points[i].separation < out.points[same].separation) out.points[same] = out.points[i];
-      }
+      // rule): e.g. a clipped end landing on the triangle's vertex.
+      contact_detail::removeCoincident(out.points, np, tol);
       out.normal = nn.cast<Real>();
-      out.count = k;
+      out.count = np;
       return true;
     }
   }
