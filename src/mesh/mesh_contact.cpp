@@ -59,11 +59,43 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
         }
       }
     }
+  activity_.assign(tris.size(), 0);
+  for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    const Triangle tri = mesh.triangle(t);
+    // the unit face normal as Collector::correct() computes it
+    Vec3 face = (tri.b - tri.a).cross(tri.c - tri.a);
+    const Real len = face.norm();
+    if (!(len > 0)) {
+      activity_[t] = 0x3f;
+      continue;
+    }
+    face /= len;
+    const Real tol = meshFeatureTolerance(tri);
+    std::uint8_t bits = 0;
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t w = opposite_[3 * std::size_t(t) + e];
+      if (w == kNone) {
+        bits |= std::uint8_t(3u << (2 * e));
+        continue;
+      }
+      // the neighbour's vertex falls away from the front side (d < -tol) or from the back side
+      // (-face·(w − corner) = -d exactly, so the back test is d > tol)
+      const Real d = face.dot(mesh.vertices()[w] - tri[e]);
+      bits |= std::uint8_t((d < -tol ? 1u : 0u) << (2 * e)) | std::uint8_t((d > tol ? 1u : 0u) << (2 * e + 1));
+    }
+    activity_[t] = bits;
+  }
   const auto& prims = mesh.bvh().primIndices;
-  oppositeBySlot_.assign(opposite_.size(), kNone);
-  for (std::size_t k = 0; k < prims.size(); ++k)
-    for (int e = 0; e < 3; ++e) oppositeBySlot_[3 * k + e] = opposite_[3 * std::size_t(prims[k]) + e];
+  activityBySlot_.resize(prims.size());
+  for (std::size_t k = 0; k < prims.size(); ++k) activityBySlot_[k] = activity_[prims[k]];
   vertexCount_ = mesh.vertices().size();
+}
+
+Real meshFeatureTolerance(const Triangle& tri) {
+  const Real longest = std::sqrt(std::max(
+      {(tri.b - tri.a).squaredNorm(), (tri.c - tri.b).squaredNorm(), (tri.a - tri.c).squaredNorm()}));
+  return kMeshFeatureRelativeTolerance *
+         (longest + std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()}));
 }
 
 Real MeshContactManifold::depth() const {
@@ -288,16 +320,12 @@ struct Collector {
   /// Internal-edge correction of one point, all in the mesh frame (see the header). Returns
   /// false to drop it (p is then unchanged: it changes only when kept with the face normal).
   bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, MeshContactPoint& p) const {
-    const Vec3 e0 = tri.b - tri.a, e1 = tri.c - tri.b, e2 = tri.a - tri.c;
-    Vec3 face = e0.cross(tri.c - tri.a);
+    Vec3 face = (tri.b - tri.a).cross(tri.c - tri.a);
     const Real len = face.norm();
     if (!(len > 0)) return true;  // degenerate triangle: no face cone
     face /= len;
     if (std::abs(face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
-    const Real scale = std::max({e0.norm(), e1.norm(), e2.norm()}) +
-                       std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(),
-                                 tri.c.cwiseAbs().maxCoeff()});
-    const Real tol = kMeshFeatureRelativeTolerance * scale;
+    const Real tol = meshFeatureTolerance(tri);
     const Vec3& pa = p.pointA;
     bool onEdge[3];
     int edges = 0;
@@ -306,29 +334,38 @@ struct Collector {
       edges += onEdge[i];
     }
     if (edges == 0) return true;  // face interior: the convex routine's normal stands
+    bool back = false;  // the shape is on the triangle's back side
     {
       // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
       // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
       Real lo = 0, hi = 0;
       ls.project(face, lo, hi);
       const Real base = face.dot(tri.a);
-      if (base - lo > hi - base) face = -face;
+      back = base - lo > hi - base;
+      if (back) face = -face;
     }
+    const unsigned active = activity(t, slot);
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && activeEdge(t, slot, tri, face, i, tol)) return true;
+      if (onEdge[i] && (active >> (2 * i + back) & 1u)) return true;
     // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
-    const Vec3 nrm = -face;  // B -> A
-    const Vec3 pb = ls.support(nrm);
-    const Real sep = face.dot(pb - tri.a);
-    if (sep > margin) return false;
-    const Vec3 pa2 = pb - sep * face;
+    MeshContactPoint q = p;
+    if (!faceContact(tri, face, q)) return false;
     // The projection must lie on this triangle: otherwise the triangle beyond the inactive
     // feature (or another one) holds that point and reports it with its own face.
-    if ((closestPoint(tri, pa2) - pa2).squaredNorm() > tol * tol) return false;
-    p.normal = nrm;
-    p.pointB = pb;
-    p.separation = sep;
-    p.pointA = pa2;
+    if ((closestPoint(tri, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
+    p = q;
+    return true;
+  }
+
+  /// The inactive-feature contact (see the header): the shape's deepest point along the unit face
+  /// normal `face` (on the shape's side) as q.pointB, its projection on the triangle's plane as
+  /// q.pointA, the normal −face (B → A). False when that separation exceeds the margin.
+  bool faceContact(const Triangle& tri, const Vec3& face, MeshContactPoint& q) const {
+    q.normal = -face;
+    q.pointB = ls.support(q.normal);
+    q.separation = face.dot(q.pointB - tri.a);
+    if (q.separation > margin) return false;
+    q.pointA = q.pointB - q.separation * face;
     return true;
   }
 
@@ -370,14 +407,10 @@ struct Collector {
     add(p);
   }
 
-  /// Whether edge i of triangle t is active (see the header): no neighbour (or a degenerate
-  /// one), or the neighbour's opposite vertex below the plane of `face` (the unit normal on the
-  /// shape's side) by more than tol.
-  bool activeEdge(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Vec3& face, int i, Real tol) const {
-    const std::uint32_t w = slot != kNoSlot ? adjacency->oppositeVertexBySlot(slot, i) : adjacency->oppositeVertex(t, i);
-    if (w == MeshAdjacency::kNone) return true;
-    const Real d = face.dot(mesh.vertices()[w] - tri[i]);
-    return d < -tol;  // convex: the neighbour falls away from the shape's side
+  /// The edge activity bits of triangle t (MeshAdjacency::edgeActivity), by slot when it came
+  /// from the BVH.
+  unsigned activity(std::uint32_t t, std::uint32_t slot) const {
+    return slot != kNoSlot ? adjacency->edgeActivityBySlot(slot) : adjacency->edgeActivity(t);
   }
 
   /// correct() for a sphere whose closest point lies in an edge or corner region of a
@@ -388,12 +421,7 @@ struct Collector {
   bool correctSphere(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const SphereTriangleContact& h,
                      MeshContactPoint& p) const {
     if (std::abs(h.face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
-    // correct()'s tolerance: (longest edge + largest |coordinate|) × kMeshFeatureRelativeTolerance
-    // (one square root: the largest root is the root of the largest square)
-    const Real longest2 = std::max({(tri.b - tri.a).squaredNorm(), (tri.c - tri.b).squaredNorm(), (tri.a - tri.c).squaredNorm()});
-    const Real scale = std::sqrt(longest2) + std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(),
-                                                       tri.c.cwiseAbs().maxCoeff()});
-    const Real tol = kMeshFeatureRelativeTolerance * scale;
+    const Real tol = meshFeatureTolerance(tri);  // correct()'s
     const Real tol2 = tol * tol;
     // the region's edge (or the corner's two edges); any other edge by correct()'s test (a
     // point near a sharp corner can be within tol of the next edge)
@@ -404,15 +432,15 @@ struct Collector {
     for (int i = 0; i < 3; ++i)
       if (!onEdge[i]) onEdge[i] = onEdgeWithin(tri, i, p.pointA, tol);
     // the side of the plane the sphere is on: its centre's (correct()'s rule for a sphere)
-    const Vec3 face = h.face.dot(ls.p[0]) < h.face.dot(tri.a) ? Vec3(-h.face) : h.face;
+    const bool back = h.face.dot(ls.p[0]) < h.face.dot(tri.a);
+    const unsigned active = activity(t, slot);
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && activeEdge(t, slot, tri, face, i, tol)) return true;
+      if (onEdge[i] && (active >> (2 * i + back) & 1u)) return true;
+    const Vec3 face = back ? Vec3(-h.face) : h.face;
     // Inactive: the face normal, the sphere's deepest point along it and its projection.
-    const Vec3 nrm = -face;  // B -> A
-    const Vec3 pb = ls.support(nrm);
-    const Real sep = face.dot(pb - tri.a);
-    if (sep > margin) return false;
-    const Vec3 pa2 = pb - sep * face;
+    MeshContactPoint q = p;
+    if (!faceContact(tri, face, q)) return false;
+    const Vec3& pa2 = q.pointA;
     // Farther than 2 tol from the region's edge line (or corner) is farther than tol from the
     // triangle (the projection lies beyond that line, up to rounding); else the exact test.
     if (region < 3) {
@@ -423,10 +451,7 @@ struct Collector {
       return false;
     }
     if ((closestPoint(tri, pa2) - pa2).squaredNorm() > tol2) return false;
-    p.normal = nrm;
-    p.pointB = pb;
-    p.separation = sep;
-    p.pointA = pa2;
+    p = q;
     return true;
   }
 

@@ -595,6 +595,84 @@ TEST(MeshContact, AdjacencyOfAGrid) {
   EXPECT_EQ(interior, 2 * (edges - boundary));
 }
 
+TEST(MeshContact, EdgeActivityOfRidgeValleyFlatAndBoundaryEdges) {
+  // Hand-derived: a ridge (convex seen from above, concave from below), a valley (the reverse),
+  // a flat seam (inactive on both sides) and boundary edges (active on both sides). Every
+  // triangle's corner order makes its normal point up (+z: the front side).
+  auto bitsOfSharedEdge = [](const Mesh& mesh, const MeshAdjacency& adjacency, std::uint32_t t) {
+    for (int e = 0; e < 3; ++e)
+      if (adjacency.neighbor(t, e) != MeshAdjacency::kNone) return (adjacency.edgeActivity(t) >> (2 * e)) & 3u;
+    ADD_FAILURE() << mesh.name() << ": triangle " << t << " has no neighbour";
+    return 0u;
+  };
+  for (const Real apex : {Real(1), Real(-1), Real(0)}) {  // ridge, valley, flat
+    std::vector<Vec3> v = {{-1, -1, 0}, {0, -1, apex}, {0, 1, apex}, {1, -1, 0}};
+    std::vector<TriangleIndices> t = {{0, 1, 2}, {1, 3, 2}};
+    const Mesh m(std::move(v), std::move(t), "fold");
+    const MeshAdjacency adjacency(m);
+    const unsigned expected = apex > 0 ? 1u : apex < 0 ? 2u : 0u;  // bit 0 front (above), bit 1 back
+    for (std::uint32_t tri = 0; tri < 2; ++tri) {
+      EXPECT_EQ(bitsOfSharedEdge(m, adjacency, tri), expected) << "apex " << double(apex) << " triangle " << tri;
+      for (int e = 0; e < 3; ++e)
+        if (adjacency.neighbor(tri, e) == MeshAdjacency::kNone)
+          EXPECT_EQ((adjacency.edgeActivity(tri) >> (2 * e)) & 3u, 3u) << "boundary edge " << e;
+    }
+  }
+  // A zero-area triangle has no face cone: every bit set.
+  const Mesh sliver({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 1, 3}}, "sliver");
+  EXPECT_EQ(MeshAdjacency(sliver).edgeActivity(0), 0x3fu);
+}
+
+TEST(MeshContact, EdgeActivityMatchesTheDihedralSignOnABumpyGridAndBySlot) {
+  // A random height field (a few exactly flat patches): each interior edge is convex on exactly
+  // one side unless flat; the sign of the neighbour's opposite vertex against the plane,
+  // computed here in double from the mesh arrays, decides it wherever it is far from the
+  // tolerance.
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::vector<double> heights(31 * 31);
+  for (double& h : heights) h = u(rng);
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) heights[std::size_t(j * 31 + i)] = 0.25;  // a flat patch
+  const Mesh grid = gridMesh(30, 30, 1, [&](int i, int j) { return Real(heights[std::size_t(j * 31 + i)]); });
+  const MeshAdjacency adjacency(grid);
+  int checked = 0, flat = 0;
+  for (std::uint32_t t = 0; t < grid.triangleCount(); ++t) {
+    const Triangle tri = grid.triangle(t);
+    const Eigen::Vector3d a = tri.a.cast<double>(), b = tri.b.cast<double>(), c = tri.c.cast<double>();
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    for (int e = 0; e < 3; ++e) {
+      const unsigned bits = (adjacency.edgeActivity(t) >> (2 * e)) & 3u;
+      const std::uint32_t nb = adjacency.neighbor(t, e);
+      if (nb == MeshAdjacency::kNone) {
+        EXPECT_EQ(bits, 3u) << "triangle " << t << " boundary edge " << e;
+        continue;
+      }
+      double d = 0;  // the neighbour's third corner against this plane
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t w = grid.triangles()[nb][k];
+        if (w != grid.triangles()[t][e] && w != grid.triangles()[t][(e + 1) % 3])
+          d = n.dot(grid.vertices()[w].cast<double>() - tri[e].cast<double>());
+      }
+      // Beyond twice the feature tolerance the sign decides; within half of it the edge is flat
+      // (inactive on both sides); between, the Real rounding of the plane may go either way.
+      const double tol = double(meshFeatureTolerance(tri));
+      if (std::abs(d) > 2 * tol) {
+        EXPECT_EQ(bits, d < 0 ? 1u : 2u) << "triangle " << t << " edge " << e << " d " << d << " tol " << tol;
+        ++checked;
+      } else if (std::abs(d) < tol / 2) {
+        EXPECT_EQ(bits, 0u) << "triangle " << t << " edge " << e << " d " << d << " tol " << tol;
+        ++flat;
+      }
+    }
+  }
+  EXPECT_GT(checked, 3000);
+  EXPECT_GT(flat, 100);
+  const auto& prims = grid.bvh().primIndices;
+  for (std::size_t k = 0; k < prims.size(); ++k)
+    ASSERT_EQ(adjacency.edgeActivityBySlot(std::uint32_t(k)), adjacency.edgeActivity(prims[k])) << "slot " << k;
+}
+
 }  // namespace
 }  // namespace crux
 

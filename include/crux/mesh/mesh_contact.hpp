@@ -30,7 +30,8 @@
 /// kMeshFeatureRelativeTolerance) is classified with the triangle adjacency:
 ///   - the edge is *active* when it has no neighbour (boundary or non-manifold) or is convex
 ///     (the neighbour's opposite vertex is below the triangle's plane, on the side away from the
-///     shape); a vertex contact is active when either of the triangle's two edges at it is;
+///     shape), decided once per mesh and side (MeshAdjacency::edgeActivity); a vertex contact
+///     is active when either of the triangle's two edges at it is;
 ///   - an *inactive* (flat or concave) feature gets the face normal instead: the contact is
 ///     recomputed as the shape's deepest point along the face normal against the triangle's
 ///     plane, and dropped when its separation exceeds the margin or its projection on the plane
@@ -84,11 +85,19 @@ class MeshAdjacency {
   /// is no neighbour or it has no third vertex (degenerate). Kept next to the neighbour so that
   /// the contact correction reads one array instead of two (fewer cache misses per query).
   std::uint32_t oppositeVertex(std::uint32_t t, int edge) const { return opposite_[3 * std::size_t(t) + edge]; }
-  /// oppositeVertex of the triangle in BVH slot k (mesh.bvh().primIndices[k]): the same data in
-  /// the BVH's leaf order, read by the BVH query next to the slot's triangle (cache locality).
-  std::uint32_t oppositeVertexBySlot(std::uint32_t k, int edge) const {
-    return oppositeBySlot_[3 * std::size_t(k) + edge];
-  }
+  /// Which edges of triangle t are active (see the internal-edge rule above), decided once here
+  /// instead of per contact: bit 2·edge is set when the edge is active for a shape on the
+  /// triangle's front side (the side its corner order's normal (b − a) × (c − a) points to),
+  /// bit 2·edge + 1 for a shape on its back side. An edge with no neighbour is active on both
+  /// sides; otherwise it is active on a side when the neighbour's opposite vertex lies below the
+  /// plane, seen from that side, by more than meshFeatureTolerance(triangle) (the unit normal
+  /// and that distance computed in Real, as the contact correction computes its face normal). A
+  /// zero-area triangle has no face cone (its contacts are never corrected): all bits set.
+  std::uint8_t edgeActivity(std::uint32_t t) const { return activity_[t]; }
+  /// edgeActivity of the triangle in BVH slot k (mesh.bvh().primIndices[k]): the same data in
+  /// the BVH's leaf order, read by the BVH query next to the slot's triangle (cache locality:
+  /// one byte per triangle instead of the neighbour's vertex).
+  std::uint8_t edgeActivityBySlot(std::uint32_t k) const { return activityBySlot_[k]; }
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
   /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
   std::size_t vertexCount() const { return vertexCount_; }
@@ -96,7 +105,8 @@ class MeshAdjacency {
  private:
   std::vector<std::uint32_t> neighbors_;
   std::vector<std::uint32_t> opposite_;
-  std::vector<std::uint32_t> oppositeBySlot_;
+  std::vector<std::uint8_t> activity_;
+  std::vector<std::uint8_t> activityBySlot_;
   std::size_t vertexCount_ = 0;
 };
 
@@ -108,6 +118,9 @@ inline constexpr Real kMeshFaceConeCos = Real(1) - Real(100) * std::numeric_limi
 /// A mesh contact point lies on a triangle edge when within this × (the triangle's length scale:
 /// longest edge + largest |coordinate|) of it: 1000 ulps of Real.
 inline constexpr Real kMeshFeatureRelativeTolerance = Real(1000) * std::numeric_limits<Real>::epsilon();
+/// That tolerance for one triangle: kMeshFeatureRelativeTolerance × (longest edge + largest
+/// |coordinate|).
+Real meshFeatureTolerance(const Triangle& tri);
 /// Two candidate points merge when their mesh points are within this × the shape's size.
 inline constexpr Real kMeshContactMergeRelativeTolerance = Real(1e-3);
 /// Capacity of the candidate buffer before reduction.
