@@ -420,8 +420,10 @@ TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
   std::uniform_real_distribution<double> lift(-0.01, 0.05);
   const Real shapeScale = Real(0.05) * diag;
   int hits = 0;
+  // (each trial runs both paths over all 75k triangles: one per shape under CRUX_TEST_SCALE 0.1)
+  const int trials = test::scaledCases(3, 1);
   for (const ShapeCase& sc : shapes(hull)) {
-    for (int trial = 0; trial < 3; ++trial) {
+    for (int trial = 0; trial < trials; ++trial) {
       const Triangle t = bunny.triangle(pick(rng));
       const Vec3 n = (t.b - t.a).cross(t.c - t.a).normalized();
       // rotated mesh; the shape near a triangle, from 1% inside to 5% of the diagonal outside
@@ -528,7 +530,8 @@ TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: share
   for (int s = 0; s < 3; ++s) {
     // resting poses: the shape's deepest point 0.001·diag below a triangle's centroid
     std::vector<Transform> poses;
-    while (poses.size() < 500) {
+    const std::size_t count = std::size_t(test::scaledCases(500, 50));  // (figures only)
+    while (poses.size() < count) {
       const Triangle t = bunny.triangle(pick(rng));
       Vec3 n = (t.b - t.a).cross(t.c - t.a);
       if (!(n.norm() > 0)) continue;
