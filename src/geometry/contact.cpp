@@ -28,10 +28,10 @@ constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 /// sin of the feature angle (kContactFaceAngleCos).
 const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
-using contact_detail::kOnFeatureUlps;    // contact_internal.hpp: shared with triangle_contact.cpp
-using contact_detail::removeCoincident;  // contact_internal.hpp: also the capsule–triangle routine's
+// contact_internal.hpp, shared with triangle_contact.cpp: the sliver rule, the rounding budget
+// (coincidenceTolerance) and the reference clipping with its coincident-point merge
+// (clipToReference).
 using contact_detail::kSliverAreaRatio;
-constexpr double kEpsReal = std::numeric_limits<Real>::epsilon();
 
 /// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
 struct Feature {
@@ -81,12 +81,6 @@ void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int n
                                                                           std::max(is, others[bestK])));
 }
 
-/// Rounding budget of a feature's coordinates: kOnFeatureUlps ulps of Real × its largest |coordinate|.
-double coincidenceTolerance(const V3* v, int n, double scale) {
-  for (int i = 0; i < n; ++i) scale = std::max(scale, v[i].cwiseAbs().maxCoeff());
-  return kOnFeatureUlps * kEpsReal * scale;
-}
-
 /// A face whose loop has coincident corners (a box with a zero half extent across it, e.g. the
 /// end face of a segment-like box) bounds no area there: its zero-length edges would clip
 /// nothing and leave points off the shape, and its coincident corners would be duplicate
@@ -94,7 +88,7 @@ double coincidenceTolerance(const V3* v, int n, double scale) {
 /// a loop left with two corners is that edge, with one that vertex.
 void collapseFace(Feature& f) {
   if (f.n < 3) return;
-  const double tol = coincidenceTolerance(f.v, f.n, 0);
+  const double tol = contact_detail::coincidenceTolerance(f.v, f.n, 0);
   int k = 0;
   for (int i = 0; i < f.n; ++i) {
     if (k > 0 && (f.v[i] - f.v[k - 1]).norm() <= tol) continue;
@@ -222,34 +216,6 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
   }
 }
 
-struct ClipVertex {
-  V3 p;
-  std::uint32_t id;
-};
-
-/// Sutherland–Hodgman: keeps the part of polygon `in` (closed loop, or a segment when n == 2)
-/// with dot(x - o, m) >= 0.
-int clip(const ClipVertex* in, int n, const V3& o, const V3& m, std::uint32_t cutId, ClipVertex* out) {
-  if (n == 2) {  // a segment: clip its parameter interval
-    const double d0 = (in[0].p - o).dot(m), d1 = (in[1].p - o).dot(m);
-    if (d0 < 0 && d1 < 0) return 0;
-    int k = 0;
-    if (d0 >= 0) out[k++] = in[0];
-    if ((d0 < 0) != (d1 < 0)) out[k++] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cutId};
-    if (d1 >= 0) out[k++] = in[1];
-    return k;
-  }
-  int k = 0;
-  for (int i = 0; i < n; ++i) {
-    const ClipVertex& a = in[i];
-    const ClipVertex& b = in[(i + 1) % n];
-    const double da = (a.p - o).dot(m), db = (b.p - o).dot(m);
-    if (da >= 0) out[k++] = a;
-    if ((da < 0) != (db < 0) && k < kMaxClipVerts) out[k++] = {a.p + (b.p - a.p) * (da / (da - db)), cutId};
-  }
-  return k;
-}
-
 /// Keeps the deepest point and the three that maximise the manifold's area (about axis u).
 void reduce(ContactPoint* pts, int& count, const V3& u) {
   if (count <= ContactManifold::kMaxContactPoints) return;
@@ -349,65 +315,13 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
       u = ref.normal.normalized();
       n = refIsA ? V3(-u) : u;
     }
-    ClipVertex bufA[kMaxClipVerts], bufB[kMaxClipVerts];
-    int cnt = inc.n;
-    for (int i = 0; i < cnt; ++i) bufA[i] = {inc.v[i], inc.vid[i]};
-    ClipVertex* cur = bufA;
-    ClipVertex* nxt = bufB;
-    if (ref.n >= 3) {
-      for (int i = 0; i < ref.n && cnt > 0; ++i) {
-        const V3 e = ref.v[(i + 1) % ref.n] - ref.v[i];
-        cnt = clip(cur, cnt, ref.v[i], u.cross(e), inc.id, nxt);
-        std::swap(cur, nxt);
-      }
-    } else {
-      V3 e = ref.v[1] - ref.v[0];
-      e -= u * u.dot(e);
-      cnt = clip(cur, cnt, ref.v[0], e, inc.id, nxt);
-      std::swap(cur, nxt);
-      if (cnt > 0) cnt = clip(cur, cnt, ref.v[1], -e, inc.id, nxt);
-      std::swap(cur, nxt);
-    }
-    ContactPoint pts[kMaxClipVerts];
-    int np = 0;
-    const V3 r0 = ref.v[0];
-    // Edge reference: each point is measured from its closest point on the reference edge; two
-    // edges within the feature angle but skew (offset across the normal) have no common
-    // perpendicular there, and projecting along the normal would leave the reference edge
-    // (defect 2 of issue 6: points outside a box). When that offset exceeds the rounding budget
-    // (kOnFeatureUlps; for a rounded reference, the offset whose effect on its surface is that
-    // budget), the pair falls back to the single GJK/EPA point.
-    // The pair's rounding budget: also the distance within which two points are one (below).
+    // The pair's rounding budget: also the distance within which two points are one.
     double scale = rA + rB + m;
     for (int i = 0; i < ref.n; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
-    const double tol = coincidenceTolerance(inc.v, inc.n, scale);
-    double lateralTol = 0;
-    if (ref.n == 2) lateralTol = tol + std::sqrt(2 * (refIsA ? rA : rB) * tol);
-    bool skew = false;
-    for (int i = 0; i < cnt && !skew; ++i) {
-      const V3 q = cur[i].p;
-      double s = u.dot(q - r0);
-      if (ref.n == 2) {
-        const V3 e = ref.v[1] - ref.v[0];
-        const double e2 = e.squaredNorm();
-        const double t = e2 > 0 ? std::clamp(e.dot(q - r0) / e2, 0.0, 1.0) : 0.0;
-        const V3 diff = q - (r0 + t * e);
-        s = u.dot(diff);
-        if (!((diff - s * u).norm() <= lateralTol)) skew = true;
-      }
-      const double sep = s - rA - rB;
-      if (!(sep <= m)) continue;
-      const V3 onRef = q - s * u;
-      const V3 ca = refIsA ? onRef : q, cb = refIsA ? q : onRef;
-      ContactPoint& c = pts[np++];
-      c.pointA = (ca - n * rA).cast<Real>();
-      c.pointB = (cb + n * rB).cast<Real>();
-      c.separation = static_cast<Real>(sep);
-      c.featureA = refIsA ? ref.id : cur[i].id;
-      c.featureB = refIsA ? cur[i].id : ref.id;
-    }
-    if (np > 0 && !skew) {
-      removeCoincident(pts, np, tol);
+    const double tol = contact_detail::coincidenceTolerance(inc.v, inc.n, scale);
+    ContactPoint pts[kMaxClipVerts];
+    int np = contact_detail::clipToReference<kMaxClipVerts>(ref, inc, refIsA, u, n, rA, rB, m, tol, pts);
+    if (np > 0) {
       reduce(pts, np, u);
       out.normal = n.cast<Real>();
       out.count = np;

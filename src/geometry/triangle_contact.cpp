@@ -197,29 +197,6 @@ void singlePoint(const TriD& t, const V3& n, const V3& pa, const V3& pbCore, dou
   (void)margin;
 }
 
-struct ClipVertex {
-  V3 p;
-  std::uint32_t id;
-};
-
-/// Keeps the part of segment `in` (2 vertices) with dot(x - o, m) >= 0 (contact.cpp's clip).
-int clipSegment(const ClipVertex* in, int n, const V3& o, const V3& m, std::uint32_t cutId, ClipVertex* out) {
-  if (n < 2) {
-    if (n == 1 && (in[0].p - o).dot(m) >= 0) {
-      out[0] = in[0];
-      return 1;
-    }
-    return 0;
-  }
-  const double d0 = (in[0].p - o).dot(m), d1 = (in[1].p - o).dot(m);
-  if (d0 < 0 && d1 < 0) return 0;
-  int k = 0;
-  if (d0 >= 0) out[k++] = in[0];
-  if ((d0 < 0) != (d1 < 0)) out[k++] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cutId};
-  if (d1 >= 0) out[k++] = in[1];
-  return k;
-}
-
 }  // namespace
 
 namespace {
@@ -505,64 +482,14 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
       u = ref.normal.normalized();
       nn = -u;
     }
-    ClipVertex bufA[4], bufB[4];
-    int cnt = inc.n;
-    for (int i = 0; i < cnt; ++i) bufA[i] = {inc.v[i], inc.vid[i]};
-    ClipVertex* cur = bufA;
-    ClipVertex* nxt = bufB;
-    if (refIsA) {
-      for (int i = 0; i < 3 && cnt > 0; ++i) {
-        const V3 e = ref.v[(i + 1) % 3] - ref.v[i];
-        cnt = clipSegment(cur, cnt, ref.v[i], u.cross(e), inc.id, nxt);
-        std::swap(cur, nxt);
-      }
-    } else {
-      V3 e = ref.v[1] - ref.v[0];
-      e -= u * u.dot(e);
-      cnt = clipSegment(cur, cnt, ref.v[0], e, inc.id, nxt);
-      std::swap(cur, nxt);
-      if (cnt > 0) cnt = clipSegment(cur, cnt, ref.v[1], -e, inc.id, nxt);
-      std::swap(cur, nxt);
-    }
-    int np = 0;
-    const V3 r0 = ref.v[0];
-    // Edge reference (the capsule's segment), as contact.cpp: each point is measured from its
-    // closest point on the segment; a pair of skew edges (offset across the normal beyond the
-    // rounding budget: 8 ulps of Real × scale, widened for the radius) falls back to the single
-    // closest pair.
+    // The rounding budget, as contact.cpp's (for the segment reference, widened for the radius
+    // by clipToReference).
     double scale = r + mg;
     for (int i = 0; i < ref.n; ++i) scale = std::max(scale, ref.v[i].cwiseAbs().maxCoeff());
-    for (int i = 0; i < inc.n; ++i) scale = std::max(scale, inc.v[i].cwiseAbs().maxCoeff());
-    const double tol = contact_detail::kOnFeatureUlps * double(std::numeric_limits<Real>::epsilon()) * scale;
-    double lateralTol = 0;
-    if (!refIsA) lateralTol = tol + std::sqrt(2 * r * tol);
-    bool skew = false;
-    for (int i = 0; i < cnt && !skew; ++i) {
-      const V3 q = cur[i].p;
-      double sd = u.dot(q - r0);
-      if (!refIsA) {
-        const V3 e = ref.v[1] - ref.v[0];
-        const double e2 = e.squaredNorm();
-        const double tt = e2 > 0 ? std::clamp(e.dot(q - r0) / e2, 0.0, 1.0) : 0.0;
-        const V3 diff = q - (r0 + tt * e);
-        sd = u.dot(diff);
-        if (!((diff - sd * u).norm() <= lateralTol)) skew = true;
-      }
-      const double sep = sd - r;
-      if (!(sep <= mg)) continue;
-      const V3 onRef = q - sd * u;
-      const V3 ca = refIsA ? onRef : q, cb = refIsA ? q : onRef;
-      ContactPoint& c = out.points[np++];
-      c.pointA = ca.cast<Real>();
-      c.pointB = (cb + nn * r).cast<Real>();
-      c.separation = static_cast<Real>(sep);
-      c.featureA = refIsA ? ref.id : cur[i].id;
-      c.featureB = refIsA ? cur[i].id : ref.id;
-    }
-    if (np > 0 && !skew) {
-      // Points coinciding on both bodies (within tol) are one, the deepest kept (contact.cpp's
-      // rule): e.g. a clipped end landing on the triangle's vertex.
-      contact_detail::removeCoincident(out.points, np, tol);
+    const double tol = contact_detail::coincidenceTolerance(inc.v, inc.n, scale);
+    // (a segment clipped stays at most 2 points)
+    const int np = contact_detail::clipToReference<4>(ref, inc, refIsA, u, nn, 0.0, r, mg, tol, out.points);
+    if (np > 0) {
       out.normal = nn.cast<Real>();
       out.count = np;
       return true;
