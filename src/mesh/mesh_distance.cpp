@@ -10,7 +10,12 @@
 
 #include <Eigen/Eigenvalues>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -64,7 +69,7 @@ Real boxBoxLowerBound(const Aabb& a, const Aabb& b, const Relative& rel, Real pa
 /// gap of their projections on the line of their centroids and on each triangle's normal (for
 /// nearly parallel facing triangles the normal is the nearly exact axis); -inf when none separates.
 /// The normals (b − a) × (c − a) of a and b are passed in (computed once per triangle of a leaf pair).
-Real triangleLowerBound(const Triangle& a, const Vec3& na, const Triangle& b, const Vec3& nb) {
+[[maybe_unused]] Real triangleLowerBound(const Triangle& a, const Vec3& na, const Triangle& b, const Vec3& nb) {
   auto gap = [&](const Vec3& u) {
     const Real len = u.norm();
     if (!(len > 0)) return -kNoLimit;
@@ -79,9 +84,244 @@ Real triangleLowerBound(const Triangle& a, const Vec3& na, const Triangle& b, co
 }
 
 /// Distance between two axis-aligned boxes in one frame (0 when they touch).
-Real aabbDistance(const Aabb& a, const Aabb& b) {
+[[maybe_unused]] Real aabbDistance(const Aabb& a, const Aabb& b) {
   const Vec3 gap = (a.min - b.max).cwiseMax(b.min - a.max).cwiseMax(Vec3::Zero());
   return gap.norm();
+}
+
+}  // namespace
+
+namespace mesh_detail {
+
+static_assert(sizeof(Mat3) == 9 * sizeof(Real) && sizeof(Vec3) == 3 * sizeof(Real) &&
+                  sizeof(MeshDistanceAccel::Node) == 16 * sizeof(Real),
+              "MeshDistanceAccel::Node is read as 16 Reals: axes (column-major), center, half, child");
+
+#if defined(__GNUC__)
+// (Four doubles are 32 bytes, passed differently with and without AVX: the functions taking
+// them are internal to this file, so GCC's ABI note does not apply; it is reported at the end of
+// the file, hence not popped.)
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace {
+
+// Four lanes of Real (GCC/Clang vector extension: SSE on x86-64 in either precision).
+using Lanes = Real __attribute__((vector_size(4 * sizeof(Real))));
+using LaneInt = std::conditional_t<sizeof(Real) == 4, std::int32_t, std::int64_t>;
+using LaneBits = LaneInt __attribute__((vector_size(4 * sizeof(Real))));
+
+#if defined(__clang__)
+#define CRUX_LANE_SHUFFLE(x, y, i0, i1, i2, i3) __builtin_shufflevector(x, y, i0, i1, i2, i3)
+#else
+#define CRUX_LANE_SHUFFLE(x, y, i0, i1, i2, i3) __builtin_shuffle(x, y, LaneBits{i0, i1, i2, i3})
+#endif
+
+/// |x| per lane, exactly (clears the sign bits).
+inline Lanes lanesAbs(const Lanes& x) { return (Lanes)((LaneBits)x & std::numeric_limits<LaneInt>::max()); }
+
+/// Correctly rounded square root per lane (as std::sqrt).
+inline Lanes lanesSqrt(const Lanes& x) {
+#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
+  return (Lanes)_mm_sqrt_ps((__m128)x);
+#elif defined(__SSE2__)
+  __m128d half[2];
+  std::memcpy(half, &x, sizeof half);
+  half[0] = _mm_sqrt_pd(half[0]), half[1] = _mm_sqrt_pd(half[1]);
+  Lanes r;
+  std::memcpy(&r, half, sizeof half);
+  return r;
+#else
+  return Lanes{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+/// mask ? x : y per lane (mask lanes all ones or all zeros, as comparisons give).
+inline Lanes lanesSelect(const LaneBits& mask, const Lanes& x, const Lanes& y) { return (Lanes)((mask & (LaneBits)x) | (~mask & (LaneBits)y)); }
+
+/// Reals 4k .. 4k+3 of four nodes, transposed: f[i] holds Real 4k+i of every node (one lane each).
+inline void loadTransposed(const MeshDistanceAccel::Node* const (&n)[4], int k, Lanes* f) {
+  Lanes r[4];
+  for (int l = 0; l < 4; ++l) std::memcpy(&r[l], reinterpret_cast<const Real*>(n[l]) + 4 * k, sizeof(Lanes));
+  const Lanes t0 = CRUX_LANE_SHUFFLE(r[0], r[1], 0, 4, 1, 5), t1 = CRUX_LANE_SHUFFLE(r[2], r[3], 0, 4, 1, 5);
+  const Lanes t2 = CRUX_LANE_SHUFFLE(r[0], r[1], 2, 6, 3, 7), t3 = CRUX_LANE_SHUFFLE(r[2], r[3], 2, 6, 3, 7);
+  f[0] = CRUX_LANE_SHUFFLE(t0, t1, 0, 1, 4, 5);
+  f[1] = CRUX_LANE_SHUFFLE(t0, t1, 2, 3, 6, 7);
+  f[2] = CRUX_LANE_SHUFFLE(t2, t3, 0, 1, 4, 5);
+  f[3] = CRUX_LANE_SHUFFLE(t2, t3, 2, 3, 6, 7);
+}
+#undef CRUX_LANE_SHUFFLE
+
+}  // namespace
+
+void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDistanceAccel::Node* const (&b)[4],
+                    const Mat3& R, const Vec3& t, Real keep, Real pad, ObbPairOffsets& out) {
+  // Each node is 16 Reals: axes(r, c) at 3c + r, center at 9, half at 12 (static_assert above);
+  // fa[i] / fb[i] hold Real i of the four boxes a / b.
+  Lanes fa[16], fb[16];
+  for (int k = 0; k < 4; ++k) loadTransposed(a, k, fa + 4 * k), loadTransposed(b, k, fb + 4 * k);
+  const Lanes* cA = fa + 9;
+  const Lanes* cB = fb + 9;
+  // d = (R·cB + t) − cA: b's centre in a's frame minus a's; e = cB + Rᵀ·(t − cA): the same
+  // offset in b's frame.
+  Lanes d[3], u[3], e[3];
+  for (int r = 0; r < 3; ++r) {
+    d[r] = (((R(r, 0) * cB[0] + R(r, 1) * cB[1]) + R(r, 2) * cB[2]) + t[r]) - cA[r];
+    u[r] = t[r] - cA[r];
+  }
+  for (int c = 0; c < 3; ++c) e[c] = cB[c] + ((R(0, c) * u[0] + R(1, c) * u[1]) + R(2, c) * u[2]);
+  // dA = A.axesᵀ·d, dB = B.axesᵀ·e (component c: column c of the box's axes, Reals 3c .. 3c+2).
+  Lanes dA[3], dB[3];
+  for (int c = 0; c < 3; ++c) {
+    dA[c] = (fa[3 * c] * d[0] + fa[3 * c + 1] * d[1]) + fa[3 * c + 2] * d[2];
+    dB[c] = (fb[3 * c] * e[0] + fb[3 * c + 1] * e[1]) + fb[3 * c + 2] * e[2];
+  }
+  const Lanes* hA = fa + 12;
+  const Lanes* hB = fb + 12;
+  const Lanes len2 = (dA[0] * dA[0] + dA[1] * dA[1]) + dA[2] * dA[2];
+  const Lanes aA[3] = {lanesAbs(dA[0]), lanesAbs(dA[1]), lanesAbs(dA[2])};
+  const Lanes aB[3] = {lanesAbs(dB[0]), lanesAbs(dB[1]), lanesAbs(dB[2])};
+  const Lanes extent = ((hA[0] * aA[0] + hA[1] * aA[1]) + hA[2] * aA[2]) + ((hB[0] * aB[0] + hB[1] * aB[1]) + hB[2] * aB[2]);
+  const Lanes len = lanesSqrt(len2);
+  const Lanes inf = Lanes{} + kNoLimit;
+  Lanes bound = (len - extent / len) - pad;
+  bound = lanesSelect(len2 > 0, bound, -inf);
+  bound = lanesSelect(len2 - extent > keep * len, inf, bound);
+  for (int c = 0; c < 3; ++c) {
+    std::memcpy(out.d[c], &d[c], sizeof(Lanes)), std::memcpy(out.e[c], &e[c], sizeof(Lanes));
+    std::memcpy(out.dA[c], &dA[c], sizeof(Lanes)), std::memcpy(out.dB[c], &dB[c], sizeof(Lanes));
+  }
+  std::memcpy(out.len2, &len2, sizeof(Lanes));
+  std::memcpy(out.extent, &extent, sizeof(Lanes));
+  std::memcpy(out.bound, &bound, sizeof(Lanes));
+}
+
+namespace {
+
+inline Lanes lanesMin(const Lanes& x, const Lanes& y) { return lanesSelect(x < y, x, y); }
+inline Lanes lanesMax(const Lanes& x, const Lanes& y) { return lanesSelect(x > y, x, y); }
+
+/// Up to four triangles of mesh b (mapped into a's frame) in lanes, with their boxes, normals
+/// (b − a) × (c − a) and corner sums, for the leaf-pair filter (fewer than four: the last
+/// triangle repeats).
+struct TriangleQuad {
+  Lanes p[3][3];  ///< [corner][coordinate]
+  Lanes lo[3], hi[3], n[3], sum[3];
+};
+
+void loadQuad(const Triangle* t, const Aabb* box, const Vec3* normal, int m, TriangleQuad& q) {
+  const int k[4] = {0, std::min(1, m - 1), std::min(2, m - 1), std::min(3, m - 1)};
+  for (int c = 0; c < 3; ++c) {
+    q.p[0][c] = Lanes{t[k[0]].a[c], t[k[1]].a[c], t[k[2]].a[c], t[k[3]].a[c]};
+    q.p[1][c] = Lanes{t[k[0]].b[c], t[k[1]].b[c], t[k[2]].b[c], t[k[3]].b[c]};
+    q.p[2][c] = Lanes{t[k[0]].c[c], t[k[1]].c[c], t[k[2]].c[c], t[k[3]].c[c]};
+    q.lo[c] = Lanes{box[k[0]].min[c], box[k[1]].min[c], box[k[2]].min[c], box[k[3]].min[c]};
+    q.hi[c] = Lanes{box[k[0]].max[c], box[k[1]].max[c], box[k[2]].max[c], box[k[3]].max[c]};
+    q.n[c] = Lanes{normal[k[0]][c], normal[k[1]][c], normal[k[2]][c], normal[k[3]][c]};
+    q.sum[c] = (q.p[0][c] + q.p[1][c]) + q.p[2][c];
+  }
+}
+
+/// Lower bounds, minus pad, on the distance between triangle a (normal na, box boxA) and each
+/// triangle of q: the larger of the box gap and the separating-axis gaps on the centroid line
+/// and on both normals (triangleLowerBound's axes), in lanes.
+void quadBounds(const Triangle& a, const Vec3& na, const Aabb& boxA, const TriangleQuad& q, Real pad, Real (&out)[4]) {
+  const Lanes inf = Lanes{} + kNoLimit;
+  // The gap of the projections on axis u (per lane): max(loB − hiA, loA − hiB) / |u|.
+  auto gap = [&](const Lanes& ux, const Lanes& uy, const Lanes& uz) {
+    const Lanes len = lanesSqrt((ux * ux + uy * uy) + uz * uz);
+    Lanes pa[3], pb[3];
+    const Vec3* corners[3] = {&a.a, &a.b, &a.c};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& v = *corners[k];
+      pa[k] = (ux * v.x() + uy * v.y()) + uz * v.z();
+      pb[k] = (ux * q.p[k][0] + uy * q.p[k][1]) + uz * q.p[k][2];
+    }
+    const Lanes loA = lanesMin(pa[0], lanesMin(pa[1], pa[2])), hiA = lanesMax(pa[0], lanesMax(pa[1], pa[2]));
+    const Lanes loB = lanesMin(pb[0], lanesMin(pb[1], pb[2])), hiB = lanesMax(pb[0], lanesMax(pb[1], pb[2]));
+    return lanesSelect(len > 0, lanesMax(loB - hiA, loA - hiB) / len, -inf);
+  };
+  const Vec3 sumA = (a.a + a.b) + a.c;
+  Lanes bound = gap(q.sum[0] - sumA.x(), q.sum[1] - sumA.y(), q.sum[2] - sumA.z());
+  bound = lanesMax(bound, gap(Lanes{} + na.x(), Lanes{} + na.y(), Lanes{} + na.z()));
+  bound = lanesMax(bound, gap(q.n[0], q.n[1], q.n[2]));
+  Lanes box2 = Lanes{};
+  for (int c = 0; c < 3; ++c) {
+    const Lanes g = lanesMax(lanesMax(boxA.min[c] - q.hi[c], q.lo[c] - boxA.max[c]), Lanes{});
+    box2 = box2 + g * g;
+  }
+  bound = lanesMax(bound, lanesSqrt(box2)) - pad;
+  std::memcpy(out, &bound, sizeof(Lanes));
+}
+
+}  // namespace
+#else
+void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDistanceAccel::Node* const (&b)[4],
+                    const Mat3& R, const Vec3& t, Real keep, Real pad, ObbPairOffsets& out) {
+  // The same arithmetic in the same order, one pair at a time.
+  for (int l = 0; l < 4; ++l) {
+    const MeshDistanceAccel::Node& A = *a[l];
+    const MeshDistanceAccel::Node& B = *b[l];
+    Real d[3], u[3], e[3];
+    for (int r = 0; r < 3; ++r) {
+      d[r] = (((R(r, 0) * B.center[0] + R(r, 1) * B.center[1]) + R(r, 2) * B.center[2]) + t[r]) - A.center[r];
+      u[r] = t[r] - A.center[r];
+    }
+    for (int c = 0; c < 3; ++c) e[c] = B.center[c] + ((R(0, c) * u[0] + R(1, c) * u[1]) + R(2, c) * u[2]);
+    for (int c = 0; c < 3; ++c) {
+      out.d[c][l] = d[c], out.e[c][l] = e[c];
+      out.dA[c][l] = (A.axes(0, c) * d[0] + A.axes(1, c) * d[1]) + A.axes(2, c) * d[2];
+      out.dB[c][l] = (B.axes(0, c) * e[0] + B.axes(1, c) * e[1]) + B.axes(2, c) * e[2];
+    }
+    const Real x = out.dA[0][l], y = out.dA[1][l], z = out.dA[2][l];
+    const Real len2 = (x * x + y * y) + z * z;
+    const Real extent = ((A.half[0] * std::abs(x) + A.half[1] * std::abs(y)) + A.half[2] * std::abs(z)) +
+                        ((B.half[0] * std::abs(out.dB[0][l]) + B.half[1] * std::abs(out.dB[1][l])) +
+                         B.half[2] * std::abs(out.dB[2][l]));
+    const Real len = std::sqrt(len2);
+    Real bound = (len - extent / len) - pad;
+    if (!(len2 > 0)) bound = -kNoLimit;
+    if (len2 - extent > keep * len) bound = kNoLimit;
+    out.len2[l] = len2, out.extent[l] = extent, out.bound[l] = bound;
+  }
+}
+
+namespace {
+
+/// Up to four triangles of mesh b (mapped into a's frame) with their boxes and normals.
+struct TriangleQuad {
+  const Triangle* t;
+  const Aabb* box;
+  const Vec3* normal;
+  int m;
+};
+
+void loadQuad(const Triangle* t, const Aabb* box, const Vec3* normal, int m, TriangleQuad& q) { q = {t, box, normal, m}; }
+
+/// Lower bounds, minus pad, on the distance between triangle a and each triangle of q (the
+/// larger of the box gap and triangleLowerBound).
+void quadBounds(const Triangle& a, const Vec3& na, const Aabb& boxA, const TriangleQuad& q, Real pad, Real (&out)[4]) {
+  for (int l = 0; l < 4; ++l) {
+    const int k = std::min(l, q.m - 1);
+    out[l] = std::max(aabbDistance(boxA, q.box[k]), triangleLowerBound(a, na, q.t[k], q.normal[k])) - pad;
+  }
+}
+
+}  // namespace
+
+#endif
+
+}  // namespace mesh_detail
+
+namespace {
+
+/// Index of the lowest set bit of mask (mask != 0).
+inline int lowestBit(unsigned mask) {
+#if defined(__GNUC__)
+  return __builtin_ctz(mask);
+#else
+  int i = 0;
+  while (!(mask & 1u)) mask >>= 1, ++i;
+  return i;
+#endif
 }
 
 /// The best pair so far and the search limits.
@@ -122,8 +362,11 @@ void bruteForce(const Mesh& a, const Mesh& b, const Relative& rel, Best& best) {
 /// min-heap keyed by the lower bound is followed down its nearest surviving child pair while the
 /// others are queued (fewer heap operations, and a tight upper bound early); the search ends when
 /// the smallest pending bound exceeds the best distance (overflow pairs are searched
-/// depth-first, nearest child pair first). Leaf pairs map b's triangles in chunks and skip
-/// triangle pairs whose separating-axis bound exceeds the best distance.
+/// depth-first, nearest child pair first). With both accelerators the 2 or 4 child pairs of an
+/// expansion get their first bound together in SIMD lanes (mesh_detail::obbPairOffsets). Leaf
+/// pairs map b's triangles in chunks, bound each of a's triangles against four of b's at once
+/// (box gap and separating axes, mesh_detail::quadBounds) and call closestPoints on the pairs
+/// within the best distance, nearest bound first.
 void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistanceAccel* accelA,
              const MeshDistanceAccel* accelB, Best& best) {
   const Bvh& ba = a.bvh();
@@ -136,13 +379,15 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     if constexpr (std::is_same_v<std::decay_t<decltype(n)>, BvhNode>) return (n.bounds.max - n.bounds.min).sum();
     else return 2 * n.half.sum();
   };
-  // Both nodes of a pair are split when neither is this many times the other's size.
-  constexpr Real kSplitBothRatio = 1.5;
+  // Both nodes of a pair are split when neither is this many times the other's size (2: with
+  // the child pairs bounded in 4 SIMD lanes, four pairs cost what two do; 1.5 before).
+  constexpr Real kSplitBothRatio = 2;
   // With both accelerators, the Euclidean box gaps refine a pair's line-of-centres gap only
   // when the boxes' summed radii on that line exceed this fraction of the centre distance
-  // (tuned on bunny00: 0.25–0.6 keep the 0.01R gaps' pruning, 1 loses 15% there; 0.4 was
-  // the fastest of those at 0.1R).
-  constexpr Real kBoxGapRadiusRatio = Real(0.4);
+  // (tuned on bunny00 after the session-6 SIMD step: 0.3 / 0.4 / 0.55 / 0.7 / 0.85 / 1 give
+  // 0.1R 149 / 144 / 140 / 137 / 133 / 133 µs but 0.01R 111 / 111 / 112 / 114 / 128 / 141 µs;
+  // 0.7 is also the fastest on armadillo at every gap).
+  constexpr Real kBoxGapRadiusRatio = Real(0.7);
 
   constexpr std::uint32_t kChunk = 16;
   Triangle mapped[kChunk];
@@ -181,44 +426,24 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   auto triB = [&](std::uint32_t k) {
     return cornersB ? Triangle{cornersB[3 * k], cornersB[3 * k + 1], cornersB[3 * k + 2]} : b.slotTriangle(k);
   };
-  // Two oriented boxes seen from each other: the offset of the centres d = map(B.center) −
-  // A.center in a's box frame (dA = A.axesᵀ·d) and in b's (dB = B.axesᵀ·Rᵀ·d), and both boxes'
-  // axes for C = A.axesᵀ·R·B.axes (b's axes in a's box frame), formed only when needed.
-  struct ObbFrame {
-    Vec3 dA, dB;
-    const Mat3* axesA;
-    const Mat3* axesB;
-  };
-  // The frame of boxes ia, ib given w = R·B.center + t (b's centre in a's frame, shared by the
-  // children of a) and g = Rᵀ·(t − A.center) (shared by the children of b):
-  // dA = A.axesᵀ·(w − A.center), dB = B.axesᵀ·(B.center + g).
-  auto obbFrame = [&](std::uint32_t ia, std::uint32_t ib, const Vec3& w, const Vec3& g) {
-    const Node& A = obbA[ia];
-    const Node& B = obbB[ib];
-    return ObbFrame{A.axes.transpose() * (w - A.center), B.axes.transpose() * (B.center + g), &A.axes, &B.axes};
-  };
-  auto nodeBound = [&](std::uint32_t ia, std::uint32_t ib, const ObbFrame* f) {
+  // Both oriented boxes, pair l of the offsets o (obbPairOffsets): the separating-axis gap on
+  // the line of centres, then (close, large pairs) the Euclidean gap between A and the box
+  // around B in A's frame (|C|·h_B) and the same in B's frame.
+  // Only the accelerators' nodes are read (one cache line each in float builds).
+  auto obbBound = [&](std::uint32_t ia, std::uint32_t ib, const mesh_detail::ObbPairOffsets& o, int l) {
     Real bound = -kNoLimit;
-    if (f) {
-      // Both oriented boxes: the separating-axis gap on the line of centres, then (close,
-      // large pairs) the Euclidean gap between A and the box around B in A's frame (|C|·h_B)
-      // and the same in B's frame.
-      // Only the accelerators' nodes are read (one cache line each in float builds).
+    {
       const Node& A = obbA[ia];
       const Node& B = obbB[ib];
       const Vec3& hA = A.half;
       const Vec3& hB = B.half;
-      const Vec3 aA = f->dA.cwiseAbs(), aB = f->dB.cwiseAbs();
-      const Real len2 = f->dA.squaredNorm();
-      const Real extent = hA.dot(aA) + hB.dot(aB);  // both boxes' radii on d, times |d|
-      Real len = 0;
-      if (len2 > 0) {
-        len = std::sqrt(len2);
-        // bound = len − extent/len − pad > limit, decided without waiting for the division
-        // (a pruned pair's bound is only compared with the limit: +inf stands for it).
-        if (len2 - extent > (best.limit + pad) * len) return kNoLimit;
-        bound = len - extent / len - pad;
-      }
+      // The line-of-centres gap: +inf (pruned) when it exceeds the limit, decided without
+      // waiting for the division (a pruned pair's bound is only compared with the limit).
+      bound = o.bound[l];  // < +inf: children() passes only pairs within the limit
+      const Vec3 dA(o.dA[0][l], o.dA[1][l], o.dA[2][l]), dB(o.dB[0][l], o.dB[1][l], o.dB[2][l]);
+      const Vec3 aA = dA.cwiseAbs(), aB = dB.cwiseAbs();
+      const Real len2 = o.len2[l];
+      const Real extent = o.extent[l];  // both boxes' radii on d, times |d|
       // The Euclidean gaps only for pairs separated along d whose radii on d are a sizeable
       // part of the centre distance (r > kBoxGapRadiusRatio·|d|, r = extent/|d|): for boxes
       // small against their distance the line-of-centres gap is within O(r²/|d|) of theirs and
@@ -226,7 +451,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       // pairs keep their negative line-of-centres bound, which orders them deepest overlap
       // first (crossing meshes: 8x faster than with the clamped gap 0).
       if (bound > 0 && extent > kBoxGapRadiusRatio * len2) {
-        const Mat3 C = f->axesA->transpose() * (rel.R * *f->axesB);
+        const Mat3 C = A.axes.transpose() * (rel.R * B.axes);
         const Mat3 absC = C.cwiseAbs();
         // (Compared squared with (limit + pad)²: one square root for the survivors.)
         const Real keep = best.limit + pad, keep2 = keep * keep;
@@ -238,13 +463,14 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       }
       const bool leafA = A.child == MeshDistanceAccel::kLeaf, leafB = B.child == MeshDistanceAccel::kLeaf;
       if (!leafA && !leafB) return bound;
-      // A leaf projects its actual corners on the line of centres u = A.axes·dA (in a's frame;
-      // b's corners on Rᵀu in b's frame, offset by u·t), an inner node its box (the radii of
-      // the first bound: |A.axesᵀu| = |dA|, |B.axesᵀRᵀu| = |dB|).
-      const Vec3 u = A.axes * f->dA;
+      // A leaf projects its actual corners on the line of centres u = d (in a's frame; b's
+      // corners on e ≈ Rᵀu in b's frame, offset by u·t: within rounding of u·(R·q + t), far
+      // inside the pad), an inner node its box (the radii of the first bound: |A.axesᵀu| =
+      // |dA|, |B.axesᵀRᵀu| = |dB|).
+      const Vec3 u(o.d[0][l], o.d[1][l], o.d[2][l]);
       const Real lenU = u.norm();
       if (!(lenU > 0)) return bound;
-      const Vec3 ub = rel.R.transpose() * u;
+      const Vec3 ub(o.e[0][l], o.e[1][l], o.e[2][l]);
       Real hiA, loB;
       if (leafA) {
         hiA = -kNoLimit;
@@ -264,13 +490,16 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       }
       return std::max(bound, (loB + u.dot(rel.t) - hiA) / lenU - pad);
     }
+  };
+  auto nodeBound = [&](std::uint32_t ia, std::uint32_t ib) {
+    Real bound = -kNoLimit;
     const BvhNode& na = ba.nodes[ia];
     const BvhNode& nb = bb.nodes[ib];
     {
       bound = boxBoxLowerBound(na.bounds, nb.bounds, rel, pad);
       if (bound > best.limit) return bound;  // refine only survivors
     }
-    if (!f && (obbA || obbB)) {
+    if (obbA || obbB) {
       // One side's oriented box (MeshDistanceAccel) and the other's axis-aligned box projected
       // on the line of their centres.
       const Vec3 ca = obbA ? obbA[ia].center : na.bounds.center();
@@ -311,6 +540,24 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     return std::max(bound, (loB + u.dot(rel.t) - hiA) / len - pad);
   };
   // All triangle pairs of two leaves (slot ranges [firstA, +countA) and [firstB, +countB)).
+  // All triangle pairs of two leaves (slot ranges [firstA, +countA) and [firstB, +countB)): the
+  // pairs passing the box-gap and separating-axis bounds are offered nearest bound first, so
+  // the best pair of the leaf pair tends to come first and prunes the others.
+  struct Candidate {
+    Real bound;
+    std::uint32_t i, k;
+  };
+  constexpr int kMaxCandidates = 64;
+  Candidate candidates[kMaxCandidates];
+  auto offerCandidates = [&](int n, std::uint32_t j0) {
+    for (int x = 1; x < n; ++x)
+      for (int y = x; y > 0 && candidates[y].bound < candidates[y - 1].bound; --y) std::swap(candidates[y], candidates[y - 1]);
+    for (int x = 0; x < n && candidates[x].bound <= best.limit; ++x) {
+      const Candidate& c = candidates[x];
+      best.offer(triA(c.i), mapped[c.k], ba.primIndices[c.i], bb.primIndices[j0 + c.k]);
+      if (best.done) return;
+    }
+  };
   auto leafPair = [&](std::uint32_t firstA, std::uint32_t countA, std::uint32_t firstB, std::uint32_t countB) {
     for (std::uint32_t j0 = firstB, je = firstB + countB; j0 < je; j0 += kChunk) {
       const std::uint32_t m = std::min(kChunk, je - j0);
@@ -319,17 +566,32 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         mappedBox[k] = bounds(mapped[k]);
         mappedNormal[k] = (mapped[k].b - mapped[k].a).cross(mapped[k].c - mapped[k].a);
       }
+      // b's triangles in groups of four lanes, each a triangle against a group at once.
+      mesh_detail::TriangleQuad quads[kChunk / 4];
+      const int groups = int(m + 3) / 4;
+      for (int g = 0; g < groups; ++g)
+        mesh_detail::loadQuad(mapped + 4 * g, mappedBox + 4 * g, mappedNormal + 4 * g, std::min(4, int(m) - 4 * g), quads[g]);
+      int n = 0;
       for (std::uint32_t i = firstA, ie = firstA + countA; i < ie; ++i) {
         const Triangle ta = triA(i);
         const Aabb boxA = bounds(ta);
         const Vec3 normalA = (ta.b - ta.a).cross(ta.c - ta.a);
-        for (std::uint32_t k = 0; k < m; ++k) {
-          if (aabbDistance(boxA, mappedBox[k]) - pad > best.limit) continue;
-          if (triangleLowerBound(ta, normalA, mapped[k], mappedNormal[k]) - pad > best.limit) continue;
-          best.offer(ta, mapped[k], ba.primIndices[i], bb.primIndices[j0 + k]);
-          if (best.done) return;
+        for (int g = 0; g < groups; ++g) {
+          Real bound[4];
+          mesh_detail::quadBounds(ta, normalA, boxA, quads[g], pad, bound);
+          for (int l = 0, le = std::min(4, int(m) - 4 * g); l < le; ++l) {
+            if (bound[l] > best.limit) continue;
+            candidates[n++] = {bound[l], i, std::uint32_t(4 * g + l)};
+            if (n == kMaxCandidates) {
+              offerCandidates(n, j0);
+              if (best.done) return;
+              n = 0;
+            }
+          }
         }
       }
+      offerCandidates(n, j0);
+      if (best.done) return;
     }
   };
 
@@ -337,7 +599,8 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     std::uint32_t a, b;
     Real bound;
   };
-  // The child pairs of a node pair, with their bounds, nearest first (returns how many): both
+  // The child pairs of a node pair within the limit, with their bounds, the nearest first
+  // (returns how many; pairs beyond the limit are dropped): both
   // nodes are split when they are of similar size (the four pairs share the frame products),
   // else the larger one (RTCD 6.3.2).
   auto children = [&](const Pair& p, Pair* out) -> int {
@@ -367,27 +630,42 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       as[0] = firstA, as[1] = firstA + 1, nA = 2;
       bs[0] = firstB, bs[1] = firstB + 1, nB = 2;
     }
-    int n = 0;
+    const int n = nA * nB;
+    int kept = 0;
     if (both) {
-      // Per child of b: w = R·cB + t; per child of a: g = Rᵀ·(t − cA); per pair:
-      // dA = A.axesᵀ·(w − cA), dB = B.axesᵀ·(cB + g) (C only for the pairs that need it).
-      Vec3 w[2];
-      for (int j = 0; j < nB; ++j) w[j] = rel.R * obbB[bs[j]].center + rel.t;
-      for (int i = 0; i < nA; ++i) {
-        const Vec3 g = rel.R.transpose() * (rel.t - obbA[as[i]].center);
-        for (int j = 0; j < nB; ++j) {
-          const ObbFrame f = obbFrame(as[i], bs[j], w[j], g);
-          out[n++] = {as[i], bs[j], nodeBound(as[i], bs[j], &f)};
-        }
+      // The n = 2 or 4 pairs' centre offsets together, pair q = i·nB + j in lane q (lanes n..3
+      // repeat lanes 0..n−1), then the rest of the bound only for pairs not already beyond
+      // the limit, taken by a mask rather than by one unpredictable branch per pair.
+      const Node* laneA[4];
+      const Node* laneB[4];
+      for (int l = 0; l < 4; ++l) {
+        const int q = l & (n - 1);
+        laneA[l] = obbA + as[q >> (nB - 1)], laneB[l] = obbB + bs[q & (nB - 1)];
+      }
+      mesh_detail::ObbPairOffsets o;
+      mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
+      unsigned live = 0;
+      for (int l = 0; l < 4; ++l) live |= unsigned(o.bound[l] != kNoLimit) << l;
+      live &= (1u << n) - 1;
+      while (live) {
+        const int l = lowestBit(live);
+        live &= live - 1;
+        const std::uint32_t ia = std::uint32_t(laneA[l] - obbA), ib = std::uint32_t(laneB[l] - obbB);
+        out[kept] = {ia, ib, obbBound(ia, ib, o, l)};
+        kept += out[kept].bound <= best.limit;
       }
     } else {
       for (int i = 0; i < nA; ++i)
-        for (int j = 0; j < nB; ++j) out[n++] = {as[i], bs[j], nodeBound(as[i], bs[j], nullptr)};
+        for (int j = 0; j < nB; ++j) {
+          out[kept] = {as[i], bs[j], nodeBound(as[i], bs[j])};
+          kept += out[kept].bound <= best.limit;
+        }
     }
-    // Insertion sort by bound (at most 4).
-    for (int i = 1; i < n; ++i)
-      for (int k = i; k > 0 && out[k].bound < out[k - 1].bound; --k) std::swap(out[k], out[k - 1]);
-    return n;
+    // The nearest pair first (the first of equals), the others in pair order.
+    int m = 0;
+    for (int k = 1; k < kept; ++k) m = out[k].bound < out[m].bound ? k : m;
+    std::swap(out[0], out[m]);
+    return kept;
   };
   // Starts loading the children of a pair's nodes (and their boxes) while other work proceeds.
   auto prefetch = [&](const Pair& p) {
@@ -442,9 +720,8 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       } else {
         Pair c[4];
         const int n = children(cur, c);
-        if (c[0].bound <= best.limit) {
-          for (int k = n - 1; k > 0; --k)
-            if (c[k].bound <= best.limit) stack[top++] = c[k];
+        if (n > 0) {
+          for (int k = n - 1; k > 0; --k) stack[top++] = c[k];
           cur = c[0];
           advanced = true;
         }
@@ -504,10 +781,13 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   };
   Pair root{0, 0, 0};
   if (both) {
-    const ObbFrame f = obbFrame(0, 0, rel.R * obbB[0].center + rel.t, rel.R.transpose() * (rel.t - obbA[0].center));
-    root.bound = nodeBound(0, 0, &f);
+    const Node* laneA[4] = {obbA, obbA, obbA, obbA};
+    const Node* laneB[4] = {obbB, obbB, obbB, obbB};
+    mesh_detail::ObbPairOffsets o;
+    mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
+    root.bound = obbBound(0, 0, o, 0);
   } else {
-    root.bound = nodeBound(0, 0, nullptr);
+    root.bound = nodeBound(0, 0);
   }
   if (root.bound > best.limit) return;
   push(root);
@@ -522,10 +802,10 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       }
       Pair c[4];
       const int n = children(p, c);
+      if (n == 0) break;
       prefetch(c[0]);
-      for (int k = 1; k < n && !best.done; ++k)
-        if (c[k].bound <= best.limit) push(c[k]);
-      if (!(c[0].bound <= best.limit) || best.done) break;
+      for (int k = 1; k < n && !best.done; ++k) push(c[k]);
+      if (best.done) break;
       p = c[0];
     }
   }
@@ -608,16 +888,16 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
                                 const MeshDistanceOptions& options) {
   validateDistanceBound(options.maxDistance, "maxDistance");
   validateDistanceBound(options.stopDistance, "stopDistance");
-  if (options.accelA && (options.accelA->nodes().size() != a.bvh().nodes.size() ||
-                         options.accelA->corners().size() != 3 * a.triangleCount()))
-    throw InvalidInput("mesh distance options.accelA was not built from mesh a (" +
-                       std::to_string(options.accelA->nodes().size()) + " nodes, mesh has " +
-                       std::to_string(a.bvh().nodes.size()) + ")");
-  if (options.accelB && (options.accelB->nodes().size() != b.bvh().nodes.size() ||
-                         options.accelB->corners().size() != 3 * b.triangleCount()))
-    throw InvalidInput("mesh distance options.accelB was not built from mesh b (" +
-                       std::to_string(options.accelB->nodes().size()) + " nodes, mesh has " +
-                       std::to_string(b.bvh().nodes.size()) + ")");
+  // A foreign accelerator (another node or triangle count) would be read out of range.
+  auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh) {
+    if (accel && (accel->nodes().size() != m.bvh().nodes.size() || accel->corners().size() != 3 * m.triangleCount()))
+      throw InvalidInput(std::string("mesh distance options.") + field + " was not built from mesh " + mesh + " (" +
+                         std::to_string(accel->nodes().size()) + " nodes and " +
+                         std::to_string(accel->corners().size() / 3) + " triangles, mesh has " +
+                         std::to_string(m.bvh().nodes.size()) + " and " + std::to_string(m.triangleCount()) + ")");
+  };
+  checkAccel(options.accelA, a, "accelA", "a");
+  checkAccel(options.accelB, b, "accelB", "b");
   const Relative rel(ta, tb);
   Best best{options.maxDistance, options.stopDistance, {}, false};
   if (options.path == QueryPath::BruteForce) bruteForce(a, b, rel, best);

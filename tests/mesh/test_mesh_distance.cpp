@@ -20,10 +20,13 @@
 #include <support/test_scale.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <cstdio>
 #include <iomanip>
 #include <limits>
 #include <memory>
+#include <sstream>
 #include <random>
 #include <string>
 #include <vector>
@@ -456,6 +459,127 @@ TEST(MeshDistance, IdenticalPosesGiveZeroAndFarMeshesNotFound) {
   MeshDistanceOptions o;
   o.maxDistance = 10;
   EXPECT_FALSE(distance(*a, Transform::identity(), *a, far, o).found);
+}
+
+TEST(MeshDistance, ForeignAcceleratorWithTheSameNodeCountButOtherTrianglesIsRefused) {
+  // The node counts agree (one leaf each), only the triangle counts differ: the accelerator's
+  // corner copy would be read past its end. Refused naming the accelerator's field.
+  const Mesh one({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 2}}, "one");
+  const Mesh quad({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}, {{0, 1, 2}, {0, 2, 3}}, "quad");
+  ASSERT_EQ(one.bvh().nodes.size(), quad.bvh().nodes.size()) << "the case needs equal node counts";
+  ASSERT_NE(one.triangleCount(), quad.triangleCount());
+  const MeshDistanceAccel accelQuad(quad), accelOne(one);
+  Transform apart;
+  apart.translation = Vec3(0, 0, 2);
+  for (const bool sideA : {true, false}) {
+    MeshDistanceOptions o;
+    (sideA ? o.accelA : o.accelB) = &accelQuad;
+    try {
+      distance(one, Transform::identity(), one, apart, o);
+      FAIL() << "no throw, side " << (sideA ? "a" : "b");
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find(sideA ? "accelA" : "accelB"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("triangles"), std::string::npos) << e.what();
+    }
+  }
+  // The matching accelerators are accepted and give the brute-force answer.
+  MeshDistanceOptions own;
+  own.accelA = &accelOne, own.accelB = &accelQuad;
+  MeshDistanceOptions brute;
+  brute.path = QueryPath::BruteForce;
+  EXPECT_EQ(distance(one, Transform::identity(), quad, apart, own).distance,
+            distance(one, Transform::identity(), quad, apart, brute).distance);
+}
+
+/// A straightforward scalar evaluation of mesh_detail::obbPairOffsets for pair l, in the order
+/// its documentation states.
+void referenceOffsets(const MeshDistanceAccel::Node& A, const MeshDistanceAccel::Node& B, const Mat3& R, const Vec3& t,
+                      Real keep, Real pad, Real (&d)[3], Real (&e)[3], Real (&dA)[3], Real (&dB)[3], Real& len2,
+                      Real& extent, Real& bound) {
+  Real u[3];
+  for (int r = 0; r < 3; ++r) {
+    const Real w = R(r, 0) * B.center[0] + R(r, 1) * B.center[1] + R(r, 2) * B.center[2];
+    d[r] = (w + t[r]) - A.center[r];
+    u[r] = t[r] - A.center[r];
+  }
+  for (int c = 0; c < 3; ++c) e[c] = B.center[c] + (R(0, c) * u[0] + R(1, c) * u[1] + R(2, c) * u[2]);
+  for (int c = 0; c < 3; ++c) {
+    dA[c] = A.axes(0, c) * d[0] + A.axes(1, c) * d[1] + A.axes(2, c) * d[2];
+    dB[c] = B.axes(0, c) * e[0] + B.axes(1, c) * e[1] + B.axes(2, c) * e[2];
+  }
+  len2 = dA[0] * dA[0] + dA[1] * dA[1] + dA[2] * dA[2];
+  const Real radiusA = A.half[0] * std::abs(dA[0]) + A.half[1] * std::abs(dA[1]) + A.half[2] * std::abs(dA[2]);
+  const Real radiusB = B.half[0] * std::abs(dB[0]) + B.half[1] * std::abs(dB[1]) + B.half[2] * std::abs(dB[2]);
+  extent = radiusA + radiusB;
+  const Real len = std::sqrt(len2);
+  if (len2 - extent > keep * len) bound = std::numeric_limits<Real>::infinity();
+  else if (!(len2 > 0)) bound = -std::numeric_limits<Real>::infinity();
+  else bound = (len - extent / len) - pad;
+}
+
+TEST(MeshDistance, BatchedNodePairOffsetsAreBitIdenticalToAScalarEvaluation) {
+  // The SIMD routine behind the accelerated query's first node-pair bound, against the
+  // documented formula evaluated one pair at a time: random node quadruples of a real mesh's
+  // accelerator (inner nodes and leaves, repeated lanes, a node against itself at the identity:
+  // d = 0), random rotations (and quarter turns), translations and limits, including limits
+  // that prune some lanes and none.
+  const Mesh blob = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/blob.off");
+  const MeshDistanceAccel acc(blob);
+  const auto& nodes = acc.nodes();
+  Rng rng(2026);
+  std::uniform_int_distribution<std::size_t> pick(0, nodes.size() - 1);
+  std::uniform_real_distribution<double> u(-1, 1), lim(0, 0.6);
+  std::normal_distribution<double> g;
+  const int cases = crux::test::scaledCases(20000, 2000);
+  int pruned = 0, kept = 0, zero = 0;
+  auto bits = [](Real x) {
+    std::uint64_t v = 0;
+    std::memcpy(&v, &x, sizeof x);
+    return v;
+  };
+  for (int c = 0; c < cases; ++c) {
+    const MeshDistanceAccel::Node* a[4];
+    const MeshDistanceAccel::Node* b[4];
+    for (int l = 0; l < 4; ++l) a[l] = &nodes[pick(rng)], b[l] = &nodes[pick(rng)];
+    if (c % 7 == 0) a[2] = a[0], b[3] = b[1];  // repeated lanes, as a 2-pair expansion has
+    Transform tr;
+    if (c % 11 == 0) {
+      tr.rotation = Quat(Eigen::AngleAxis<Real>(Real(M_PI / 2), Vec3::UnitZ()));
+    } else {
+      tr.rotation = Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().cast<Real>();
+    }
+    tr.translation = Vec3(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+    Mat3 R = tr.rotation.toRotationMatrix();
+    Vec3 t = tr.translation;
+    if (c % 13 == 0) R = Mat3::Identity(), t = Vec3::Zero(), b[1] = a[1];  // lane 1: d = 0
+    const Real keep = c % 5 == 0 ? std::numeric_limits<Real>::infinity() : Real(lim(rng));
+    const Real pad = Real(1e-6);
+    mesh_detail::ObbPairOffsets o;
+    mesh_detail::obbPairOffsets(a, b, R, t, keep, pad, o);
+    for (int l = 0; l < 4; ++l) {
+      Real d[3], e[3], dA[3], dB[3], len2, extent, bound;
+      referenceOffsets(*a[l], *b[l], R, t, keep, pad, d, e, dA, dB, len2, extent, bound);
+      std::ostringstream what;
+      what << std::setprecision(17) << "case " << c << " lane " << l << " nodes " << (a[l] - nodes.data()) << ", "
+           << (b[l] - nodes.data()) << " R " << R.reshaped().transpose() << " t " << t.transpose() << " keep " << keep;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(bits(o.d[k][l]), bits(d[k])) << what.str() << " d" << k << " " << o.d[k][l] << " vs " << d[k];
+        EXPECT_EQ(bits(o.e[k][l]), bits(e[k])) << what.str() << " e" << k << " " << o.e[k][l] << " vs " << e[k];
+        EXPECT_EQ(bits(o.dA[k][l]), bits(dA[k])) << what.str() << " dA" << k << " " << o.dA[k][l] << " vs " << dA[k];
+        EXPECT_EQ(bits(o.dB[k][l]), bits(dB[k])) << what.str() << " dB" << k << " " << o.dB[k][l] << " vs " << dB[k];
+      }
+      EXPECT_EQ(bits(o.len2[l]), bits(len2)) << what.str() << " len2 " << o.len2[l] << " vs " << len2;
+      EXPECT_EQ(bits(o.extent[l]), bits(extent)) << what.str() << " extent " << o.extent[l] << " vs " << extent;
+      ASSERT_EQ(bits(o.bound[l]), bits(bound)) << what.str() << " bound " << o.bound[l] << " vs " << bound;
+      if (bound == std::numeric_limits<Real>::infinity()) ++pruned;
+      else if (bound == -std::numeric_limits<Real>::infinity()) ++zero;
+      else ++kept;
+    }
+  }
+  std::printf("batched offsets: %d lanes pruned, %d bounded, %d at zero offset\n", pruned, kept, zero);
+  EXPECT_GT(pruned, cases / 2);
+  EXPECT_GT(kept, cases / 2);
+  EXPECT_GT(zero, 0);
 }
 
 }  // namespace

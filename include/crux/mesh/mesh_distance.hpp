@@ -64,6 +64,35 @@ class MeshDistanceAccel {
   std::vector<Range> ranges_;
 };
 
+namespace mesh_detail {
+
+/// Internal (declared here for the tests): the first node-pair bound of the accelerated distance
+/// query, for the 2 or 4 child pairs of one expansion together in SIMD lanes (GCC/Clang vector
+/// extension: SSE on x86-64 in either precision; unused lanes repeat a pair). For pair l,
+/// oriented boxes a[l] (mesh a's frame) and b[l] (b's frame, placed in a's by x_a = R·x_b + t):
+///  - d[·][l] = (R·b.center + t) − a.center, the centre offset in a's frame;
+///  - e[·][l] = b.center + Rᵀ·(t − a.center), the same offset in b's frame (≈ Rᵀ·d);
+///  - dA[·][l] = a.axesᵀ·d and dB[·][l] = b.axesᵀ·e (in each box's own frame);
+///  - len2[l] = |dA|², extent[l] = a.half·|dA| + b.half·|dB| (both radii on d, times |d|);
+///  - bound[l]: the separating-axis gap on the line of centres (|dA| − extent/|dA|) − pad
+///    (Gottschalk, Lin & Manocha's OBB test on one axis); +inf when len2 − extent > keep·|dA|
+///    (the pair is farther than keep; no division needed), −inf when dA = 0.
+/// Sums are taken left to right ((x0·y0 + x1·y1) + x2·y2; extent = (radius A) + (radius B)), so
+/// a scalar evaluation in that order gives the same bits in every lane (tested).
+struct ObbPairOffsets {
+  Real d[3][4];  ///< [component][pair], as every member
+  Real e[3][4];
+  Real dA[3][4];
+  Real dB[3][4];
+  Real len2[4];
+  Real extent[4];
+  Real bound[4];
+};
+void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDistanceAccel::Node* const (&b)[4],
+                    const Mat3& R, const Vec3& t, Real keep, Real pad, ObbPairOffsets& out);
+
+}  // namespace mesh_detail
+
 /// Parameters of distance(Mesh, Transform, Mesh, Transform, options).
 struct MeshDistanceOptions {
   /// Only pairs at distance <= maxDistance are searched: when none exists the answer is
