@@ -14,6 +14,17 @@
 namespace crux {
 namespace {
 
+/// Index of the lowest set bit of mask (mask != 0).
+inline int lowestBit(std::uint64_t mask) {
+#if defined(__GNUC__)
+  return __builtin_ctzll(mask);
+#else
+  int i = 0;
+  while (!(mask & 1u)) mask >>= 1, ++i;
+  return i;
+#endif
+}
+
 using detail::V3;
 
 /// sin of the feature angle (kContactFaceAngleCos), as contact.cpp.
@@ -117,35 +128,45 @@ void triangleFeature(const TriD& t, const V3& d, Feature& f) {
   vertexOrEdge(t.p, d, is, others, 2, f);
 }
 
-/// Closest point of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions); `region`
-/// tells which: -1 the face, 0..2 the edge from corner i to corner i+1 (mod 3), 3..5 the
-/// vertex region − 3.
-V3 closestOnTriangle(const V3* t, const V3& p, int& region) {
-  const V3 &a = t[0], &b = t[1], &c = t[2];
-  const V3 ab = b - a, ac = c - a, ap = p - a;
+/// Closest point q of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions) and its
+/// region: -1 the face, 0..2 the edge from corner i to corner i+1 (mod 3), 3..5 the vertex
+/// region − 3. For the face q is left untouched (sphereCore computes it from the plane).
+/// RTCD's tests in RTCD's order with RTCD's formulas, but every dot product is taken first and
+/// the region is the first of the six conditions that holds, combined without branches: the
+/// region of a mesh's candidate triangles is unpredictable, and the mispredicted chain of early
+/// returns cost more than the dot products it skipped.
+int closestRegionOnTriangle(const V3& a, const V3& b, const V3& c, const V3& p, V3& q) {
+  const V3 ab = b - a, ac = c - a, ap = p - a, bp = p - b, cp = p - c;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  region = 3;
-  if (d1 <= 0 && d2 <= 0) return a;
-  const V3 bp = p - b;
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  region = 4;
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  region = 0;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
-  const V3 cp = p - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  region = 5;
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  region = 2;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  region = 1;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  region = -1;
-  const double denom = 1 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
+  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  const double e43 = d4 - d3, e56 = d5 - d6;
+  // RTCD's conditions in its order (& on bools, not &&: no branches)
+  const unsigned c3 = unsigned(d1 <= 0) & unsigned(d2 <= 0);
+  const unsigned c4 = unsigned(d3 >= 0) & unsigned(d4 <= d3);
+  const unsigned c0 = unsigned(vc <= 0) & unsigned(d1 >= 0) & unsigned(d3 <= 0);
+  const unsigned c5 = unsigned(d6 >= 0) & unsigned(d5 <= d6);
+  const unsigned c2 = unsigned(vb <= 0) & unsigned(d2 >= 0) & unsigned(d6 <= 0);
+  const unsigned c1 = unsigned(va <= 0) & unsigned(e43 >= 0) & unsigned(e56 >= 0);
+  // the first condition that holds, as a bit index in that order (7: none, the face)
+  const unsigned bits = c3 | c4 << 1 | c0 << 2 | c5 << 3 | c2 << 4 | c1 << 5 | 1u << 6;
+  static constexpr signed char kRegion[7] = {3, 4, 0, 5, 2, 1, -1};
+  const int region = kRegion[lowestBit(bits)];
+  // The point without branches either: the edge's formula (by region; any edge for the others,
+  // its result then unused) and the vertex, one of the two picked by index.
+  static constexpr unsigned char kEdge[7] = {0, 0, 1, 2, 0, 0, 0}, kVertex[7] = {0, 0, 0, 0, 0, 1, 2};
+  const unsigned k = kEdge[region + 1];
+  const V3 cb = c - b;
+  const V3* base[3] = {&a, &b, &a};
+  const V3* dir[3] = {&ab, &cb, &ac};
+  const double num[3] = {d1, e43, d2}, den[3] = {d1 - d3, e43 + e56, d2 - d6};
+  V3 cand[2];
+  cand[0] = *base[k] + *dir[k] * (num[k] / den[k]);
+  const V3* corner[3] = {&a, &b, &c};
+  cand[1] = *corner[kVertex[region + 1]];
+  q = cand[region >= 3];
+  return region;
 }
 
 /// Closest point of segment [a, b] to p.
@@ -207,11 +228,15 @@ namespace {
 /// (SphereTriangleContact::region).
 bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V3& q, V3& n, double& d, int& region) {
   // (the triangle in double and its cross product are computed once, for the test and for t)
-  t.p[0] = tri.a.cast<double>();
-  t.p[1] = tri.b.cast<double>();
-  t.p[2] = tri.c.cast<double>();
-  const V3 ab = t.p[1] - t.p[0], ac = t.p[2] - t.p[0];
-  t.m = ab.cross(ac);
+  // (from locals, not read back from t: a 16-byte load spanning two of the stores just made
+  // to t.p misses store forwarding and showed as sphereCore's hottest instruction)
+  const V3 a = tri.a.cast<double>(), b = tri.b.cast<double>(), c = tri.c.cast<double>();
+  t.p[0] = a;
+  t.p[1] = b;
+  t.p[2] = c;
+  const V3 ab = b - a, ac = c - a;
+  const V3 mm = ab.cross(ac);
+  t.m = mm;
   const double bound = std::max({tri.a.cwiseAbs().maxCoeff(), tri.b.cwiseAbs().maxCoeff(), tri.c.cwiseAbs().maxCoeff()});
   const double pMax = p.cwiseAbs().maxCoeff();
   {
@@ -221,8 +246,7 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
     // The rounding of the cross product (<= 8 ulps × |ab|₁|ac|₁ per unit of |p − a|₁) is
     // added, so that nearly collinear triangles, whose computed normal is noise, are never
     // rejected wrongly.
-    const V3 ap = p - t.p[0];
-    const V3& mm = t.m;
+    const V3 ap = p - a;
     const double h = mm.dot(ap);
     const double slack = kGjkScaleTolerance * (1.7320508075688773 * (bound + pMax) + r);
     const double reach = r + m + slack;
@@ -230,13 +254,16 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
     const double lhs = std::abs(h) - err;
     if (lhs > 0 && lhs * lhs > reach * reach * mm.squaredNorm()) return false;
   }
-  t.finish(ab, ac);
+  // t.finish(ab, ac) from the locals
+  t.len = mm.norm();
+  t.degenerate = !(t.len > kTriangleContactDegenerateRelative *
+                               std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()}));
   region = SphereTriangleContact::kDegenerate;
   if (!t.degenerate) {
-    q = closestOnTriangle(t.p, p, region);
+    region = closestRegionOnTriangle(a, b, c, p, q);
     if (region == SphereTriangleContact::kFace) {  // exact projection: distance and normal from the plane, not from q - p
-      const V3 mh = t.m / t.len;
-      const double h = mh.dot(p - t.p[0]);
+      const V3 mh = mm / t.len;
+      const double h = mh.dot(p - a);
       d = std::abs(h);
       q = p - h * mh;
       n = h > 0 ? V3(-mh) : V3(mh);
@@ -253,8 +280,8 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
   } else {
     q = closestOnSegment(t.p[0], t.p[1], p);
     for (int i = 1; i < 3; ++i) {
-      const V3 c = closestOnSegment(t.p[i], t.p[(i + 1) % 3], p);
-      if ((c - p).squaredNorm() < (q - p).squaredNorm()) q = c;
+      const V3 e = closestOnSegment(t.p[i], t.p[(i + 1) % 3], p);
+      if ((e - p).squaredNorm() < (q - p).squaredNorm()) q = e;
     }
     d = (q - p).norm();
     n = d > 0 ? V3((q - p) / d) : V3::Zero();

@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -264,8 +266,15 @@ struct Collector {
   /// The deepest point the internal-edge correction dropped (uncorrected), for keepDeepestDropped.
   MeshContactPoint dropped;
   bool hasDropped = false;
-  /// buf[i].pointA by coordinate, for add()'s merge scan.
+  /// buf[i].pointA by coordinate, for add()'s merge scan; +∞ beyond n (see add()).
   Real ax[kMeshContactBuffer], ay[kMeshContactBuffer], az[kMeshContactBuffer];
+
+  /// Fills the coordinate arrays with +∞ (no point: never within the merge tolerance).
+  void clearScan() {
+    std::fill(std::begin(ax), std::end(ax), std::numeric_limits<Real>::infinity());
+    std::fill(std::begin(ay), std::end(ay), std::numeric_limits<Real>::infinity());
+    std::fill(std::begin(az), std::end(az), std::numeric_limits<Real>::infinity());
+  }
 
   void set(int i, const MeshContactPoint& p) {
     buf[i] = p;
@@ -277,11 +286,15 @@ struct Collector {
   void add(const MeshContactPoint& p) {
     // The squared distances to every buffered point first and how many are within the merge
     // tolerance (a branch-free loop the compiler vectorises); only then, when some are, the
-    // first of those with the same normal.
+    // first of those with the same normal. The scan runs to n rounded up to a multiple of 8 (the
+    // slots beyond n hold +∞, never close), so its trip count changes every 8 points, not with
+    // every point added (its exit and the vector epilogue were often mispredicted).
+    static_assert(kMeshContactBuffer % 8 == 0, "add() scans whole blocks of 8");
     Real d2[kMeshContactBuffer];
     const Real x = p.pointA.x(), y = p.pointA.y(), z = p.pointA.z();
     int close = 0;
-    for (int i = 0; i < n; ++i) {
+    const int scan = (n + 7) & ~7;
+    for (int i = 0; i < scan; ++i) {
       const Real dx = ax[i] - x, dy = ay[i] - y, dz = az[i] - z;
       d2[i] = dx * dx + dy * dy + dz * dz;
       close += d2[i] <= mergeTol2;
@@ -421,21 +434,22 @@ struct Collector {
   bool correctSphere(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const SphereTriangleContact& h,
                      MeshContactPoint& p) const {
     if (std::abs(h.face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
-    const Real tol = meshFeatureTolerance(tri);  // correct()'s
-    const Real tol2 = tol * tol;
-    // the region's edge (or the corner's two edges); any other edge by correct()'s test (a
-    // point near a sharp corner can be within tol of the next edge)
-    bool onEdge[3] = {false, false, false};
     const int region = h.region;
-    if (region < 3) onEdge[region] = true;
-    else onEdge[region - 3] = onEdge[(region - 1) % 3] = true;
-    for (int i = 0; i < 3; ++i)
-      if (!onEdge[i]) onEdge[i] = onEdgeWithin(tri, i, p.pointA, tol);
     // the side of the plane the sphere is on: its centre's (correct()'s rule for a sphere)
     const bool back = h.face.dot(ls.p[0]) < h.face.dot(tri.a);
     const unsigned active = activity(t, slot);
+    // bit i: edge i is active on that side
+    const unsigned activeSide =
+        ((active >> back) & 1u) | ((active >> (2 + back)) & 1u) << 1 | ((active >> (4 + back)) & 1u) << 2;
+    // Kept unchanged when an active edge holds the point: the region's edge (or the corner's two
+    // edges) first, at no cost; then any other active edge by correct()'s test (a point near a
+    // sharp corner can be within tol of the next edge). Inactive edges need no test.
+    const unsigned regionEdges = region < 3 ? 1u << region : (1u << (region - 3)) | (1u << ((region - 1) % 3));
+    if (regionEdges & activeSide) return true;
+    const Real tol = meshFeatureTolerance(tri);  // correct()'s
+    const Real tol2 = tol * tol;
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && (active >> (2 * i + back) & 1u)) return true;
+      if (((activeSide & ~regionEdges) >> i & 1u) != 0 && onEdgeWithin(tri, i, p.pointA, tol)) return true;
     const Vec3 face = back ? Vec3(-h.face) : h.face;
     // Inactive: the face normal, the sphere's deepest point along it and its projection.
     MeshContactPoint q = p;
@@ -601,6 +615,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);
   Collector c{mesh, ls, margin, adjacency, mergeTol * mergeTol, {}, 0, {}, false, {}, {}, {}};
+  c.clearScan();
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, kNoSlot, mesh.triangle(t));
   } else {
