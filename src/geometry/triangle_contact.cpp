@@ -8,22 +8,14 @@
 #include <cmath>
 #include <limits>
 
+#include "geometry/bits.hpp"
 #include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {
 namespace {
 
-/// Index of the lowest set bit of mask (mask != 0).
-inline int lowestBit(std::uint64_t mask) {
-#if defined(__GNUC__)
-  return __builtin_ctzll(mask);
-#else
-  int i = 0;
-  while (!(mask & 1u)) mask >>= 1, ++i;
-  return i;
-#endif
-}
+using detail::lowestBit;  // geometry/bits.hpp
 
 using detail::V3;
 

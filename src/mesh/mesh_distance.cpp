@@ -5,6 +5,7 @@
 #include <crux/error.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 
+#include "geometry/bits.hpp"
 #include "node_tests.hpp"
 #include "relative_frame.hpp"
 
@@ -313,16 +314,7 @@ void quadBounds(const Triangle& a, const Vec3& na, const Aabb& boxA, const Trian
 
 namespace {
 
-/// Index of the lowest set bit of mask (mask != 0).
-inline int lowestBit(unsigned mask) {
-#if defined(__GNUC__)
-  return __builtin_ctz(mask);
-#else
-  int i = 0;
-  while (!(mask & 1u)) mask >>= 1, ++i;
-  return i;
-#endif
-}
+using detail::lowestBit;  // geometry/bits.hpp
 
 /// The best pair so far and the search limits.
 struct Best {
