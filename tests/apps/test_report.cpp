@@ -2,6 +2,7 @@
 // tiny budget in a temporary directory and checks what it wrote: the three outputs exist and
 // parse, results.json holds every workload and backend of the benches that are built, and every
 // chart in index.html draws only series (and points) present in results.json.
+// ctest: one process (the ReportRun tests share one `crux report` run: tests/CMakeLists.txt)
 
 #include "batch_test_util.hpp"
 #include "cli/report.hpp"
