@@ -98,7 +98,11 @@ static_assert(sizeof(Mat3) == 9 * sizeof(Real) && sizeof(Vec3) == 3 * sizeof(Rea
                   sizeof(MeshDistanceAccel::Node) == 16 * sizeof(Real),
               "MeshDistanceAccel::Node is read as 16 Reals: axes (column-major), center, half, child");
 
-#if defined(__GNUC__)
+// The 4-wide lanes below use the GCC/Clang vector extension; crux is built with GCC or Clang
+// (README: requirements), so there is no scalar copy of this arithmetic to keep in step.
+#if !defined(__GNUC__)
+#error "crux needs GCC or Clang: src/mesh/mesh_distance.cpp uses their vector extension"
+#endif
 // (Four doubles are 32 bytes, passed differently with and without AVX: the functions taking
 // them are internal to this file, so GCC's ABI note does not apply; it is reported at the end of
 // the file, hence not popped.)
@@ -254,61 +258,6 @@ void quadBounds(const Triangle& a, const Vec3& na, const Aabb& boxA, const Trian
 }
 
 }  // namespace
-#else
-void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDistanceAccel::Node* const (&b)[4],
-                    const Mat3& R, const Vec3& t, Real keep, Real pad, ObbPairOffsets& out) {
-  // The same arithmetic in the same order, one pair at a time.
-  for (int l = 0; l < 4; ++l) {
-    const MeshDistanceAccel::Node& A = *a[l];
-    const MeshDistanceAccel::Node& B = *b[l];
-    Real d[3], u[3], e[3];
-    for (int r = 0; r < 3; ++r) {
-      d[r] = (((R(r, 0) * B.center[0] + R(r, 1) * B.center[1]) + R(r, 2) * B.center[2]) + t[r]) - A.center[r];
-      u[r] = t[r] - A.center[r];
-    }
-    for (int c = 0; c < 3; ++c) e[c] = B.center[c] + ((R(0, c) * u[0] + R(1, c) * u[1]) + R(2, c) * u[2]);
-    for (int c = 0; c < 3; ++c) {
-      out.d[c][l] = d[c], out.e[c][l] = e[c];
-      out.dA[c][l] = (A.axes(0, c) * d[0] + A.axes(1, c) * d[1]) + A.axes(2, c) * d[2];
-      out.dB[c][l] = (B.axes(0, c) * e[0] + B.axes(1, c) * e[1]) + B.axes(2, c) * e[2];
-    }
-    const Real x = out.dA[0][l], y = out.dA[1][l], z = out.dA[2][l];
-    const Real len2 = (x * x + y * y) + z * z;
-    const Real extent = ((A.half[0] * std::abs(x) + A.half[1] * std::abs(y)) + A.half[2] * std::abs(z)) +
-                        ((B.half[0] * std::abs(out.dB[0][l]) + B.half[1] * std::abs(out.dB[1][l])) +
-                         B.half[2] * std::abs(out.dB[2][l]));
-    const Real len = std::sqrt(len2);
-    Real bound = (len - extent / len) - pad;
-    if (!(len2 > 0)) bound = -kNoLimit;
-    if (len2 - extent > keep * len) bound = kNoLimit;
-    out.len2[l] = len2, out.extent[l] = extent, out.bound[l] = bound;
-  }
-}
-
-namespace {
-
-/// Up to four triangles of mesh b (mapped into a's frame) with their boxes and normals.
-struct TriangleQuad {
-  const Triangle* t;
-  const Aabb* box;
-  const Vec3* normal;
-  int m;
-};
-
-void loadQuad(const Triangle* t, const Aabb* box, const Vec3* normal, int m, TriangleQuad& q) { q = {t, box, normal, m}; }
-
-/// Lower bounds, minus pad, on the distance between triangle a and each triangle of q (the
-/// larger of the box gap and triangleLowerBound).
-void quadBounds(const Triangle& a, const Vec3& na, const Aabb& boxA, const TriangleQuad& q, Real pad, Real (&out)[4]) {
-  for (int l = 0; l < 4; ++l) {
-    const int k = std::min(l, q.m - 1);
-    out[l] = std::max(aabbDistance(boxA, q.box[k]), triangleLowerBound(a, na, q.t[k], q.normal[k])) - pad;
-  }
-}
-
-}  // namespace
-
-#endif
 
 }  // namespace mesh_detail
 
@@ -661,7 +610,6 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   };
   // Starts loading the children of a pair's nodes (and their boxes) while other work proceeds.
   auto prefetch = [&](const Pair& p) {
-#if defined(__GNUC__)
     if (both) {
       const Node& na = obbA[p.a];
       const Node& nb = obbB[p.b];
@@ -681,9 +629,6 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       __builtin_prefetch(&bb.nodes[nb.first]);
       if (obbB) __builtin_prefetch(&obbB[nb.first]), __builtin_prefetch(&obbB[nb.first + 1]);
     }
-#else
-    (void)p;
-#endif
   };
   auto visitLeaves = [&](const Pair& p) {
     if (both) {
