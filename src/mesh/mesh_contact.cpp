@@ -261,19 +261,33 @@ struct Collector {
   Real margin;
   const MeshAdjacency* adjacency;
   Real mergeTol2;
-  MeshContactPoint buf[kMeshContactBuffer];
+  /// The buffered points, slots [0, n) in use. Left uninitialised (a query writes only the
+  /// slots it uses; initialising all 64 cost ~3 KB of stores per query).
+  struct PointBuffer {
+    union Slot {
+      Slot() {}
+      MeshContactPoint p;
+    };
+    Slot slots[kMeshContactBuffer];
+    PointBuffer() {}
+    MeshContactPoint& operator[](int i) { return slots[i].p; }
+    const MeshContactPoint& operator[](int i) const { return slots[i].p; }
+  } buf;
   int n = 0;
   /// The deepest point the internal-edge correction dropped (uncorrected), for keepDeepestDropped.
   MeshContactPoint dropped;
   bool hasDropped = false;
-  /// buf[i].pointA by coordinate, for add()'s merge scan; +∞ beyond n (see add()).
+  /// buf[i].pointA by coordinate, for add()'s merge scan; +∞ in [n, n rounded up to 8) (see
+  /// add(); a block of 8 is filled when the first point enters it).
   Real ax[kMeshContactBuffer], ay[kMeshContactBuffer], az[kMeshContactBuffer];
 
-  /// Fills the coordinate arrays with +∞ (no point: never within the merge tolerance).
-  void clearScan() {
-    std::fill(std::begin(ax), std::end(ax), std::numeric_limits<Real>::infinity());
-    std::fill(std::begin(ay), std::end(ay), std::numeric_limits<Real>::infinity());
-    std::fill(std::begin(az), std::end(az), std::numeric_limits<Real>::infinity());
+  Collector(const Mesh& mesh_, const LocalShape& ls_, Real margin_, const MeshAdjacency* adjacency_, Real mergeTol2_)
+      : mesh(mesh_), ls(ls_), margin(margin_), adjacency(adjacency_), mergeTol2(mergeTol2_) {}
+
+  /// Fills the block of 8 coordinate slots from `first` (a multiple of 8) with +∞ (no point:
+  /// never within the merge tolerance).
+  void clearBlock(int first) {
+    for (int i = first; i < first + 8; ++i) ax[i] = ay[i] = az[i] = std::numeric_limits<Real>::infinity();
   }
 
   void set(int i, const MeshContactPoint& p) {
@@ -307,6 +321,7 @@ struct Collector {
       }
     }
     if (n < kMeshContactBuffer) {
+      if ((n & 7) == 0) clearBlock(n);
       set(n++, p);
       return;
     }
@@ -338,15 +353,6 @@ struct Collector {
     if (!(len > 0)) return true;  // degenerate triangle: no face cone
     face /= len;
     if (std::abs(face.dot(p.normal)) >= kMeshFaceConeCos) return true;  // within the face cone
-    const Real tol = meshFeatureTolerance(tri);
-    const Vec3& pa = p.pointA;
-    bool onEdge[3];
-    int edges = 0;
-    for (int i = 0; i < 3; ++i) {
-      onEdge[i] = onEdgeWithin(tri, i, pa, tol);
-      edges += onEdge[i];
-    }
-    if (edges == 0) return true;  // face interior: the convex routine's normal stands
     bool back = false;  // the shape is on the triangle's back side
     {
       // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
@@ -358,8 +364,30 @@ struct Collector {
       if (back) face = -face;
     }
     const unsigned active = activity(t, slot);
+    // bit i: edge i is active on that side
+    const unsigned activeSide =
+        ((active >> back) & 1u) | ((active >> (2 + back)) & 1u) << 1 | ((active >> (4 + back)) & 1u) << 2;
+    // All three edges active (a convex ridge all round, the usual case on a curved surface):
+    // the point stands wherever it lies (on an edge: active; in the face interior: the convex
+    // routine's normal), so no edge test is needed.
+    if (activeSide == 7u) return true;
+    const Real tol = meshFeatureTolerance(tri);
+    const Vec3& pa = p.pointA;
+    // A point at a corner (within tol/2, where onEdgeWithin's test is certain for both of the
+    // corner's edges whatever the rounding: the usual box and capsule point is a triangle vertex)
+    // stands when one of those two edges is active.
     for (int i = 0; i < 3; ++i)
-      if (onEdge[i] && (active >> (2 * i + back) & 1u)) return true;
+      if ((pa - tri[i]).squaredNorm() <= Real(0.25) * tol * tol && (activeSide & (1u << i | 1u << (i + 2) % 3)) != 0)
+        return true;
+    bool onEdge[3];
+    int edges = 0;
+    for (int i = 0; i < 3; ++i) {
+      onEdge[i] = onEdgeWithin(tri, i, pa, tol);
+      edges += onEdge[i];
+    }
+    if (edges == 0) return true;  // face interior: the convex routine's normal stands
+    for (int i = 0; i < 3; ++i)
+      if (onEdge[i] && (activeSide >> i & 1u)) return true;
     // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
     MeshContactPoint q = p;
     if (!faceContact(tri, face, q)) return false;
@@ -614,8 +642,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);
-  Collector c{mesh, ls, margin, adjacency, mergeTol * mergeTol, {}, 0, {}, false, {}, {}, {}};
-  c.clearScan();
+  Collector c(mesh, ls, margin, adjacency, mergeTol * mergeTol);
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, kNoSlot, mesh.triangle(t));
   } else {
@@ -675,7 +702,9 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
           const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
           const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
           if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
-        } else if (boxesOverlap(bounds(tri), query)) {
+        } else if (isBox || boxesOverlap(bounds(tri), query)) {
+          // (a box tests the triangle against its own faces first, in Collector::triangle; the
+          // world box rejected ~2 % of the leaf triangles there, for more than it saved)
           c.triangle(mesh.bvh().primIndices[k], k, tri);
         }
         return true;
