@@ -392,7 +392,7 @@ bool DynamicAabbTree::raycast(const Ray& ray, RayProxyCollector& collector) cons
       if (rayBoxEntry(slabs, entries_[n.id].box, collector.maxT, t) && !collector.add(n.id, t)) return false;
       continue;
     }
-    Real t1, t2;
+    Real t1 = 0, t2 = 0;  // (set whenever read: rayBoxEntry writes them on a hit; initialised for -Wmaybe-uninitialized)
     const bool hit1 = rayBoxEntry(slabs, nodes_[n.child1].box, collector.maxT, t1);
     const bool hit2 = rayBoxEntry(slabs, nodes_[n.child2].box, collector.maxT, t2);
     if (hit1 && hit2) {  // nearer on top
