@@ -26,6 +26,10 @@ constexpr double kFeatureSin = 0.034899496702500969;  // sin(2°)
 /// axis' separation, within this × scale (scaled units); otherwise the generic routine answers.
 constexpr double kRealiseTolerance = 1e-9;
 
+/// Slack (scaled units, coordinates <= 1) of the clearance bound that skips the edge axes (see
+/// its use): far above their rounding (tens of ulps), far below kBoxTriangleFaceBias.
+constexpr double kEdgeBoundSlack = 1e-12;
+
 /// Clip buffers: a triangle clipped by 4 planes or a box face by 3 has at most 7 vertices.
 constexpr int kMaxClip = 12;
 
@@ -219,6 +223,44 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
   return 2;
 }
 
+/// triangleFeature's choice for d = dk·unit(k) (dk = ±1, finite inputs), on the corners T (the
+/// rows of t, read as scalars): every dot product with d is then ±one component, exactly (the
+/// other terms are ±0), so the choice is the same. Returns 3 (the face; `front` whether
+/// m·d > 0), 2 (the edge is–other) or 1 (the corner is).
+int triangleFeatureAlongAxis(const double (*T)[3], const double* L, const V& m, double mLen, int k, double dk,
+                             int& is, int& other, bool& front) {
+  if (mLen > 0 && std::abs(m[k]) >= kFeatureCos * mLen) {
+    front = m[k] * dk > 0;
+    return 3;
+  }
+  const double p0 = T[0][k] * dk, p1 = T[1][k] * dk, p2 = T[2][k] * dk;
+  is = 0;
+  double best = p0;
+  if (p1 > best) {
+    best = p1;
+    is = 1;
+  }
+  if (p2 > best) is = 2;
+  int bestK = -1;
+  double bestCos = kFeatureSin;
+  for (int kk = 1; kk <= 2; ++kk) {
+    const int o = is + kk >= 3 ? is + kk - 3 : is + kk;
+    // The edge is → o is ±E_j, j = is (kk = 1) or o (kk = 2): the same |e·d| and |e|² = L[j].
+    const int j = kk == 1 ? is : o, j1 = j == 2 ? 0 : j + 1;
+    const double ed = (T[j1][k] - T[j][k]) * dk, e2 = L[j];
+    if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) continue;
+    const double len = std::sqrt(e2);
+    if (!(len > 0)) continue;
+    const double c = std::abs(ed) / len;
+    if (c <= bestCos) {
+      bestCos = c;
+      bestK = o;
+    }
+  }
+  other = bestK;
+  return bestK < 0 ? 1 : 2;
+}
+
 enum class AxisKind { BoxFace, TriangleFace, Edge };
 
 struct Axis {
@@ -245,18 +287,6 @@ inline void powerOfTwoScale(double S, double& scale, double& unscale) {
   std::frexp(S, &exponent);
   scale = std::ldexp(1.0, -exponent);
   unscale = std::ldexp(1.0, exponent);
-}
-
-/// Separation numerator of the triangle from the box along the unnormalised axis a: the larger
-/// of the two sides (separation = numerator / |a|); `sign` receives the side (+1: triangle
-/// along +a).
-inline double axisNumerator(const V* t, const V& h, const V& a, double& sign) {
-  const double p0 = a.dot(t[0]), p1 = a.dot(t[1]), p2 = a.dot(t[2]);
-  const double lo = std::min(p0, std::min(p1, p2)), hi = std::max(p0, std::max(p1, p2));
-  const double r = h.dot(a.cwiseAbs());
-  const double pos = lo - r, neg = -r - hi;
-  sign = pos >= neg ? 1.0 : -1.0;
-  return std::max(pos, neg);
 }
 
 /// Edge axis a = e_I × e (box axis I, triangle edge e; C0, C1, C2 = e × t_0, t_1, t_2, whose
@@ -286,6 +316,55 @@ inline bool exceeds(double num, double a2, double bound) {
   return num >= 0 ? ((bound < 0) | (nn > bb)) : ((bound < 0) & (nn < bb));
 }
 
+/// The 9 edge axes (see the call): false when one separates beyond the margin, else `best`
+/// becomes the edge axis exceeding face.sep + bias the most, if any.
+// (Always inlined: called from both instantiations below, GCC would otherwise call it, ~1 ns.)
+[[gnu::always_inline]] inline bool edgeAxes(const V* t, const V* E, const V& h, double m, double bias,
+                                            const Axis& face, Axis& best) {
+  // The 9 edge axes a = e_i × E_j, all at once and without branches (RTCD §5.2.9 with the
+  // triple-product form of Akenine-Möller's triangle–box test): a vertex p projects to
+  // a·p = (E_j × p)_i, so the cross products E_j × t_k give the triangle's projection
+  // interval on the 3 axes of edge j at once; the box's radius is h_u|E_v| + h_v|E_u| and
+  // |a|² = E_u² + E_v² (u, v the two other axes). The edge's own two vertices project to the
+  // same value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike
+  // (a segment triangle's two copies of its edge tie, and the first wins).
+  double num[9], a2[9], sgn[9];
+  bool valid[9];
+  bool separated = false;
+  const double m2 = m * m;
+  for (int j = 0; j < 3; ++j) {
+    const V& e = E[j];
+    const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
+    const double e2 = e.squaredNorm();
+    const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
+    separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+    separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+    separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+  }
+  if (separated) return false;
+  double bound = face.sep + bias;  // an edge axis must exceed this
+  bool any = false;                // some axis beats the initial bound (the bound only grows)
+  for (int k = 0; k < 9; ++k) any |= valid[k] & exceeds(num[k], a2[k], bound);
+  for (int k = 0; any && k < 9; ++k) {
+    if (!valid[k] || !exceeds(num[k], a2[k], bound)) continue;
+    const double len = std::sqrt(a2[k]);
+    const double sep = num[k] / len;
+    if (!(sep > bound)) continue;
+    const int i = k % 3, j = k / 3;
+    const int u = (i + 1) % 3, v = (i + 2) % 3;
+    V a = V::Zero();  // unit(i) × E[j], exact
+    a[u] = -E[j][v];
+    a[v] = E[j][u];
+    bound = sep;
+    best.kind = AxisKind::Edge;
+    best.i = i;
+    best.j = j;
+    best.sep = sep;
+    best.n = a * (sgn[k] / len);
+  }
+  return true;
+}
+
 /// The GJK/EPA pair (gjk.hpp's distance(), as contacts() uses): one point, the closest (or
 /// deepest) pair, with the features supporting the normal (contact.hpp's rule), when the
 /// signed distance is <= m. Unlike contacts(), no clipping: its edge–edge and sliver-plane
@@ -313,25 +392,44 @@ bool fallback(const Vec3& half, const Triangle& tri, double m, const V* t, const
   return true;
 }
 
-}  // namespace
 
-bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+/// The routine; kShortcuts = false computes every axis and takes the general paths (the full
+/// SAT, detail::boxTriangleContactsFullSat), which the shortcuts must match bit for bit.
+template <bool kShortcuts>
+bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
   out.count = 0;
   if (!(margin >= 0)) margin = 0;
   // Exact power-of-two rescaling to a length scale in [0.5, 1).
   double S = std::max({double(half.cwiseAbs().maxCoeff()), double(tri.a.cwiseAbs().maxCoeff()),
                        double(tri.b.cwiseAbs().maxCoeff()), double(tri.c.cwiseAbs().maxCoeff())});
+  // The shortcuts assume finite inputs (x − x is 0 for finite x, NaN otherwise).
+  const bool fast = kShortcuts && ((half - half) + (tri.a - tri.a) + (tri.b - tri.b) + (tri.c - tri.c)).sum() == 0;
   double scale = 1, unscale = 1;
   powerOfTwoScale(S, scale, unscale);
-  const V h = half.cast<double>().cwiseAbs() * scale;
-  const V t[3] = {tri.a.cast<double>() * scale, tri.b.cast<double>() * scale, tri.c.cast<double>() * scale};
+  // Scalars first (the vectors below are built from registers, not reloaded from memory).
+  const double ax = double(tri.a[0]) * scale, ay = double(tri.a[1]) * scale, az = double(tri.a[2]) * scale;
+  const double bx = double(tri.b[0]) * scale, by = double(tri.b[1]) * scale, bz = double(tri.b[2]) * scale;
+  const double cx = double(tri.c[0]) * scale, cy = double(tri.c[1]) * scale, cz = double(tri.c[2]) * scale;
+  const double hx = std::abs(double(half[0])) * scale, hy = std::abs(double(half[1])) * scale,
+               hz = std::abs(double(half[2])) * scale;
+  const V h(hx, hy, hz);
+  const V t[3] = {V(ax, ay, az), V(bx, by, bz), V(cx, cy, cz)};
+  const double T[3][3] = {{ax, ay, az}, {bx, by, bz}, {cx, cy, cz}};  // t, read as scalars
   const double m = std::isfinite(double(margin)) ? double(margin) * scale : std::numeric_limits<double>::infinity();
 
   // ---- separating axes ----
-  const V E[3] = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
-  const V normal = E[0].cross(t[2] - t[0]);
-  const double longest = std::max({E[0].squaredNorm(), E[1].squaredNorm(), E[2].squaredNorm()});
-  const double normalLen = normal.norm();
+  // Written out in scalars, in Eigen's evaluation order for 3-vectors (dot: (x + y) + z).
+  const double e0x = bx - ax, e0y = by - ay, e0z = bz - az;  // E[0] = t[1] − t[0]
+  const double e1x = cx - bx, e1y = cy - by, e1z = cz - bz;  // E[1] = t[2] − t[1]
+  const double e2x = ax - cx, e2y = ay - cy, e2z = az - cz;  // E[2] = t[0] − t[2]
+  const V E[3] = {V(e0x, e0y, e0z), V(e1x, e1y, e1z), V(e2x, e2y, e2z)};
+  const double fx = cx - ax, fy = cy - ay, fz = cz - az;  // t[2] − t[0]
+  const double nx = e0y * fz - e0z * fy, ny = e0z * fx - e0x * fz, nz = e0x * fy - e0y * fx;  // E[0] × (t[2] − t[0])
+  const V normal(nx, ny, nz);
+  const double L[3] = {(e0x * e0x + e0y * e0y) + e0z * e0z, (e1x * e1x + e1y * e1y) + e1z * e1z,
+                       (e2x * e2x + e2y * e2y) + e2z * e2z};  // |E_j|²
+  const double longest = std::max({L[0], L[1], L[2]});
+  const double normalLen = std::sqrt((nx * nx + ny * ny) + nz * nz);
   const bool hasFace = normalLen > kBoxTriangleDegenerateRelative * longest && normalLen > 0;
 
   Axis face;  // best box face
@@ -349,8 +447,15 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
   if (!(face.sep <= m)) return false;        // a separating axis: distance >= face.sep > margin
   const double bias = kBoxTriangleFaceBias;  // × scale, which is ~1 after rescaling
   if (hasFace) {
-    double sign = 1;
-    const double num = axisNumerator(t, h, normal, sign);
+    // The separation numerator along the normal (the larger of the two sides; separation =
+    // numerator / |normal|), written out in scalars.
+    const double p0 = (nx * ax + ny * ay) + nz * az, p1 = (nx * bx + ny * by) + nz * bz,
+                 p2 = (nx * cx + ny * cy) + nz * cz;
+    const double lo = std::min(p0, std::min(p1, p2)), hi = std::max(p0, std::max(p1, p2));
+    const double r = (hx * std::abs(nx) + hy * std::abs(ny)) + hz * std::abs(nz);
+    const double pos = lo - r, neg = -r - hi;
+    const double sign = pos >= neg ? 1.0 : -1.0;
+    const double num = std::max(pos, neg);
     const double sep = num / normalLen;
     if (!(sep <= m)) return false;  // a separating axis beyond the margin (never biased away)
     if (sep >= face.sep - bias) {
@@ -360,49 +465,24 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
     }
   }
   Axis best = face;
-  {
-    // The 9 edge axes a = e_i × E_j, all at once and without branches (RTCD §5.2.9 with the
-    // triple-product form of Akenine-Möller's triangle–box test): a vertex p projects to
-    // a·p = (E_j × p)_i, so the cross products E_j × t_k give the triangle's projection
-    // interval on the 3 axes of edge j at once; the box's radius is h_u|E_v| + h_v|E_u| and
-    // |a|² = E_u² + E_v² (u, v the two other axes). The edge's own two vertices project to the
-    // same value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike
-    // (a segment triangle's two copies of its edge tie, and the first wins).
-    double num[9], a2[9], sgn[9];
-    bool valid[9];
-    bool separated = false;
-    const double m2 = m * m;
-    for (int j = 0; j < 3; ++j) {
-      const V& e = E[j];
-      const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
-      const double e2 = e.squaredNorm();
-      const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
-      separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
-      separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
-      separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
-    }
-    if (separated) return false;
-    double bound = face.sep + bias;  // an edge axis must exceed this
-    bool any = false;                // some axis beats the initial bound (the bound only grows)
-    for (int k = 0; k < 9; ++k) any |= valid[k] & exceeds(num[k], a2[k], bound);
-    for (int k = 0; any && k < 9; ++k) {
-      if (!valid[k] || !exceeds(num[k], a2[k], bound)) continue;
-      const double len = std::sqrt(a2[k]);
-      const double sep = num[k] / len;
-      if (!(sep > bound)) continue;
-      const int i = k % 3, j = k / 3;
-      const int u = (i + 1) % 3, v = (i + 2) % 3;
-      V a = V::Zero();  // unit(i) × E[j], exact
-      a[u] = -E[j][v];
-      a[v] = E[j][u];
-      bound = sep;
-      best.kind = AxisKind::Edge;
-      best.i = i;
-      best.j = j;
-      best.sep = sep;
-      best.n = a * (sgn[k] / len);
-    }
+  // The edge axes cannot win when a triangle vertex lies inside the box deeply enough: for any
+  // axis a and vertex v with clearance d = min_k (h_k − |v_k|) >= 0, both sides' separation
+  // numerators are at most Σ|a_k|(|v_k| − h_k) <= −d·Σ|a_k| <= −d·|a|, so every edge axis
+  // separates by at most −d. Skipped when −d stays below both the bound an edge axis must exceed
+  // (face.sep + bias) and the margin m by kEdgeBoundSlack, which covers the edge axes' rounding
+  // (their projections carry errors of a few ulps of |a|, the coordinates being <= 1 here): the
+  // full test would then keep `face` too, and no edge axis would separate beyond m (m = 0 needs
+  // d >= kEdgeBoundSlack), bit for bit (test_box_triangle_contact checks it against
+  // detail::boxTriangleContactsFullSat).
+  bool edgesMayWin = true;
+  if (fast) {
+    double clearance = -std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i)
+      clearance = std::max(clearance,
+                           std::min({h[0] - std::abs(t[i][0]), h[1] - std::abs(t[i][1]), h[2] - std::abs(t[i][2])}));
+    edgesMayWin = !(clearance >= 0 && -clearance <= std::min(face.sep + bias, m) - kEdgeBoundSlack);
   }
+  if (edgesMayWin && !edgeAxes(t, E, h, m, bias, face, best)) return false;
   // An edge axis within the feature angle of the best face axis gives way to that face, as
   // contact.cpp turns a normal within 2° of a face into that face's normal: a face contact (2–4
   // points) rather than one edge–edge point, at most 2° off the minimum-penetration direction.
@@ -423,7 +503,47 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
   if (best.kind == AxisKind::BoxFace) {
     const int k = best.i;
     const double s = n[k];  // ±1
-    int cnt = triangleFeature(t, normal, hasFace ? normalLen : 0.0, -n, cur, incId);
+    int cnt;
+    if (fast) {
+      int is = 0, other = 0;
+      bool front = false;
+      const int kind = triangleFeatureAlongAxis(T, L, normal, hasFace ? normalLen : 0.0, k, -s, is, other, front);
+      if (kind == 1) {
+        // A single corner (the usual case), in scalars: the four side planes' tests as clip()
+        // makes them, the point and the output as below.
+        const double* p = T[is];
+        const double sep = s * p[k] - h[k];
+        const int a1 = k + 1 >= 3 ? k - 2 : k + 1, a2 = k + 2 >= 3 ? k - 1 : k + 2;
+        const bool inside = !(p[a1] + h[a1] < 0 || h[a1] - p[a1] < 0 || p[a2] + h[a2] < 0 || h[a2] - p[a2] < 0);
+        if (!inside || !(sep <= m) || (best.sep > 0 && sep > best.sep + kRealiseTolerance))
+          return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+        out.normal = n.cast<Real>();
+        out.count = 1;
+        ContactPoint& c = out.points[0];
+        c.pointA = Vec3(static_cast<Real>(p[0] * unscale), static_cast<Real>(p[1] * unscale),
+                        static_cast<Real>(p[2] * unscale));
+        // pointB: pointA moved onto the face's plane, (s·h_k)·unscale (set in place: a run-time
+        // indexed local array read back right after its stores stalls store forwarding)
+        c.pointB = c.pointA;
+        c.pointB[k] = static_cast<Real>((s * h[k]) * unscale);
+        c.separation = static_cast<Real>(sep * unscale);
+        c.featureA = vertexId(is);
+        c.featureB = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (s > 0 ? 1 : 0)));
+        return true;
+      }
+      if (kind == 3) {
+        for (int i = 0; i < 3; ++i) cur[i] = {t[i], 0, vertexId(i)};
+        incId = featureId(FeatureKind::Face, front ? 0u : 1u);
+        cnt = 3;
+      } else {
+        cur[0] = {t[is], 0, vertexId(is)};
+        cur[1] = {t[other], 0, vertexId(other)};
+        incId = edgeId(is, other);
+        cnt = 2;
+      }
+    } else {
+      cnt = triangleFeature(t, normal, hasFace ? normalLen : 0.0, -n, cur, incId);
+    }
     for (int q = 0; q < cnt; ++q) cur[q].sep = s * cur[q].p[k] - h[k];
     const bool vertex = cnt == 1;
     if (vertex) {  // a vertex (the usual case): the four side planes' tests, as clip() makes them
@@ -522,5 +642,17 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
   }
   return true;
 }
+
+}  // namespace
+
+bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+  return boxTriangleContactsImpl<true>(half, tri, margin, out);
+}
+
+namespace detail {
+bool boxTriangleContactsFullSat(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+  return boxTriangleContactsImpl<false>(half, tri, margin, out);
+}
+}  // namespace detail
 
 }  // namespace crux

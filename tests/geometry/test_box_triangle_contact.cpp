@@ -2,18 +2,21 @@
 // triangle, a triangle edge lying on a box face, degenerate triangles, flat boxes), seeded
 // properties against the generic GJK/EPA + clipping routine of contact.hpp over thousands of
 // cases in seven families, penetration depth against libccd, integer-grid cases against the
-// exact (CGAL) overlap and an exact integer SAT (touching gives separation 0 exactly), no heap
-// allocation, and a microbenchmark (printed, not asserted).
+// exact (CGAL) overlap and an exact integer SAT (touching gives separation 0 exactly), the
+// routine's shortcuts against its full SAT bit for bit, no heap allocation, and a
+// microbenchmark (printed, not asserted).
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <crux/geometry/box_triangle_contact.hpp>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/gjk.hpp>
 #include <cstdio>
+#include <cstring>
 #include <exact/exact_kernel.hpp>
 #include <limits>
 #include <random>
@@ -465,6 +468,96 @@ TEST(BoxTriangleContact, AgreesWithTheGenericRoutineOnRandomCases) {
               normalDiffer, worstNormal);
   for (int f = 0; f < 7; ++f) EXPECT_GT(perFamily[f], n / 7 / 8) << "family " << f << " rarely in contact";
   EXPECT_GT(penetrating, n / 5);
+}
+
+// ---- the shortcuts against the full SAT, bit for bit ---------------------------------------
+
+/// Both answers identical bit for bit: verdict, count, normal and every point's fields.
+::testing::AssertionResult sameBits(bool ra, const ContactManifold& a, bool rb, const ContactManifold& b) {
+  auto bits = [](const Vec3& v) {
+    std::array<std::uint32_t, 3 * sizeof(Real) / 4> w{};
+    std::memcpy(w.data(), v.data(), 3 * sizeof(Real));
+    return w;
+  };
+  auto same = [&](Real x, Real y) { return std::memcmp(&x, &y, sizeof(Real)) == 0; };
+  bool ok = ra == rb && a.count == b.count && (!ra || bits(a.normal) == bits(b.normal));
+  for (int i = 0; ok && i < a.count; ++i) {
+    const ContactPoint &p = a.points[i], &q = b.points[i];
+    ok = bits(p.pointA) == bits(q.pointA) && bits(p.pointB) == bits(q.pointB) && same(p.separation, q.separation) &&
+         p.featureA == q.featureA && p.featureB == q.featureB;
+  }
+  if (ok) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "shortcuts (" << ra << "): " << describe(a) << "\nfull SAT (" << rb
+                                       << "): " << describe(b);
+}
+
+TEST(BoxTriangleContact, ShortcutsGiveTheFullSatAnswerBitForBit) {
+  // The routine's shortcuts (edge axes skipped under the clearance bound, the supporting feature
+  // along a box face on single components, a single-corner contact written out directly) against
+  // detail::boxTriangleContactsFullSat, which takes none of them: the seven families above, a
+  // corner inside the box at any depth (the bound's case, up to a clearance of 0), a corner just
+  // off a box face within the margin (corner contacts after the edge axes), integer grids (exact
+  // ties: touching corners, edges on faces).
+  Gen g(31337);
+  const int n = test::scaledCases(20000, 3000);
+  int deep = 0, cornerContacts = 0, contactsFound = 0;
+  for (int i = 0; i < n; ++i) {
+    const int family = i % 10;
+    Case c;
+    if (family < 7) {
+      c = g.make(family);
+    } else if (family == 7) {
+      c.half = g.half();
+      c.margin = g.margin();
+      const V3d h = c.half.cast<double>();
+      const double depth = g.pick(4) == 0 ? 1e-7 * g.uni(0, 1) : g.uni(0, 1);  // shallow ones near the bound
+      V3d in(g.uni(-1, 1) * h.x(), g.uni(-1, 1) * h.y(), g.uni(-1, 1) * h.z());
+      const int k = g.pick(3);
+      in[k] = (g.pick(2) ? 1 : -1) * h[k] * (1 - depth);
+      c.tri = Gen::tri(in, in + g.vec(2.5), in + g.vec(2.5));
+    } else if (family == 8) {
+      c.half = g.half();
+      c.margin = Real(g.uni(0.01, 0.3));
+      const V3d h = c.half.cast<double>();
+      const int k = g.pick(3);
+      const double s = g.pick(2) ? 1 : -1;
+      V3d p(g.uni(-1, 1) * h.x(), g.uni(-1, 1) * h.y(), g.uni(-1, 1) * h.z());
+      p[k] = s * (h[k] + g.uni(-0.02, 1) * double(c.margin));
+      V3d q1 = p + g.vec(2), q2 = p + g.vec(2);
+      q1[k] = p[k] + s * g.uni(0, 1.5);
+      q2[k] = p[k] + s * g.uni(0, 1.5);
+      c.tri = Gen::tri(p, q1, q2);
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        c.half[k] = Real(0.5 * g.pick(5));
+        c.tri.a[k] = Real(g.pick(9) - 4);
+        c.tri.b[k] = Real(g.pick(9) - 4);
+        c.tri.c[k] = Real(g.pick(9) - 4);
+      }
+      c.margin = Real(g.pick(3) == 0 ? 0.5 * g.pick(3) : 0);
+    }
+    for (const Vec3& v : {c.tri.a, c.tri.b, c.tri.c})
+      if ((c.half.cast<double>() - v.cast<double>().cwiseAbs()).minCoeff() >= 0) {
+        ++deep;
+        break;
+      }
+    ContactManifold a, b;
+    std::memset(static_cast<void*>(&a), 0, sizeof a);
+    std::memset(static_cast<void*>(&b), 0, sizeof b);
+    const bool ra = boxTriangleContacts(c.half, c.tri, c.margin, a);
+    const bool rb = detail::boxTriangleContactsFullSat(c.half, c.tri, c.margin, b);
+    EXPECT_TRUE(sameBits(ra, a, rb, b)) << "case " << i << ", family " << family << "\n" << describe(c);
+    if (!ra) continue;
+    ++contactsFound;
+    if (a.count == 1 && (a.points[0].featureA >> 24) == std::uint32_t(FeatureKind::Vertex) &&
+        (a.points[0].featureB >> 24) == std::uint32_t(FeatureKind::Face))
+      ++cornerContacts;
+  }
+  std::printf("shortcuts vs full SAT: %d cases, %d with a corner inside the box, %d contacts, %d single-corner "
+              "contacts on a box face\n",
+              n, deep, contactsFound, cornerContacts);
+  EXPECT_GT(deep, n / 8);  // the clearance bound's cases are exercised
+  EXPECT_GT(cornerContacts, n / 8);
 }
 
 // ---- integer grid: exact verdicts, touching at separation 0 exactly ----------------------------

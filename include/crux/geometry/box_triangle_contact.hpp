@@ -57,6 +57,18 @@ inline constexpr double kBoxTriangleDegenerateRelative = 1e-10;
 /// Returns out.count > 0. Never throws, never allocates; a NaN or negative margin counts as 0.
 /// Everything runs in double whatever Real is, after an exact power-of-two rescaling of the
 /// inputs (no overflow or NaN for finite inputs).
+///
+/// Shortcuts (same output bit for bit as the full test, checked against it by
+/// test_box_triangle_contact on random and integer-grid cases): the 9 edge axes are skipped when
+/// a triangle corner lies inside the box deeply enough that no edge axis can win or separate
+/// (clearance bound, see the source); along a box face the triangle's supporting feature is
+/// chosen on single components; a single-corner contact is written out directly.
 bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out);
+
+namespace detail {
+/// boxTriangleContacts without its shortcuts (every axis, the general feature and clipping
+/// paths): the reference the shortcuts are tested against, bit for bit. Not for production use.
+bool boxTriangleContactsFullSat(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out);
+}  // namespace detail
 
 }  // namespace crux
