@@ -207,6 +207,55 @@ TEST(MeshContact, BvhAgreesWithBruteForceAndPerTriangleRoutine) {
   EXPECT_GT(withContacts, checked / 5);
 }
 
+// distance()'s separating-axis pruning (a triangle whose plane, or a box's face axes, bound its
+// signed distance above the best so far is skipped) must give the brute-force answer bit for bit,
+// above all on deep placements where it skips most of the overlapped triangles.
+TEST(MeshContact, DistancePruningKeepsTheBruteForceAnswerOnDeepPlacements) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::vector<double> heights(21 * 21);
+  for (double& h : heights) h = u(rng);
+  const Mesh grid = gridMesh(20, 20, 1, [&](int i, int j) { return Real(heights[std::size_t(j * 21 + i)]); });
+  const ConvexHull hull = randomHull(rng);
+  std::uniform_real_distribution<double> xy(3, 17), lift(-0.8, 1.6);
+  const int poses = test::scaledCases(60, 10);
+  int penetrating = 0, checked = 0;
+  for (const ShapeCase& sc : shapes(hull)) {
+    ConvexShape shape = sc.shape;  // ~1.5 across: a few cells
+    shape.radius *= 3;
+    for (Vec3& p : shape.p) p *= 3;
+    if (shape.kind == ConvexKind::Box) shape.p[0] = Vec3::Zero();
+    if (shape.kind == ConvexKind::Hull) shape = Sphere{Vec3::Zero(), Real(1.2)};
+    for (int k = 0; k < poses; ++k) {
+      const Real x = Real(xy(rng)), y = Real(xy(rng));
+      const Real z = Real(heights[std::size_t(std::lround(double(y)) * 21 + std::lround(double(x)))] + lift(rng));
+      Transform meshPose;
+      meshPose.rotation = randomRotation(rng);
+      meshPose.translation = Vec3(Real(u(rng) * 10), Real(u(rng) * 10), Real(u(rng) * 10));
+      const Transform shapePose{randomRotation(rng), meshPose.apply(Vec3(x, y, z))};
+      const std::string info = sc.name + " meshPose " + str(meshPose) + " shapePose " + str(shapePose);
+      const MeshDistanceResult a = distance(grid, meshPose, shape, shapePose);
+      const MeshDistanceResult b = distance(grid, meshPose, shape, shapePose, kNoLimit, QueryPath::BruteForce);
+      ASSERT_TRUE(a.found && b.found) << info;
+      ASSERT_EQ(a.distance, b.distance) << info;
+      ASSERT_EQ(a.triangle, b.triangle) << info;
+      ASSERT_EQ(a.pointA, b.pointA) << info;
+      ASSERT_EQ(a.pointB, b.pointB) << info;
+      ASSERT_EQ(a.normal, b.normal) << info;
+      // with an early-out bound just above the answer, as a TOI or proximity query would ask
+      const Real limit = a.distance + Real(0.01);
+      const MeshDistanceResult c = distance(grid, meshPose, shape, shapePose, limit);
+      ASSERT_TRUE(c.found) << info;
+      ASSERT_EQ(c.distance, a.distance) << info;
+      ASSERT_EQ(c.triangle, a.triangle) << info;
+      penetrating += a.distance < 0;
+      ++checked;
+    }
+  }
+  std::printf("checked %d placements, %d penetrating\n", checked, penetrating);
+  EXPECT_GT(penetrating, checked / 3);
+}
+
 // --- ghost contacts on internal edges -----------------------------------------------------------
 
 TEST(MeshContact, SphereOnFlatGridHasOneVerticalContactEvenAtInternalEdges) {

@@ -167,11 +167,19 @@ struct MeshDistanceResult {
   std::uint32_t triangle = 0;  ///< triangle realising it (lowest index among equal distances)
 };
 
+/// Slack of distance()'s separating-axis pruning, relative to the pair's length scale (|mesh and
+/// shape translations| + shape size + |coordinates| of the shape's box): above GJK/EPA's 1e-6
+/// relative error and the bound's rounding, so pruning never changes the result.
+inline constexpr Real kMeshDistancePruneRelativeTolerance = Real(1e-5);
+
 /// Minimum over the triangles of the signed convex distance (gjk.hpp) to the shape, with BVH
 /// pruning: subtrees whose box is farther from the shape's box (both in the mesh frame) than the
 /// best distance so far — initially `maxDistance`, the early-out upper bound — are skipped
-/// (nearest child first). found == false when nothing is within maxDistance. Never allocates;
-/// a NaN maxDistance throws InvalidInput.
+/// (nearest child first); a triangle whose box overlaps the shape's is skipped when a
+/// separating-axis lower bound on its signed distance (its plane; a box's face axes) exceeds the
+/// best by more than kMeshDistancePruneRelativeTolerance × the pair's scale (so penetrating
+/// queries do not run EPA on every overlapped triangle). found == false when nothing is within
+/// maxDistance. Never allocates; a NaN maxDistance throws InvalidInput.
 MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                             const Transform& shapePose, Real maxDistance = kNoLimit,
                             QueryPath path = QueryPath::Bvh);
