@@ -181,6 +181,21 @@ int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
   return 2;
 }
 
+/// Whether an edge e with e·d = ed and |e|² = e2 (d unit) is within the feature angle of
+/// perpendicular to d and at least as near to it as bestCos (|cos| of the best so far, from
+/// sin 2°), which it then becomes.
+inline bool nearerPerpendicular(double ed, double e2, double& bestCos) {
+  // Cheap reject (no square root): beyond the feature angle with room to spare for rounding, so
+  // the exact test below would reject it too (bestCos only decreases from sin 2°).
+  if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) return false;
+  const double len = std::sqrt(e2);
+  if (!(len > 0)) return false;
+  const double c = std::abs(ed) / len;
+  if (!(c <= bestCos)) return false;
+  bestCos = c;
+  return true;
+}
+
 /// The triangle's supporting feature along unit d (contact.hpp's rule), as a clip polygon;
 /// `m` is its normal (b−a)×(c−a) and mLen its length, 0 when degenerate.
 int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex* f, std::uint32_t& id) {
@@ -201,17 +216,7 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
   for (int k = 1; k <= 2; ++k) {
     const int o = (is + k) % 3;
     const V e = t[o] - t[is];
-    const double ed = e.dot(d), e2 = e.squaredNorm();
-    // Cheap reject (no square root): beyond the feature angle with room to spare for rounding,
-    // so the exact test below would reject it too (bestCos only decreases from sin 2°).
-    if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) continue;
-    const double len = std::sqrt(e2);
-    if (!(len > 0)) continue;
-    const double c = std::abs(ed) / len;
-    if (c <= bestCos) {
-      bestCos = c;
-      bestK = o;
-    }
+    if (nearerPerpendicular(e.dot(d), e.squaredNorm(), bestCos)) bestK = o;
   }
   f[0] = {t[is], 0, vertexId(is)};
   if (bestK < 0) {
@@ -247,15 +252,7 @@ int triangleFeatureAlongAxis(const double (*T)[3], const double* L, const V& m, 
     const int o = is + kk >= 3 ? is + kk - 3 : is + kk;
     // The edge is → o is ±E_j, j = is (kk = 1) or o (kk = 2): the same |e·d| and |e|² = L[j].
     const int j = kk == 1 ? is : o, j1 = j == 2 ? 0 : j + 1;
-    const double ed = (T[j1][k] - T[j][k]) * dk, e2 = L[j];
-    if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) continue;
-    const double len = std::sqrt(e2);
-    if (!(len > 0)) continue;
-    const double c = std::abs(ed) / len;
-    if (c <= bestCos) {
-      bestCos = c;
-      bestK = o;
-    }
+    if (nearerPerpendicular((T[j1][k] - T[j][k]) * dk, L[j], bestCos)) bestK = o;
   }
   other = bestK;
   return bestK < 0 ? 1 : 2;
