@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 
+#include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {
@@ -52,40 +53,21 @@ std::uint32_t cutId(const ClipVertex& a, const ClipVertex& b, std::uint32_t feat
   return featureId;
 }
 
-/// Sutherland–Hodgman against {x : dist(x) >= 0}, dist affine; a 2-vertex input is a segment.
-/// `snap` (axis >= 0) puts cut points exactly on the axis-aligned plane x[axis] = value.
+/// contact_detail::clipStep against {x : dist(x) >= 0} (dist affine) for vertices carrying a
+/// separation, interpolated along cuts; `snap` (axis >= 0) puts cut points exactly on the
+/// axis-aligned plane x[axis] = value.
 template <class Dist>
 int clip(const ClipVertex* in, int n, Dist dist, int snapAxis, double snapValue, std::uint32_t feature,
          ClipVertex* out) {
-  auto cut = [&](const ClipVertex& a, const ClipVertex& b, double da, double db) {
-    const double t = da / (da - db);
-    ClipVertex c{a.p + (b.p - a.p) * t, a.sep + (b.sep - a.sep) * t, cutId(a, b, feature)};
-    if (snapAxis >= 0) c.p[snapAxis] = snapValue;
-    return c;
-  };
-  if (n == 1) {
-    if (dist(in[0].p) < 0) return 0;
-    out[0] = in[0];
-    return 1;
-  }
-  if (n == 2) {
-    const double d0 = dist(in[0].p), d1 = dist(in[1].p);
-    if (d0 < 0 && d1 < 0) return 0;
-    int k = 0;
-    if (d0 >= 0) out[k++] = in[0];
-    if ((d0 < 0) != (d1 < 0)) out[k++] = cut(in[0], in[1], d0, d1);
-    if (d1 >= 0) out[k++] = in[1];
-    return k;
-  }
-  int k = 0;
-  for (int i = 0; i < n; ++i) {
-    const ClipVertex& a = in[i];
-    const ClipVertex& b = in[(i + 1) % n];
-    const double da = dist(a.p), db = dist(b.p);
-    if (da >= 0 && k < kMaxClip) out[k++] = a;
-    if ((da < 0) != (db < 0) && k < kMaxClip) out[k++] = cut(a, b, da, db);
-  }
-  return k;
+  return contact_detail::clipStep(
+      in, n, dist,
+      [&](const ClipVertex& a, const ClipVertex& b, double da, double db) {
+        const double t = da / (da - db);
+        ClipVertex c{a.p + (b.p - a.p) * t, a.sep + (b.sep - a.sep) * t, cutId(a, b, feature)};
+        if (snapAxis >= 0) c.p[snapAxis] = snapValue;
+        return c;
+      },
+      out, kMaxClip);
 }
 
 /// A contact point in the scaled double frame (no initialisation: filled before use).

@@ -1,6 +1,6 @@
-// Rules shared by the generic contact clipping (contact.cpp) and the closed-form triangle
-// contacts (triangle_contact.cpp), which must classify triangle features, clip and merge
-// coincident points identically.
+// Rules shared by the generic contact clipping (contact.cpp), the closed-form triangle contacts
+// (triangle_contact.cpp) and the box–triangle SAT (box_triangle_contact.cpp, its clipping step),
+// which must classify triangle features, clip and merge coincident points identically.
 #pragma once
 
 #include <crux/geometry/contact.hpp>
@@ -60,29 +60,47 @@ struct ClipVertex {
   std::uint32_t id;
 };
 
-/// One Sutherland–Hodgman step (Sutherland and Hodgman, "Reentrant polygon clipping", 1974):
-/// keeps the part of polygon `in` (a closed loop of n vertices, or a segment when n == 2) with
-/// dot(x − o, m) >= 0, writing at most `capacity` vertices to `out`; returns their count.
-inline int clipPolygon(const ClipVertex* in, int n, const Eigen::Vector3d& o, const Eigen::Vector3d& m,
-                       std::uint32_t cutId, ClipVertex* out, int capacity) {
+/// One Sutherland–Hodgman step (Sutherland and Hodgman, "Reentrant polygon clipping", 1974),
+/// generic over the vertex type V (a member `p`): keeps the part of polygon `in` (a closed loop
+/// of n vertices; a segment when n == 2, a point when n == 1) where the affine `dist(p)` >= 0,
+/// writing at most `capacity` vertices to `out`; a crossing edge a→b gives `cut(a, b, da, db)`
+/// (the caller interpolates what its vertices carry). Returns the count.
+template <class V, class Dist, class Cut>
+int clipStep(const V* in, int n, Dist dist, Cut cut, V* out, int capacity) {
+  if (n == 1) {
+    if (dist(in[0].p) < 0) return 0;
+    out[0] = in[0];
+    return 1;
+  }
   if (n == 2) {  // a segment: clip its parameter interval
-    const double d0 = (in[0].p - o).dot(m), d1 = (in[1].p - o).dot(m);
+    const double d0 = dist(in[0].p), d1 = dist(in[1].p);
     if (d0 < 0 && d1 < 0) return 0;
     int k = 0;
     if (d0 >= 0) out[k++] = in[0];
-    if ((d0 < 0) != (d1 < 0)) out[k++] = {in[0].p + (in[1].p - in[0].p) * (d0 / (d0 - d1)), cutId};
+    if ((d0 < 0) != (d1 < 0)) out[k++] = cut(in[0], in[1], d0, d1);
     if (d1 >= 0) out[k++] = in[1];
     return k;
   }
   int k = 0;
   for (int i = 0; i < n; ++i) {
-    const ClipVertex& a = in[i];
-    const ClipVertex& b = in[(i + 1) % n];
-    const double da = (a.p - o).dot(m), db = (b.p - o).dot(m);
-    if (da >= 0) out[k++] = a;
-    if ((da < 0) != (db < 0) && k < capacity) out[k++] = {a.p + (b.p - a.p) * (da / (da - db)), cutId};
+    const V& a = in[i];
+    const V& b = in[(i + 1) % n];
+    const double da = dist(a.p), db = dist(b.p);
+    if (da >= 0 && k < capacity) out[k++] = a;
+    if ((da < 0) != (db < 0) && k < capacity) out[k++] = cut(a, b, da, db);
   }
   return k;
+}
+
+/// clipStep against the half-space dot(x − o, m) >= 0; cut points carry `cutId`.
+inline int clipPolygon(const ClipVertex* in, int n, const Eigen::Vector3d& o, const Eigen::Vector3d& m,
+                       std::uint32_t cutId, ClipVertex* out, int capacity) {
+  return clipStep(
+      in, n, [&](const Eigen::Vector3d& p) { return (p - o).dot(m); },
+      [&](const ClipVertex& a, const ClipVertex& b, double da, double db) {
+        return ClipVertex{a.p + (b.p - a.p) * (da / (da - db)), cutId};
+      },
+      out, capacity);
 }
 
 /// Reference-feature clipping (the contact-manifold construction of Gregorius, "Robust Contact
