@@ -158,6 +158,33 @@ std::optional<Frac<T>> rayPoint3D(J& judge, const V3<T>& d, const V3<T>& p) {
   return Frac<T>{dp, d.squaredNorm()};
 }
 
+/// v scaled by a power of two (exact) to a largest |component| in [1, 2) when |v|² would
+/// overflow or underflow Wide (a largest component beyond 2^±400); v itself otherwise, and when
+/// it is zero or not finite. Normalising the result gives the same bits as normalising v
+/// wherever |v|² fits Wide, and a unit vector where it does not.
+WVec3 powerOfTwoScaled(const WVec3& v) {
+  const Wide m = v.cwiseAbs().maxCoeff();
+  if (!(m > 0) || !std::isfinite(m) || (m > 0x1p-400 && m < 0x1p400)) return v;
+  return v * std::ldexp(Wide(1), -std::ilogb(m));
+}
+
+/// |v| without overflow in |v|² (powerOfTwoScaled, then the scale put back).
+Wide scaledNorm(const WVec3& v) {
+  const WVec3 s = powerOfTwoScaled(v);
+  if (s == v) return v.norm();
+  return std::ldexp(s.norm(), std::ilogb(v.cwiseAbs().maxCoeff()));
+}
+
+/// A normal of the proper triangle tri along (b − a) × (c − a) that stays finite where that
+/// product overflows Wide (double builds beyond ~1.3e154): the edges halved (exact) so that their
+/// differences cannot overflow and scaled by powers of two (powerOfTwoScaled) before the cross
+/// product. Used only when the exact normal's approximation is not finite.
+WVec3 scaledEdgeNormal(const Triangle& tri) {
+  const WVec3 a = Wide(0.5) * wide(tri.a);
+  const WVec3 e1 = powerOfTwoScaled(Wide(0.5) * wide(tri.b) - a), e2 = powerOfTwoScaled(Wide(0.5) * wide(tri.c) - a);
+  return e1.cross(e2);
+}
+
 /// The answer of firstHit.
 template <class T>
 struct TriangleHit {
@@ -190,7 +217,8 @@ TriangleHit<T> firstHit(J& judge, const V3<T>& o, const V3<T>& d, const Triangle
   if (!((u >= 0 && v >= 0 && w >= 0) || (u <= 0 && v <= 0 && w <= 0))) return r;
   const V3<T> n = (B - A).cross(C - A);
   const int det = u + v + w > 0 ? 1 : (u + v + w < 0 ? -1 : 0);  // sign of d·n = u + v + w
-  const WVec3 nApprox = robust::approx(n);
+  WVec3 nApprox = robust::approx(n);
+  if (!nApprox.allFinite()) nApprox = scaledEdgeNormal(tri);  // |n| beyond Wide: the direction only
   if (det == 0) {
     // The ray's line lies in the triangle's plane: exact 2-D test in a projection keeping it.
     r.normal = nApprox;
@@ -253,15 +281,17 @@ std::optional<SlabEntry> slabs(const WVec3& o, const WVec3& d, const WVec3& lo, 
 /// The hit at parameter s (world distance s|d|), or nullopt beyond maxT. A zero `normal`
 /// means "no surface normal here" and becomes -d/|d|.
 std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec3& normal, Real maxT) {
-  const Wide len = d.norm();
+  const Wide len = scaledNorm(d);  // d.norm(), but finite where |d|² overflows
   RayHit hit;
   hit.t = Real(s * len);
   // A distance that overflows Real (found by fuzz_geometry: a ray almost parallel to a plane)
   // lies beyond every representable point: a miss, never a hit at t = inf.
   if (!(hit.t <= maxT) || !std::isfinite(hit.t)) return std::nullopt;
   hit.point = (o + s * d).cast<Real>();
-  const Wide nn = normal.norm();
-  hit.normal = (nn > 0 ? WVec3(normal / nn) : WVec3(-d / len)).cast<Real>();
+  // (normalised after a power-of-two scaling: |normal|² may overflow Wide far from the origin)
+  const WVec3 ns = powerOfTwoScaled(normal);
+  const Wide nn = ns.norm();
+  hit.normal = (nn > 0 && std::isfinite(nn) ? WVec3(ns / nn) : WVec3(-d / len)).cast<Real>();
   return hit;
 }
 
@@ -283,6 +313,12 @@ std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
     if (!h.s) return false;
     s = h.s->value();
     normal = h.normal;
+    // Beyond the exact range (double builds, coordinates past ~√max Wide) n·a and n·d overflow
+    // and their ratio is no parameter: it is taken from the (scaled) plane normal instead.
+    if (h.crossing != 0 && !(std::isfinite(robust::approx(h.s->num)) && std::isfinite(robust::approx(h.s->den)))) {
+      const Wide num = normal.dot(wide(t.a) - wide(ray.origin)), den = normal.dot(wide(ray.dir));
+      s = num / den > 0 ? num / den : Wide(0);
+    }
     return true;
   });
   if (!hit) return std::nullopt;

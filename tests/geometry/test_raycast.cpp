@@ -385,6 +385,33 @@ TEST(Raycast, TinyAndHugeInputsGiveFiniteAnswers) {
   if (const auto h = raycast(grazing, t)) EXPECT_TRUE(wellFormed(grazing, *h, 4));
 }
 
+TEST(Raycast, DirectionsAndNormalsBeyondTheSquareRootOfWideStayFinite) {
+  // |d|² and |(b − a) × (c − a)|² overflow Wide when components pass ~√max Wide (double builds):
+  // the length and the normal are taken after a power-of-two scaling, so a long direction still
+  // gives the world distance and a triangle far out a unit normal. In float builds every
+  // Real is far below √max Wide; the checks hold there too.
+  const Real big = std::sqrt(std::numeric_limits<Real>::max()) * 4;  // big² overflows Real
+  const Triangle t = tri(Vec3(-10, -10, 0), Vec3(30, -10, 0), Vec3(-10, 30, 0));
+  // (a direction whose |d|² underflows is refused by validate(Ray): no parameter is meaningful)
+  for (const Real length : {big, Real(-big)}) {
+    const Ray ray{Vec3(0, 0, 5), Vec3(length, 0, -big)};
+    for (const auto& h : {raycast(ray, t), raycast(ray, Plane{Vec3(0, 0, 1), 0}),
+                          raycast(ray, Aabb{Vec3(-10, -10, -1), Vec3(10, 10, 0)})}) {
+      ASSERT_TRUE(h.has_value()) << str(ray);
+      EXPECT_NEAR(h->t, 5 * std::sqrt(Real(2)), 8 * kEps * 10) << str(ray);
+      EXPECT_EQ(h->normal, Vec3(0, 0, 1)) << str(ray) << " normal " << str(h->normal);
+    }
+  }
+  // A triangle whose edges are ~max/8: (b − a) × (c − a) overflows any Wide; the hit's normal is
+  // still the unit plane normal, facing the ray.
+  const Real m = std::numeric_limits<Real>::max() / 8;
+  const Triangle far = tri(Vec3(-m, -m, 1), Vec3(m, -m, 1), Vec3(-m, m, 1));
+  const auto h = raycast(Ray{Vec3(0, 0, 3), Vec3(0, 0, -1)}, far);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_EQ(h->t, 2);
+  EXPECT_EQ(h->normal, Vec3(0, 0, 1)) << str(h->normal);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Watertightness on closed meshes.
 
