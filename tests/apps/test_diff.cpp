@@ -153,6 +153,46 @@ TEST(DiffClassify, NumericWithinAndBeyondTolerance) {
   EXPECT_EQ(k.cause, "unexplained") << describe(k);
 }
 
+// A grazing ray (|cos θ| = 5e-4 between the ray and the triangle's normal; found by crux diff in a
+// double build, family transformed: crux's t was 2.6e-13 relative off exact's, hundreds of ulps,
+// while its point lay on the triangle to within a sub-ulp move). A t moved along the ray by 100 τ
+// stays within 0.05 τ of the triangle here: the exact hit of a triangle moved by less than τ.
+// The same move on a ray that meets the triangle head-on leaves the triangle by 100 τ.
+TEST(DiffClassify, GrazingRayHitOnATriangleMovedWithinTauIsWithinTolerance) {
+  DiffRunner runner;
+  auto shifted = [](const J& exact, const J& query, double by) {
+    J got = exact;
+    const J& d = query["ray"]["dir"];
+    const Vec3d u = Vec3d(d[0].get<double>(), d[1].get<double>(), d[2].get<double>()).normalized();
+    got["t"] = exact["t"].get<double>() + by;
+    for (int k = 0; k < 3; ++k) got["point"][k] = exact["point"][k].get<double>() + by * u[k];
+    return got;
+  };
+  const auto grazing = primitive(
+      R"({"op":"ray_triangle","triangle":[[-3.7787996453542023,0.265869140625,7.060639381408691],)"
+      R"([-3.439453125,1.6386329013511354,7.08203125],[-7.165391951889235,2.5888671875,5.2898783683776855]],)"
+      R"("ray":{"origin":[-7.392578125,-1.00146484375,5.533203125],"dir":[3.953125,2.64005532737447,1.549641728401184]}})",
+      false);
+  const double tau = runner.tolerance("native").at(8);
+  const J exact = runner.run(grazing, "exact");
+  ASSERT_TRUE(exact["hit"].get<bool>()) << exact.dump();
+  const J query = J::parse(grazing.query);
+  auto k = classify(runner, grazing, "native", shifted(exact, query, 100 * tau));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "grazing-ray") << describe(k);
+  // the point must still be the one at distance t on the ray
+  J off = shifted(exact, query, 100 * tau);
+  off["point"][0] = off["point"][0].get<double>() + 100 * tau;
+  k = classify(runner, grazing, "native", off);
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  const auto headOn = primitive(
+      R"({"op":"ray_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"ray":{"origin":[1,1,3],"dir":[0,0,-1]}})", false);
+  const J exactHeadOn = runner.run(headOn, "exact");
+  k = classify(runner, headOn, "native", shifted(exactHeadOn, J::parse(headOn.query), 100 * tau));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "beyond-tolerance") << describe(k);
+}
+
 TEST(DiffClassify, BelowMinFeatureIsOutsideBulletsRange) {
   DiffRunner runner;
   auto c = primitive(
