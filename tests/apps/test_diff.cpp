@@ -375,6 +375,31 @@ TEST(DiffNarrowPhase, GenerationIsDeterministicAndValid) {
   EXPECT_GT(ops["model_distance"], 12);  // every hierarchy and scene case
 }
 
+// The mesh family's narrow-phase cases include the large real meshes (bunny00, cow) at a low rate:
+// they are generated, and the first two of them are answered by native and exact alike.
+TEST(DiffNarrowPhase, LargeRealMeshesAppearAndAgree) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  g.ops = {"distance", "contacts"};
+  DiffRunner runner;
+  int large = 0, checked = 0;
+  for (std::uint64_t i = 0; i < 4000 && checked < 2; ++i) {
+    const auto c = generateCase("mesh", 11, i, g);
+    ASSERT_TRUE(c.has_value());
+    bool isLarge = false;
+    for (const auto& line : c->setup)
+      isLarge = isLarge || line.find("bunny00.off") != std::string::npos || line.find("cow.off") != std::string::npos;
+    if (!isLarge) continue;
+    ++large;
+    const J got = runner.run(*c, "native"), exact = runner.run(*c, "exact");
+    const auto k = classifyAnswer(*c, "native", got, exact, runner.tolerance("native"), runner.tolerance("exact"),
+                                  [&](const DiffCase& moved) { return runner.run(moved, "exact"); });
+    EXPECT_TRUE(k.verdict == Verdict::Agree || k.verdict == Verdict::WithinTolerance) << describe(k) << "\n" << c->query;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 2) << large << " large-mesh cases in 4000";
+}
+
 // A unit square mesh; model p under a quarter turn about x (the square in the plane y = 0, x and
 // z in [0, 1]); its child c at local (0, 0, 3), i.e. the world square at y = -3: the models are
 // 3 apart, any (x, 0, z) / (x, -3, z) with x, z in [0, 1] a witness pair.
