@@ -156,6 +156,7 @@ struct LocalShape {
   Eigen::Matrix3d boxToLocal = Eigen::Matrix3d::Identity();  // box: mesh frame -> box frame rotation
   Eigen::Vector3d boxCentre = Eigen::Vector3d::Zero();       // box: centre in the mesh frame
   double boxSlack = 0;  // box: rounding slack of the face-axis reject (1000 ulps of Real × scale)
+  bool boxMirrored = false;  // box: its frame is left-handed (det < 0): triangles turn over in it
   bool aligned = false;  // the relative rotation is axis-aligned (applied exactly)
   Triangle mappedTriangle;  // a triangle shape under an aligned rotation, mapped exactly
 
@@ -196,6 +197,7 @@ struct LocalShape {
         boxCentre = Rr * s.p[0].cast<double>() + tr;
         boxToLocal = (Rr * s.axes.cast<double>()).transpose();
         boxSlack = double(kMeshFeatureRelativeTolerance) * (boxCentre.norm() + double(half.norm()) + 1);
+        boxMirrored = boxToLocal.determinant() < 0;
         break;
       default: break;
     }
@@ -253,8 +255,9 @@ struct LocalShape {
   }
 };
 
-/// Collects per-triangle contacts in the MESH frame (points, normals), corrects internal
-/// edges, merges and reduces there; only the reduced points are mapped to the world.
+/// Collects per-triangle contacts in the MESH frame (points, normals) — a box's in its own
+/// frame, where boxTriangleContacts computes them — corrects internal edges, merges and reduces
+/// there; only the reduced points are mapped to the world (a box's through the mesh frame).
 struct Collector {
   const Mesh& mesh;
   const LocalShape& ls;
@@ -345,10 +348,14 @@ struct Collector {
     return (c - pa).squaredNorm() <= tol * tol;
   }
 
-  /// Internal-edge correction of one point, all in the mesh frame (see the header). Returns
-  /// false to drop it (p is then unchanged: it changes only when kept with the face normal).
-  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, MeshContactPoint& p) const {
-    Vec3 face = (tri.b - tri.a).cross(tri.c - tri.a);
+  /// Internal-edge correction of one point (see the header), in the frame of p and `ft`: the
+  /// mesh frame (ft = tri), or with `boxFrame` the box's own frame (ft = tri there; a box's
+  /// points are corrected, merged and reduced in its frame and only the reduced ones mapped
+  /// back). `tri` (mesh frame) sets the feature tolerance. Returns false to drop the point (p is
+  /// then unchanged: it changes only when kept with the face normal).
+  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, bool boxFrame,
+               MeshContactPoint& p) const {
+    Vec3 face = (ft.b - ft.a).cross(ft.c - ft.a);
     const Real len = face.norm();
     if (!(len > 0)) return true;  // degenerate triangle: no face cone
     face /= len;
@@ -356,17 +363,25 @@ struct Collector {
     bool back = false;  // the shape is on the triangle's back side
     {
       // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
-      // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
+      // (the contact normal may be nearly parallel to the plane, so its sign says nothing). In
+      // the box frame the box is centred at the origin: it reaches farther behind iff face·a > 0.
       Real lo = 0, hi = 0;
-      ls.project(face, lo, hi);
-      const Real base = face.dot(tri.a);
+      if (boxFrame) {
+        hi = ls.half.x() * std::abs(face.x()) + ls.half.y() * std::abs(face.y()) + ls.half.z() * std::abs(face.z());
+        lo = -hi;
+      } else {
+        ls.project(face, lo, hi);
+      }
+      const Real base = face.dot(ft.a);
       back = base - lo > hi - base;
       if (back) face = -face;
     }
+    // the side in the mesh's own orientation (a left-handed box frame turns the triangle over)
+    const bool meshBack = back != (boxFrame && ls.boxMirrored);
     const unsigned active = activity(t, slot);
     // bit i: edge i is active on that side
-    const unsigned activeSide =
-        ((active >> back) & 1u) | ((active >> (2 + back)) & 1u) << 1 | ((active >> (4 + back)) & 1u) << 2;
+    const unsigned activeSide = ((active >> meshBack) & 1u) | ((active >> (2 + meshBack)) & 1u) << 1 |
+                                ((active >> (4 + meshBack)) & 1u) << 2;
     // All three edges active (a convex ridge all round, the usual case on a curved surface):
     // the point stands wherever it lies (on an edge: active; in the face interior: the convex
     // routine's normal), so no edge test is needed.
@@ -377,12 +392,12 @@ struct Collector {
     // corner's edges whatever the rounding: the usual box and capsule point is a triangle vertex)
     // stands when one of those two edges is active.
     for (int i = 0; i < 3; ++i)
-      if ((pa - tri[i]).squaredNorm() <= Real(0.25) * tol * tol && (activeSide & (1u << i | 1u << (i + 2) % 3)) != 0)
+      if ((pa - ft[i]).squaredNorm() <= Real(0.25) * tol * tol && (activeSide & (1u << i | 1u << (i + 2) % 3)) != 0)
         return true;
     bool onEdge[3];
     int edges = 0;
     for (int i = 0; i < 3; ++i) {
-      onEdge[i] = onEdgeWithin(tri, i, pa, tol);
+      onEdge[i] = onEdgeWithin(ft, i, pa, tol);
       edges += onEdge[i];
     }
     if (edges == 0) return true;  // face interior: the convex routine's normal stands
@@ -390,10 +405,10 @@ struct Collector {
       if (onEdge[i] && (activeSide >> i & 1u)) return true;
     // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
     MeshContactPoint q = p;
-    if (!faceContact(tri, face, q)) return false;
+    if (!faceContact(ft, face, q, boxFrame)) return false;
     // The projection must lie on this triangle: otherwise the triangle beyond the inactive
     // feature (or another one) holds that point and reports it with its own face.
-    if ((closestPoint(tri, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
+    if ((closestPoint(ft, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
     p = q;
     return true;
   }
@@ -401,9 +416,12 @@ struct Collector {
   /// The inactive-feature contact (see the header): the shape's deepest point along the unit face
   /// normal `face` (on the shape's side) as q.pointB, its projection on the triangle's plane as
   /// q.pointA, the normal −face (B → A). False when that separation exceeds the margin.
-  bool faceContact(const Triangle& tri, const Vec3& face, MeshContactPoint& q) const {
+  bool faceContact(const Triangle& tri, const Vec3& face, MeshContactPoint& q, bool boxFrame = false) const {
     q.normal = -face;
-    q.pointB = ls.support(q.normal);
+    // (in the box frame the box's support point: the corner on the normal's side, as support())
+    q.pointB = boxFrame ? Vec3(q.normal.x() > 0 ? ls.half.x() : -ls.half.x(), q.normal.y() > 0 ? ls.half.y() : -ls.half.y(),
+                               q.normal.z() > 0 ? ls.half.z() : -ls.half.z())
+                        : ls.support(q.normal);
     q.separation = face.dot(q.pointB - tri.a);
     if (q.separation > margin) return false;
     q.pointA = q.pointB - q.separation * face;
@@ -441,7 +459,8 @@ struct Collector {
     p.featureB = featureId(FeatureKind::Vertex, 0);
     // (correct() and correctSphere() change p only when they keep it: a dropped p is the raw point)
     if (adjacency && h.region != SphereTriangleContact::kFace &&
-        !(h.region == SphereTriangleContact::kDegenerate ? correct(t, slot, tri, p) : correctSphere(t, slot, tri, h, p))) {
+        !(h.region == SphereTriangleContact::kDegenerate ? correct(t, slot, tri, tri, false, p)
+                                                         : correctSphere(t, slot, tri, h, p))) {
       drop(p);
       return;
     }
@@ -527,14 +546,12 @@ struct Collector {
         if ((lo.array() > reach.array()).any() || (hi.array() < -reach.array()).any()) return;
         // (no planeSeparates here: the routine's SAT tests the triangle's normal itself; that
         // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
-        if (!boxTriangleContacts(ls.half, Triangle{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()}, margin, m)) return;
-        const Eigen::Matrix3d R = Rt.transpose();
-        m.normal = (R * m.normal.cast<double>()).cast<Real>();
-        for (int i = 0; i < m.count; ++i) {
-          m.points[i].pointA = (R * m.points[i].pointA.cast<double>() + ls.boxCentre).cast<Real>();
-          m.points[i].pointB = (R * m.points[i].pointB.cast<double>() + ls.boxCentre).cast<Real>();
-        }
-        break;
+        const Triangle tb{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()};
+        if (!boxTriangleContacts(ls.half, tb, margin, m)) return;
+        // The points stay in the box frame: corrected, merged and reduced there (frame-free
+        // rules), only the reduced ones mapped back (toMeshFrame).
+        emit(t, slot, tri, tb, true, m);
+        return;
       }
       default:
         if (planeSeparates(tri)) return;
@@ -547,6 +564,13 @@ struct Collector {
         }
         break;
     }
+    emit(t, slot, tri, tri, false, m);
+  }
+
+  /// The points of one triangle's manifold m (in the frame of ft: see correct()), corrected
+  /// and buffered.
+  void emit(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, bool boxFrame,
+            const ContactManifold& m) {
     for (int i = 0; i < m.count; ++i) {
       MeshContactPoint p;
       p.pointA = m.points[i].pointA;
@@ -555,11 +579,24 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (adjacency && !correct(t, slot, tri, p)) {
+      if (adjacency && !correct(t, slot, tri, ft, boxFrame, p)) {
         drop(p);  // unchanged: the raw point
         continue;
       }
       add(p);
+    }
+  }
+
+  /// A box's reduced points from its frame to the mesh frame (rounded once, as every point was
+  /// before session 8 kept them in the box frame); nothing for the other shapes.
+  void toMeshFrame(MeshContactManifold& out) const {
+    if (ls.shape.kind != ConvexKind::Box) return;
+    const Eigen::Matrix3d R = ls.boxToLocal.transpose();
+    for (int i = 0; i < out.count; ++i) {
+      MeshContactPoint& p = out.points[i];
+      p.normal = (R * p.normal.cast<double>()).cast<Real>();
+      p.pointA = (R * p.pointA.cast<double>() + ls.boxCentre).cast<Real>();
+      p.pointB = (R * p.pointB.cast<double>() + ls.boxCentre).cast<Real>();
     }
   }
 
@@ -725,6 +762,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
   }
   c.keepDeepestDropped();
   c.reduce(out, mergeTol);
+  c.toMeshFrame(out);
   // Mesh frame -> world: only the reduced points.
   const Eigen::Matrix3d R = meshPose.rotation.cast<double>().toRotationMatrix();
   const Eigen::Vector3d tw = meshPose.translation.cast<double>();
