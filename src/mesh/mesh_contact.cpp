@@ -64,7 +64,8 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
   activity_.assign(tris.size(), 0);
   for (std::uint32_t t = 0; t < tris.size(); ++t) {
     const Triangle tri = mesh.triangle(t);
-    // the unit face normal as Collector::correct() computes it
+    // the unit face normal as Collector::correct() computes it in the mesh frame (a box's points
+    // are corrected in the box frame: the same normal rotated, to rounding)
     Vec3 face = (tri.b - tri.a).cross(tri.c - tri.a);
     const Real len = face.norm();
     if (!(len > 0)) {
