@@ -1030,8 +1030,7 @@ DiffCase narrowConvexCase(std::string_view family, std::string_view op, Rng& rng
 }
 
 /// Real meshes the narrow-phase ops use: the small ones, and (kLargeRealMeshChance of the
-/// picks) the large ones, whose exact answers cost ~0.3 s a case (the exact backend places every
-/// vertex exactly and tests every triangle whose box is within reach).
+/// picks) the large ones, whose exact answers cost ~40 ms a case (oracle/README.md).
 const std::vector<std::string> kNarrowRealMeshes = {"blob-closed", "sphere"};
 const std::vector<std::string> kNarrowLargeRealMeshes = {"bunny00", "cow"};
 constexpr double kLargeRealMeshChance = 0.05;

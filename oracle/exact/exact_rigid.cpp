@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <utility>
 
 namespace crux::exact::detail {
@@ -99,6 +100,13 @@ ExactRigid ExactRigid::compose(const ExactRigid& a, const ExactRigid& b) {
   }
   for (int i = 0; i < 3; ++i) c.t_[i] = a.r_[i][0] * b.t_[0] + a.r_[i][1] * b.t_[1] + a.r_[i][2] * b.t_[2] + a.t_[i];
   return c;
+}
+
+void ExactRigid::enclosures(double rLo[3][3], double rHi[3][3], double tLo[3], double tHi[3]) const {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) std::tie(rLo[i][j], rHi[i][j]) = CGAL::to_interval(r_[i][j]);
+    std::tie(tLo[i], tHi[i]) = CGAL::to_interval(t_[i]);
+  }
 }
 
 Point ExactRigid::apply(const Point& p) const {

@@ -52,6 +52,9 @@ class ExactRigid {
   Point apply(const Vec3& p) const { return apply(toPoint(p)); }
   /// Whether the rotation is an exact signed permutation (snapped).
   bool axisAligned() const { return axisAligned_; }
+  /// Interval enclosures (CGAL::to_interval) of R's entries, [rLo, rHi], and of t's, [tLo, tHi]:
+  /// for conservative double bounds of placed points (LazyPlaced in exact_distance.cpp).
+  void enclosures(double rLo[3][3], double rHi[3][3], double tLo[3], double tHi[3]) const;
 
  private:
   void setRotation(const std::array<FT, 4>& q);
