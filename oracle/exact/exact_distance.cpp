@@ -615,7 +615,7 @@ std::optional<ExactDistance> detail::meshDistance(const Mesh& a, const ExactRigi
       const CGAL::Bbox_3 &ba = pa.triangles[i].box, &bb = pb.triangles[j].box;
       // A double filter (its rounding is far below the 1e-9 slack), then the exact prune.
       const double g = approxGap(ba, bb);
-      if (g > std::min(bestApprox, max2Approx) * (1 + 1e-9)) continue;
+      if (certainlyBeyond(g, std::min(bestApprox, max2Approx))) continue;
       const FT gap = squaredGap(ba, bb);
       if (bounded && max2 < gap) continue;
       if (best && best->squared < gap) continue;

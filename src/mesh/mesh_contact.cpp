@@ -161,6 +161,14 @@ struct LocalShape {
   bool aligned = false;  // the relative rotation is axis-aligned (applied exactly)
   Triangle mappedTriangle;  // a triangle shape under an aligned rotation, mapped exactly
 
+  /// A box (`box`: centre 0, identity axes) in its own frame, set directly (no pose to read):
+  /// where a box's contact points are corrected (Collector::frame).
+  struct OwnFrame {};
+  LocalShape(const ConvexShape& box, OwnFrame) : shape(box), relR(Mat3::Identity()), half(box.p[1]) {
+    p[0] = p[1] = Vec3::Zero();
+    aligned = true;
+  }
+
   LocalShape(const ConvexShape& s, const Transform& meshPose, const Transform& shapePose) : shape(s) {
     // rel = meshPose⁻¹ ∘ shapePose in double, rounded once.
     const Eigen::Quaterniond qm = meshPose.rotation.cast<double>(), qs = shapePose.rotation.cast<double>();
@@ -262,6 +270,9 @@ struct LocalShape {
 struct Collector {
   const Mesh& mesh;
   const LocalShape& ls;
+  /// The shape in the frame its points are corrected in: ls itself, or for a box the box in its
+  /// own frame (centre 0, identity axes), where boxTriangleContacts computes its points.
+  const LocalShape& frame;
   Real margin;
   const MeshAdjacency* adjacency;
   Real mergeTol2;
@@ -285,8 +296,9 @@ struct Collector {
   /// add(); a block of 8 is filled when the first point enters it).
   Real ax[kMeshContactBuffer], ay[kMeshContactBuffer], az[kMeshContactBuffer];
 
-  Collector(const Mesh& mesh_, const LocalShape& ls_, Real margin_, const MeshAdjacency* adjacency_, Real mergeTol2_)
-      : mesh(mesh_), ls(ls_), margin(margin_), adjacency(adjacency_), mergeTol2(mergeTol2_) {}
+  Collector(const Mesh& mesh_, const LocalShape& ls_, const LocalShape& frame_, Real margin_,
+            const MeshAdjacency* adjacency_, Real mergeTol2_)
+      : mesh(mesh_), ls(ls_), frame(frame_), margin(margin_), adjacency(adjacency_), mergeTol2(mergeTol2_) {}
 
   /// Fills the block of 8 coordinate slots from `first` (a multiple of 8) with +∞ (no point:
   /// never within the merge tolerance).
@@ -349,13 +361,12 @@ struct Collector {
     return (c - pa).squaredNorm() <= tol * tol;
   }
 
-  /// Internal-edge correction of one point (see the header), in the frame of p and `ft`: the
-  /// mesh frame (ft = tri), or with `boxFrame` the box's own frame (ft = tri there; a box's
-  /// points are corrected, merged and reduced in its frame and only the reduced ones mapped
-  /// back). `tri` (mesh frame) sets the feature tolerance. Returns false to drop the point (p is
-  /// then unchanged: it changes only when kept with the face normal).
-  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, bool boxFrame,
-               MeshContactPoint& p) const {
+  /// Internal-edge correction of one point (see the header), in `frame` (the mesh frame; a box's
+  /// own frame for a box, whose points are corrected, merged and reduced there and only the
+  /// reduced ones mapped back): `ft` is triangle t in that frame, `tri` in the mesh frame (it
+  /// sets the feature tolerance). Returns false to drop the point (p is then unchanged: it
+  /// changes only when kept with the face normal).
+  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, MeshContactPoint& p) const {
     Vec3 face = (ft.b - ft.a).cross(ft.c - ft.a);
     const Real len = face.norm();
     if (!(len > 0)) return true;  // degenerate triangle: no face cone
@@ -364,21 +375,15 @@ struct Collector {
     bool back = false;  // the shape is on the triangle's back side
     {
       // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
-      // (the contact normal may be nearly parallel to the plane, so its sign says nothing). In
-      // the box frame the box is centred at the origin: it reaches farther behind iff face·a > 0.
+      // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
       Real lo = 0, hi = 0;
-      if (boxFrame) {
-        hi = ls.half.x() * std::abs(face.x()) + ls.half.y() * std::abs(face.y()) + ls.half.z() * std::abs(face.z());
-        lo = -hi;
-      } else {
-        ls.project(face, lo, hi);
-      }
+      frame.project(face, lo, hi);
       const Real base = face.dot(ft.a);
       back = base - lo > hi - base;
       if (back) face = -face;
     }
     // the side in the mesh's own orientation (a left-handed box frame turns the triangle over)
-    const bool meshBack = back != (boxFrame && ls.boxMirrored);
+    const bool meshBack = back != (&frame != &ls && ls.boxMirrored);
     const unsigned active = activity(t, slot);
     // bit i: edge i is active on that side
     const unsigned activeSide = ((active >> meshBack) & 1u) | ((active >> (2 + meshBack)) & 1u) << 1 |
@@ -406,7 +411,7 @@ struct Collector {
       if (onEdge[i] && (activeSide >> i & 1u)) return true;
     // Inactive (flat or concave) edge or vertex: use the face normal (towards the shape).
     MeshContactPoint q = p;
-    if (!faceContact(ft, face, q, boxFrame)) return false;
+    if (!faceContact(ft, face, q)) return false;
     // The projection must lie on this triangle: otherwise the triangle beyond the inactive
     // feature (or another one) holds that point and reports it with its own face.
     if ((closestPoint(ft, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
@@ -417,12 +422,9 @@ struct Collector {
   /// The inactive-feature contact (see the header): the shape's deepest point along the unit face
   /// normal `face` (on the shape's side) as q.pointB, its projection on the triangle's plane as
   /// q.pointA, the normal −face (B → A). False when that separation exceeds the margin.
-  bool faceContact(const Triangle& tri, const Vec3& face, MeshContactPoint& q, bool boxFrame = false) const {
+  bool faceContact(const Triangle& tri, const Vec3& face, MeshContactPoint& q) const {
     q.normal = -face;
-    // (in the box frame the box's support point: the corner on the normal's side, as support())
-    q.pointB = boxFrame ? Vec3(q.normal.x() > 0 ? ls.half.x() : -ls.half.x(), q.normal.y() > 0 ? ls.half.y() : -ls.half.y(),
-                               q.normal.z() > 0 ? ls.half.z() : -ls.half.z())
-                        : ls.support(q.normal);
+    q.pointB = frame.support(q.normal);
     q.separation = face.dot(q.pointB - tri.a);
     if (q.separation > margin) return false;
     q.pointA = q.pointB - q.separation * face;
@@ -460,7 +462,7 @@ struct Collector {
     p.featureB = featureId(FeatureKind::Vertex, 0);
     // (correct() and correctSphere() change p only when they keep it: a dropped p is the raw point)
     if (adjacency && h.region != SphereTriangleContact::kFace &&
-        !(h.region == SphereTriangleContact::kDegenerate ? correct(t, slot, tri, tri, false, p)
+        !(h.region == SphereTriangleContact::kDegenerate ? correct(t, slot, tri, tri, p)
                                                          : correctSphere(t, slot, tri, h, p))) {
       drop(p);
       return;
@@ -551,7 +553,7 @@ struct Collector {
         if (!boxTriangleContacts(ls.half, tb, margin, m)) return;
         // The points stay in the box frame: corrected, merged and reduced there (frame-free
         // rules), only the reduced ones mapped back (toMeshFrame).
-        emit(t, slot, tri, tb, true, m);
+        emit(t, slot, tri, tb, m);
         return;
       }
       default:
@@ -565,13 +567,12 @@ struct Collector {
         }
         break;
     }
-    emit(t, slot, tri, tri, false, m);
+    emit(t, slot, tri, tri, m);
   }
 
-  /// The points of one triangle's manifold m (in the frame of ft: see correct()), corrected
-  /// and buffered.
-  void emit(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, bool boxFrame,
-            const ContactManifold& m) {
+  /// The points of one triangle's manifold m (in `frame`, where triangle t is ft: see correct()),
+  /// corrected and buffered.
+  void emit(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, const ContactManifold& m) {
     for (int i = 0; i < m.count; ++i) {
       MeshContactPoint p;
       p.pointA = m.points[i].pointA;
@@ -580,7 +581,7 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (adjacency && !correct(t, slot, tri, ft, boxFrame, p)) {
+      if (adjacency && !correct(t, slot, tri, ft, p)) {
         drop(p);  // unchanged: the raw point
         continue;
       }
@@ -589,9 +590,9 @@ struct Collector {
   }
 
   /// A box's reduced points from its frame to the mesh frame (rounded once, as every point was
-  /// before session 8 kept them in the box frame); nothing for the other shapes.
+  /// before session 8 kept them in the box frame); nothing when `frame` is the mesh frame.
   void toMeshFrame(MeshContactManifold& out) const {
-    if (ls.shape.kind != ConvexKind::Box) return;
+    if (&frame == &ls) return;
     const Eigen::Matrix3d R = ls.boxToLocal.transpose();
     for (int i = 0; i < out.count; ++i) {
       MeshContactPoint& p = out.points[i];
@@ -680,7 +681,15 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);
-  Collector c(mesh, ls, margin, adjacency, mergeTol * mergeTol);
+  // a box's own frame: the box centred at the origin with identity axes (LocalShape's box
+  // projection and support there are exact: identity rotations and a zero centre add nothing)
+  std::optional<ConvexShape> boxInItsFrame;
+  std::optional<LocalShape> boxFrame;
+  if (shape.kind == ConvexKind::Box) {
+    boxInItsFrame.emplace(Obb{Vec3::Zero(), ls.half, Mat3::Identity()});
+    boxFrame.emplace(*boxInItsFrame, LocalShape::OwnFrame{});
+  }
+  Collector c(mesh, ls, boxFrame ? *boxFrame : ls, margin, adjacency, mergeTol * mergeTol);
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t t = 0; t < mesh.triangleCount(); ++t) c.triangle(t, kNoSlot, mesh.triangle(t));
   } else {
