@@ -5,6 +5,7 @@
 #include <crux/geometry/contact.hpp>
 
 #include <crux/error.hpp>
+#include <crux/geometry/overlap.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -285,7 +286,30 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);
   out.normal = dr.normal;
-  if (!(dr.distance <= margin)) return false;
+  // The margin decision. Spheres, capsules and triangles (cores of 1-3 points) are decided
+  // exactly (withinDistance, overlap.hpp) when the distance is within its rounding of the
+  // margin, so that touching on integer grids is reported exactly (a capsule's foot on a triangle
+  // corner at an unrepresentable parameter puts the double distance an ulp off); a pair found
+  // within the margin but computed beyond it gets the margin as its separation.
+  bool clampToMargin = false;
+  {
+    auto cores = [](const ConvexShape& s) {
+      return s.kind == ConvexKind::Sphere ? 1 : s.kind == ConvexKind::Capsule ? 2 : s.kind == ConvexKind::Triangle ? 3 : 0;
+    };
+    const int na = cores(a), nb = cores(b);
+    const double m = double(margin),
+                 band = kGjkScaleTolerance * (detail::pairScale(A, B) + A.t.cwiseAbs().maxCoeff() +
+                                              B.t.cwiseAbs().maxCoeff() + m) +
+                        4 * double(std::numeric_limits<Real>::epsilon()) * m;
+    if (na > 0 && nb > 0) {
+      if (!contact_detail::withinMargin(
+              double(dr.distance), m, band, [&] { return withinDistance(A.p, na, B.p, nb, A.radius, B.radius, m); },
+              clampToMargin))
+        return false;
+    } else if (!(dr.distance <= margin)) {
+      return false;
+    }
+  }
   V3 n = dr.normal.cast<double>();
   const double rA = A.radius, rB = B.radius, m = double(margin);
 
@@ -321,6 +345,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     const double tol = contact_detail::coincidenceTolerance(inc.v, inc.n, scale);
     ContactPoint pts[kMaxClipVerts];
     int np = contact_detail::clipToReference<kMaxClipVerts>(ref, inc, refIsA, u, n, rA, rB, m, tol, pts);
+    if (np > 0 && !contact_detail::keepsClosest(pts, np, double(dr.distance), tol)) np = 0;  // the pair below
     if (np > 0) {
       reduce(pts, np, u);
       out.normal = n.cast<Real>();
@@ -335,7 +360,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   ContactPoint& c = out.points[0];
   c.pointA = dr.pointA;
   c.pointB = dr.pointB;
-  c.separation = dr.distance;
+  c.separation = clampToMargin ? margin : dr.distance;
   c.featureA = fa.id;
   c.featureB = fb.id;
   return true;

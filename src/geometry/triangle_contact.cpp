@@ -3,6 +3,7 @@
 // precision, fixed-size data, no exceptions.
 
 #include <crux/geometry/triangle_contact.hpp>
+#include <crux/geometry/overlap.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -278,7 +279,19 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
     d = (q - p).norm();
     n = d > 0 ? V3((q - p) / d) : V3::Zero();
   }
-  if (!(d - r <= m)) return false;
+  {
+    // The margin decision: d - r <= m, exactly (withinDistance) when d is within its rounding
+    // (kGjkScaleTolerance of the scale) of the bound, so that touching is reported exactly on
+    // integer grids (a float d may round either way: found by crux diff for the capsule).
+    // A distance found within the margin but computed beyond it is clamped to r + m.
+    const double band = kGjkScaleTolerance * (bound + pMax + r + m);  // (bound: the corners' largest |coordinate|)
+    bool clamp = false;
+    if (!contact_detail::withinMargin(
+            d - r, m, band,
+            [&] { return withinDistance(tri, Vec3(p.cast<Real>()), static_cast<Real>(r), static_cast<Real>(m)); }, clamp))
+      return false;
+    if (clamp) d = r + m;
+  }
   // The flat case: the centre on the triangle within kGjkScaleTolerance × the pair's scale
   // (max |vertex| + |centre| + radius; its square roots are taken only when d is below a bound
   // of that tolerance from ∞-norms: 2·|x|∞ > √3·|x|∞ >= |x|).
@@ -403,9 +416,21 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     }
   }
   double dcore = crossing ? 0.0 : std::sqrt(best2);
+  // The margin decision: dcore - r <= mg, exactly (withinDistance) when dcore is within its
+  // rounding (tolAbs) of the bound: touching is reported exactly on integer grids (crux diff found
+  // a capsule touching a segment triangle at distance 1 computed as 1 + 2e-16, and dropped). A
+  // core distance found within the margin but computed beyond it is clamped to r + mg.
+  auto inMargin = [&](double& core) {
+    bool clamp = false;
+    if (!contact_detail::withinMargin(
+            core - r, mg, tolAbs, [&] { return withinDistance(tri, p0In, p1In, radius, margin); }, clamp))
+      return false;
+    if (clamp) core = r + mg;
+    return true;
+  };
   V3 n;
   if (dcore > tolAbs) {
-    if (dcore - r > mg) return false;
+    if (!inMargin(dcore)) return false;
     n = (pa - pb) / dcore;
   } else {
     // ---- crossing cores: minimum translation over the faces of the Minkowski difference (SAT).
@@ -475,7 +500,7 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
         detail::closestSegmentSegment(t.p[axisBest], t.p[(axisBest + 1) % 3], s[0], s[1], pa, pb);
       }
     }
-    if (dcore - r > mg) return false;
+    if (!inMargin(dcore)) return false;
   }
   n.normalize();  // unit to the last ulp, as the generic routine's
   // ---- features and clipping (contact.cpp's rules for a triangle and a segment).
@@ -508,7 +533,8 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     const double tol = contact_detail::coincidenceTolerance(inc.v, inc.n, scale);
     // (a segment clipped stays at most 2 points)
     const int np = contact_detail::clipToReference<4>(ref, inc, refIsA, u, nn, 0.0, r, mg, tol, out.points);
-    if (np > 0) {
+    // (the clip lost the closest pair: that pair alone, below, as contacts())
+    if (np > 0 && contact_detail::keepsClosest(out.points, np, dcore - r, tol)) {
       out.normal = nn.cast<Real>();
       out.count = np;
       return true;

@@ -8,11 +8,13 @@
 /// docs/geometry.md for the range). Degenerate triangles are classified exactly
 /// (predicates::classify) and tested as the segment or point they are.
 
+#include <crux/error.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
 
 namespace crux {
@@ -285,6 +287,105 @@ bool triangleWithinRadius(J& judge, const V3<T>& x, const V3<T>& a, const V3<T>&
          segmentWithinRadius(judge, x, c, a, r2);
 }
 
+/// |[p, q] - [u, v]|² <= r2 for two segments (either may be a point): an endpoint of one within
+/// r of the other, or else the lines' closest points interior to both (RTCD 5.1.9's parameters
+/// s = (b·g - e·f)/den, t = (a·g - b·f)/den, compared as numerators with den = |d1 × d2|² > 0)
+/// and the lines' distance |w·(d1 × d2)|/|d1 × d2| within r. When the line minimum is outside
+/// the unit square of parameters, or the lines are parallel, the minimum over the segments is on
+/// that square's boundary: an endpoint against the other segment.
+template <class J, class T>
+bool segmentsWithinRadius(J& judge, const V3<T>& p, const V3<T>& q, const V3<T>& u, const V3<T>& v, const T& r2) {
+  if (segmentWithinRadius(judge, p, u, v, r2) || segmentWithinRadius(judge, q, u, v, r2) ||
+      segmentWithinRadius(judge, u, p, q, r2) || segmentWithinRadius(judge, v, p, q, r2))
+    return true;
+  const V3<T> d1 = q - p, d2 = v - u, w = p - u;
+  const V3<T> c = d1.cross(d2);
+  const T den = c.squaredNorm();
+  if (judge(den) <= 0) return false;
+  const T a = d1.dot(d1), b = d1.dot(d2), e = d2.dot(d2), f = d1.dot(w), g = d2.dot(w);
+  const T sn = b * g - e * f, tn = a * g - b * f;
+  if (judge(sn) <= 0 || judge(sn - den) >= 0 || judge(tn) <= 0 || judge(tn - den) >= 0) return false;
+  const T h = w.dot(c);
+  return judge(h * h - r2 * den) <= 0;
+}
+
+/// |x - S|² <= r2 for any simplex S.
+template <class J, class T>
+bool pointWithinSimplex(J& judge, const V3<T>& x, const Simplex<T>& s, const T& r2) {
+  switch (s.kind) {
+    case TriangleKind::Triangle:
+      return triangleWithinRadius(judge, x, s.v[0], s.v[1], s.v[2], r2);
+    case TriangleKind::Segment:
+      return segmentWithinRadius(judge, x, s.p, s.q, r2);
+    case TriangleKind::Point:
+      break;
+  }
+  return judge((x - s.p).squaredNorm() - r2) <= 0;
+}
+
+/// |[p, q] - S|² <= r2 for any simplex S and p != q: 0 when they meet; else the distance of a
+/// segment to a convex polygon is attained at one of its endpoints or against the polygon's
+/// boundary (along the segment the distance to the plane is linear while the nearest point is
+/// interior to the face, so it has no interior minimum there without a crossing).
+template <class J, class T>
+bool segmentWithinSimplex(J& judge, const V3<T>& p, const V3<T>& q, const Simplex<T>& s, const T& r2) {
+  if (segmentOnSimplex(judge, p, q, s)) return true;
+  switch (s.kind) {
+    case TriangleKind::Triangle:
+      return pointWithinSimplex(judge, p, s, r2) || pointWithinSimplex(judge, q, s, r2) ||
+             segmentsWithinRadius(judge, p, q, s.v[0], s.v[1], r2) ||
+             segmentsWithinRadius(judge, p, q, s.v[1], s.v[2], r2) ||
+             segmentsWithinRadius(judge, p, q, s.v[2], s.v[0], r2);
+    case TriangleKind::Segment:
+      return segmentsWithinRadius(judge, p, q, s.p, s.q, r2);
+    case TriangleKind::Point:
+      break;
+  }
+  return segmentWithinRadius(judge, s.p, p, q, r2);
+}
+
+/// |A - B|² <= r2 for two simplices (points, segments, proper triangles): a point against the
+/// other; a segment against the other (segmentWithinSimplex); two triangles: 0 when they meet,
+/// else the distance of disjoint triangles is attained at a corner against the other triangle
+/// or between two edges.
+template <class J, class T>
+bool simplicesWithin(J& judge, const Simplex<T>& a, const Simplex<T>& b, const T& r2) {
+  if (a.kind == TriangleKind::Point) return pointWithinSimplex(judge, a.p, b, r2);
+  if (b.kind == TriangleKind::Point) return pointWithinSimplex(judge, b.p, a, r2);
+  if (a.kind == TriangleKind::Segment) return segmentWithinSimplex(judge, a.p, a.q, b, r2);
+  if (b.kind == TriangleKind::Segment) return segmentWithinSimplex(judge, b.p, b.q, a, r2);
+  if (triangleTriangle(judge, a.v, b.v)) return true;
+  for (int i = 0; i < 3; ++i)
+    if (triangleWithinRadius(judge, a.v[i], b.v[0], b.v[1], b.v[2], r2) ||
+        triangleWithinRadius(judge, b.v[i], a.v[0], a.v[1], a.v[2], r2))
+      return true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (segmentsWithinRadius(judge, a.v[i], a.v[(i + 1) % 3], b.v[j], b.v[(j + 1) % 3], r2)) return true;
+  return false;
+}
+
+/// The simplex of a core of n = 1..3 points (exact: coincident points are one point, collinear
+/// corners the segment they span).
+template <class T>
+Simplex<T> coreSimplex(const WVec3* c, int n) {
+  predicates::TriangleShape shape;
+  if (n >= 3) {
+    shape = predicates::classify(c[0], c[1], c[2]);
+  } else if (n == 2 && c[0] != c[1]) {
+    shape.kind = TriangleKind::Segment;
+    shape.p = c[0];
+    shape.q = c[1];
+  } else {
+    shape.kind = TriangleKind::Point;
+    shape.p = shape.q = c[0];
+  }
+  const WVec3& x = c[0];
+  const WVec3& y = c[n >= 2 ? 1 : 0];
+  const WVec3& z = c[n >= 3 ? 2 : 0];
+  return {shape.kind, {lift<T>(x), lift<T>(y), lift<T>(z)}, lift<T>(shape.p), lift<T>(shape.q)};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Triangle–box: Akenine-Möller 2001 separating axes, box centred at the origin.
 // ---------------------------------------------------------------------------------------------
@@ -382,18 +483,8 @@ bool overlaps(const Triangle& t, const Sphere& s) {
   const TriangleShape shape = predicates::classify(t);
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
-    const V3<T> x = lift<T>(s.center);
     const T r = T(Wide(s.radius));
-    const T r2 = r * r;
-    switch (shape.kind) {
-      case TriangleKind::Triangle:
-        return triangleWithinRadius(judge, x, lift<T>(t.a), lift<T>(t.b), lift<T>(t.c), r2);
-      case TriangleKind::Segment:
-        return segmentWithinRadius(judge, x, lift<T>(shape.p), lift<T>(shape.q), r2);
-      case TriangleKind::Point:
-        break;
-    }
-    return judge((x - lift<T>(shape.p)).squaredNorm() - r2) <= 0;
+    return pointWithinSimplex(judge, lift<T>(s.center), toSimplex<T>(t, shape), r * r);
   });
 }
 
@@ -440,6 +531,26 @@ bool overlaps(const Triangle& t, const Plane& p) {
               sc = judge(n.dot(lift<T>(t.c)) - d);
     return std::min({sa, sb, sc}) <= 0 && std::max({sa, sb, sc}) >= 0;
   });
+}
+
+bool withinDistance(const WVec3* a, int na, const WVec3* b, int nb, Wide radiusA, Wide radiusB, Wide margin) {
+  if (na < 1 || na > 3 || nb < 1 || nb > 3)
+    throw InvalidInput("withinDistance: cores of 1 to 3 points, got " + std::to_string(na) + " and " + std::to_string(nb));
+  return robust::filtered([&](auto& judge) {
+    using T = NumberOf<decltype(judge)>;
+    const T reach = (T(radiusA) + T(radiusB)) + T(margin);
+    return simplicesWithin(judge, coreSimplex<T>(a, na), coreSimplex<T>(b, nb), reach * reach);
+  });
+}
+
+bool withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin) {
+  const WVec3 tri[3] = {wide(t.a), wide(t.b), wide(t.c)}, point = wide(x);
+  return withinDistance(tri, 3, &point, 1, Wide(radius), 0, Wide(margin));
+}
+
+bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin) {
+  const WVec3 tri[3] = {wide(t.a), wide(t.b), wide(t.c)}, segment[2] = {wide(p), wide(q)};
+  return withinDistance(tri, 3, segment, 2, Wide(radius), 0, Wide(margin));
 }
 
 }  // namespace crux

@@ -20,8 +20,12 @@
 #include <memory>
 #include <random>
 #include <sstream>
+#include <string>
 #include <utility>
 #include <vector>
+
+#include "support/grid_touching.hpp"
+#include "support/test_scale.hpp"
 
 namespace crux {
 namespace {
@@ -764,6 +768,104 @@ TEST(ContactsDegenerate, RandomDegenerateShapesGiveDistinctPoints) {
   EXPECT_GT(withPoints, n / 10);
   EXPECT_GT(multi, n / 50);
   std::printf("degenerate shapes: %d contacts of %d, %d with > 1 point\n", withPoints, n, multi);
+}
+
+// Touching on the integer grid is reported by the convex pair contacts too (issue 6's exactness
+// on grids): an integer point X at an integer distance k from a segment s0 + t·d whose foot on
+// the line is at a rational, unrepresentable t inside it (searched: |w|²|d|² - (w·d)² = k²|d|²);
+// shapes built on X (a triangle or a capsule's segment reaching into the half-space away from the
+// segment, or a sphere centred at X) against a capsule on the segment (or the segment as a
+// degenerate triangle), radii and margin summing to k. The GJK distance is an ulp or so off
+// either way; before the exact margin decision in contacts() some of these were missed
+// (distance 4.4e-16 or 1 + 2e-16 with margin 0 or 1).
+TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
+  std::mt19937_64 rng(0x5eed9u);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  const int cases = 2000;
+  int built = 0, missed = 0, falseHits = 0;
+  std::string first;
+  for (int i = 0; i < cases; ++i) {
+    const Vec3 X = point(5);
+    Vec3 s0, d;
+    long k = 0;
+    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    ++built;
+    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);  // X towards the foot, scaled
+    Vec3 v[2];
+    for (Vec3& c : v) {
+      do c = X + point(4);
+      while (double(n.dot(c - X)) > 0);
+    }
+    const Real margin = Real(integer(0, 1)), rest = Real(k) - margin;  // radii sum to rest
+    const Real rA = Real(integer(0, int(rest))), rB = rest - rA;
+    ConvexShape A, B;
+    switch (i % 4) {
+      case 0: A = ConvexShape(Triangle{X, v[0], v[1]}); B = ConvexShape(Capsule{s0, Vec3(s0 + d), rest}); break;
+      case 1: A = ConvexShape(Capsule{X, v[0], rA}); B = ConvexShape(Capsule{s0, Vec3(s0 + d), rB}); break;
+      case 2: A = ConvexShape(Sphere{X, rA}); B = ConvexShape(Capsule{s0, Vec3(s0 + d), rB}); break;
+      default: A = ConvexShape(Triangle{X, v[0], v[1]}); B = ConvexShape(Triangle{s0, Vec3(s0 + d), Vec3(s0 + d)}); break;
+    }
+    const Real m = i % 4 == 3 ? Real(k) : margin;  // two triangles: the whole distance is margin
+    std::ostringstream what;
+    what << "case " << i % 4 << ": X " << X.transpose() << " segment " << s0.transpose() << " + t·" << d.transpose()
+         << " k " << k << " rA " << rA << " rB " << rB << " margin " << m;
+    ContactManifold out;
+    if (contacts(A, Transform::identity(), B, Transform::identity(), m, out)) {
+      for (int j = 0; j < out.count; ++j) EXPECT_LE(out.points[j].separation, m) << what.str();
+    } else if (++missed == 1) {
+      first = what.str();
+    }
+    if (m >= 1) falseHits += contacts(A, Transform::identity(), B, Transform::identity(), m - Real(0.5), out);
+  }
+  std::printf("%d touching pairs built\n", built);
+  EXPECT_GT(built, cases / 2);
+  EXPECT_EQ(missed, 0) << first;
+  EXPECT_EQ(falseHits, 0);
+}
+
+// A manifold is never shallower than the closest (deepest) pair beyond the face snapping's
+// allowance: the overlap along any direction is at least the minimum, so a reference face within
+// 2° of the contact normal measures its deepest support point at least as deep, unless the clip
+// cuts that point away (it lies beyond the face's side planes); contacts() then reports the
+// single closest pair (contact_detail::keepsClosest; crux diff found a hull and a capsule 6.6e-4
+// relative shallow, tests/regressions/native.crux-wrong.contacts.9301-8420). Random triangles
+// and hulls against capsules and boxes under random rotations: 210 of ~68,000 manifolds broke
+// this before.
+TEST(ContactsIssue6, ManifoldIsNeverShallowerThanTheClosestPairBeyondTheSnappingAllowance) {
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> U(-1, 1);
+  auto v = [&] { return Vec3(Real(U(rng)), Real(U(rng)), Real(U(rng))); };
+  const int cases = test::scaledCases(60000, 6000);
+  int manifolds = 0, shallow = 0;
+  std::string first;
+  for (int i = 0; i < cases; ++i) {
+    std::vector<Vec3> pts;
+    for (int k = 0; k < 4 + i % 5; ++k) pts.push_back(v());
+    const ConvexHull hull = ConvexHull::build(pts);
+    const ConvexShape A = i % 3 == 0 ? ConvexShape(Triangle{pts[0], pts[1], pts[2]}) : ConvexShape(hull);
+    const ConvexShape B = i % 2 ? ConvexShape(Capsule{v() * Real(1.5), v() * Real(1.5), Real(0.1 + 0.4 * (U(rng) + 1))})
+                                : ConvexShape(Obb{v(), Vec3(Real(0.3), Real(0.5), Real(0.2)), Mat3::Identity()});
+    Transform t;
+    t.rotation = Quat(Real(U(rng)), Real(U(rng)), Real(U(rng)), Real(U(rng))).normalized();
+    t.translation = v();
+    ContactManifold m;
+    if (!contacts(A, Transform::identity(), B, t, Real(0.05), m)) continue;
+    ++manifolds;
+    const double sep = distance(A, Transform::identity(), B, t).distance;
+    double least = HUGE_VAL;
+    for (int k = 0; k < m.count; ++k) least = std::min(least, double(m.points[k].separation));
+    // (the rounding: float inputs and outputs, 1e-5 of the unit-sized shapes)
+    if (least > sep + (1 - double(kContactFaceAngleCos)) * std::abs(sep) + 1e-5 * (1 + std::abs(sep)) && ++shallow == 1) {
+      std::ostringstream what;
+      what << "case " << i << ": deepest separation " << least << " vs the closest pair's " << sep << ", " << m.count
+           << " points";
+      first = what.str();
+    }
+  }
+  std::printf("%d manifolds\n", manifolds);
+  EXPECT_GT(manifolds, cases / 5);
+  EXPECT_EQ(shallow, 0) << first;
 }
 
 }  // namespace

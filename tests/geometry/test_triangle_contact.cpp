@@ -8,6 +8,7 @@
 #include <crux/geometry/triangle_contact.hpp>
 
 #include <crux/geometry/closest_point.hpp>
+#include <crux/geometry/overlap.hpp>
 
 #include <gtest/gtest.h>
 
@@ -19,6 +20,7 @@
 #include <sstream>
 #include <string>
 
+#include "support/grid_touching.hpp"
 #include "support/test_scale.hpp"
 
 namespace crux {
@@ -505,6 +507,102 @@ TEST(TriangleContact, CapsuleThroughTheFaceTakesTheMinimumTranslation) {
   EXPECT_NEAR(double(minSeparation(m)), double(minSeparation(g)), 1e-6) << describe(m) << " vs " << describe(g);
   EXPECT_LT(double(minSeparation(m)), -0.01);
   EXPECT_GT(double(minSeparation(m)), -0.03);
+}
+
+// Touching on the integer grid must be reported (issue 6: every boolean answer on integer-grid
+// inputs equals the exact answer; crux diff found a capsule touching a segment triangle at
+// distance exactly 1, which the double distance put at 1 + 2e-16, and dropped). Two constructions,
+// each touching at radius + margin = k exactly and apart by 1 at one less:
+// - corner: the capsule's segment s0 + t·d (integers) has its foot on the line at a rational
+//   t = (X - s0)·d / |d|² inside the segment, at an integer distance k from the integer point X
+//   (searched: |w|²|d|² - (w·d)² = k²|d|²); X is a corner of the triangle, whose other corners
+//   lie in the half-space beyond X away from the segment. The foot is not representable, so the
+//   computed distance is off by an ulp either way.
+// - face: the triangle lies in the plane through X normal to an integer u of integer length L
+//   (a Pythagorean quadruple), X inside it; the sphere's centre is X + k·u, the capsule's segment
+//   parallel to the plane through X + k·u: the distance is k·L in the face region.
+// Also the withinDistance predicates directly. The first fails without the exact margin decision.
+TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
+  std::mt19937_64 rng(0x70c4u);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  const int cases = test::scaledCases(3000, 300);
+  int missed = 0, falseHits = 0, corner = 0, degenerate = 0;
+  std::string first;
+  auto check = [&](const char* kind, const Triangle& tri, const Vec3* centre, const Vec3& p0, const Vec3& p1,
+                   Real reach) {
+    const Real margin = Real(integer(0, 1)), radius = reach - margin;
+    std::ostringstream what;
+    what << kind << ": triangle " << tri.a.transpose() << " | " << tri.b.transpose() << " | " << tri.c.transpose()
+         << ", radius " << radius << " margin " << margin << ", ";
+    ContactManifold m;
+    if (centre) {
+      what << "sphere centre " << centre->transpose();
+      EXPECT_TRUE(withinDistance(tri, *centre, radius, margin)) << what.str();
+      EXPECT_FALSE(withinDistance(tri, *centre, radius - 1, margin)) << what.str();
+      if (sphereTriangleContacts(tri, *centre, radius, margin, m)) {
+        EXPECT_LE(m.points[0].separation, margin) << what.str();
+      } else if (++missed == 1) {
+        first = what.str();
+      }
+      falseHits += sphereTriangleContacts(tri, *centre, radius - 1, margin, m);
+      return;
+    }
+    what << "capsule " << p0.transpose() << " -> " << p1.transpose();
+    EXPECT_TRUE(withinDistance(tri, p0, p1, radius, margin)) << what.str();
+    EXPECT_FALSE(withinDistance(tri, p0, p1, radius - 1, margin)) << what.str();
+    if (capsuleTriangleContacts(tri, p0, p1, radius, margin, m)) {
+      for (int j = 0; j < m.count; ++j) EXPECT_LE(m.points[j].separation, margin) << what.str();
+    } else if (++missed == 1) {
+      first = what.str();
+    }
+    falseHits += capsuleTriangleContacts(tri, p0, p1, radius - 1, margin, m);
+  };
+  for (int i = 0; i < cases; ++i) {
+    const Vec3 X = point(5);
+    if (i % 2 == 0) {
+      // corner: search a segment at an integer distance from X, its foot strictly inside
+      Vec3 s0, d;
+      long k = 0;
+      if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+      // the far half-space: (y - X)·(foot - X) <= 0, with foot - X = (s0 - X) + t·d scaled by |d|²
+      const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
+      Vec3 v[2];
+      for (Vec3& c : v) {
+        do c = X + point(4);
+        while (double(n.dot(c - X)) > 0);
+      }
+      if (i % 6 == 0) v[1] = v[0];  // a segment triangle (a point when v[0] == X)
+      const Triangle tri{X, v[0], v[1]};
+      degenerate += (v[1] - X).cross(v[0] - X).squaredNorm() == 0;
+      ++corner;
+      check("corner", tri, nullptr, s0, s0 + d, Real(k));
+    } else {
+      // face: a triangle around X in the plane normal to u, the shapes at height k·L
+      struct Quad {
+        int x, y, z, length;
+      };
+      static const Quad quads[] = {{0, 3, 4, 5}, {1, 2, 2, 3}, {2, 3, 6, 7}, {1, 4, 8, 9}, {4, 4, 7, 9}, {2, 6, 9, 11}};
+      const Quad& q = quads[std::size_t(integer(0, 5))];
+      const Vec3 u(Real(q.x * (integer(0, 1) ? 1 : -1)), Real(q.y * (integer(0, 1) ? 1 : -1)),
+                   Real(q.z * (integer(0, 1) ? 1 : -1)));
+      Vec3 e1 = u.cross(point(2));
+      if (e1.squaredNorm() == 0) e1 = u.cross(Vec3(1, 0, 0)).squaredNorm() > 0 ? u.cross(Vec3(1, 0, 0)) : u.cross(Vec3(0, 1, 0));
+      const Vec3 e2 = u.cross(e1);  // e1, e2: integer, normal to u and to each other
+      const Vec3 a = X + Real(2) * e1, b = X - e1 + e2, c = X - e1 - e2;  // centroid X
+      const Triangle tri{a, b, c};
+      const int k = integer(1, 2);
+      const Vec3 centre = X + Real(k) * u;
+      check("face", tri, &centre, centre, centre, Real(k * q.length));
+      const Vec3 p0 = centre - Real(integer(0, 2)) * e1, p1 = centre + Real(integer(1, 2)) * e1;
+      check("face", tri, nullptr, p0, p1, Real(k * q.length));
+    }
+  }
+  std::printf("%d grid touching cases (%d corner, %d of them on degenerate triangles)\n", cases, corner, degenerate);
+  EXPECT_EQ(missed, 0) << first;
+  EXPECT_EQ(falseHits, 0);
+  EXPECT_GT(corner, cases / 4);
+  EXPECT_GT(degenerate, 0);
 }
 
 }  // namespace

@@ -54,6 +54,23 @@ bool overlaps(const Triangle& t, const Obb& b);
 /// Triangle–plane: the corners' signed distances n·v - d take both signs or a zero.
 bool overlaps(const Triangle& t, const Plane& p);
 
+/// Whether the closed triangle t (degenerate ones as their segment or point) is within
+/// distance radius + margin of point x, decided exactly (the sum, its square and every sign in
+/// exact arithmetic when the filter cannot decide, as the overlap tests above). The contact
+/// routines (triangle_contact.hpp) ask it when their double distance is within rounding of the
+/// margin, so that touching on integer grids is reported exactly.
+bool withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin);
+/// The same for the segment [p, q] (a point when p == q): 0 when it meets the triangle, else
+/// the nearer of its endpoints' distances and its distances to the triangle's edges (segment
+/// pairs by RTCD 5.1.9's parameters, division-free).
+bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin);
+/// The general form: two cores of 1 to 3 points each (a point, a segment, a triangle;
+/// coincident or collinear points classified exactly) within radiusA + radiusB + margin of each
+/// other (two triangles: 0 when they meet, else a corner against the other or two edges). The
+/// convex pair contacts (contact.hpp) ask it for spheres, capsules and triangles near the margin.
+/// Throws InvalidInput for other point counts.
+bool withinDistance(const WVec3* a, int na, const WVec3* b, int nb, Wide radiusA, Wide radiusB, Wide margin);
+
 /// Near-parallel cutoff for cross-product axes in OBB tests: a cross axis L = u × v with
 /// |L|² <= kParallelAxisTolerance·|u|²|v|² is skipped.
 inline constexpr Wide kParallelAxisTolerance = 1e-12;

@@ -146,10 +146,9 @@ struct TriangleShape {
   WVec3 p, q;  ///< Segment endpoints (Segment), the point (Point, in p).
 };
 
-/// Classifies t exactly for any finite corners: the cross product of its edges is exactly
-/// zero iff the corners are collinear.
-inline TriangleShape classify(const Triangle& t) {
-  const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
+/// Classifies the corners a, b, c exactly for any finite values: the cross product of the
+/// edges is exactly zero iff the corners are collinear.
+inline TriangleShape classify(const WVec3& a, const WVec3& b, const WVec3& c) {
   TriangleShape s;
   const bool proper = robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
@@ -179,5 +178,8 @@ inline TriangleShape classify(const Triangle& t) {
   s.q = *v[hi];
   return s;
 }
+
+/// Classifies t exactly (classify of its corners).
+inline TriangleShape classify(const Triangle& t) { return classify(wide(t.a), wide(t.b), wide(t.c)); }
 
 }  // namespace crux::predicates

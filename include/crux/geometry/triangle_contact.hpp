@@ -5,7 +5,8 @@
 /// Both routines answer what the generic `contacts(ConvexShape(tri), I, shape, I, margin, out)`
 /// of contact.hpp answers (same normal convention, separations, points, clipping and feature
 /// ids), without GJK/EPA: everything is in one frame (the caller's, e.g. the mesh's), in double
-/// whatever Real is, on fixed-size data (no heap, no exceptions).
+/// whatever Real is, on fixed-size data (no heap, no exceptions; but the exact margin decision
+/// near the margin may spill its expansions to the heap, as contact.hpp's contacts()).
 ///
 /// Conventions (contact.hpp): A is the triangle, B the sphere/capsule; `out.normal` is the unit
 /// direction from B to A; pointA − pointB = separation·normal for every point; a point is

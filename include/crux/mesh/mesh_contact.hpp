@@ -57,7 +57,9 @@
 /// most 4 are kept: the deepest (first), the farthest from it, the one of largest area with those
 /// two, and the one adding most area outside that triangle — stopping early when the next point
 /// would be coincident or collinear within the merge tolerance (a capsule lying on a seam gives 2,
-/// not 4 collinear points). No heap allocation, no exceptions in the queries.
+/// not 4 collinear points). No heap allocation, no exceptions in the queries, except the exact
+/// margin decision's rare spill (contact.hpp's contacts(): a sphere or capsule within rounding
+/// of the margin whose sign the filter cannot decide).
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/raycast.hpp>
@@ -151,8 +153,8 @@ struct MeshContactManifold {
 /// `adjacency` (built from this mesh; one with another triangle or vertex count throws InvalidInput) is given,
 /// reduction to 4. `path` BruteForce tests every
 /// triangle (reference). Returns out.count > 0. Throws InvalidInput for a margin that is negative
-/// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws, never
-/// allocates.
+/// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws and does
+/// not allocate (but for the exact margin decision's rare spill, see above).
 bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency = nullptr,
               QueryPath path = QueryPath::Bvh);

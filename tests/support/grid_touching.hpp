@@ -1,0 +1,34 @@
+// Integer-grid touching constructions for the tests of the exact margin decisions (issue 6:
+// touching on integer grids must be reported exactly).
+#pragma once
+
+#include <crux/math.hpp>
+
+#include <cmath>
+
+namespace crux::test {
+
+/// Searches a segment s0 + t·d (integer points, from `point(r)`: a random integer point within r
+/// per coordinate) whose nearest point to the integer point X is strictly inside it, at t =
+/// (X − s0)·d / |d|² (a rational, not representable in general), at an integer distance k:
+/// |w|²|d|² − (w·d)² = k²|d|² with w = X − s0. False when none is found in `tries` draws.
+template <class Point>
+bool segmentAtIntegerDistance(Point& point, const Vec3& X, Vec3& s0, Vec3& d, long& k, int tries = 10000) {
+  for (int i = 0; i < tries; ++i) {
+    s0 = X + point(4);
+    d = point(3);
+    const Vec3 w = X - s0;
+    const long dd = long(d.squaredNorm()), wd = long(w.dot(d)), ww = long(w.squaredNorm());
+    if (dd == 0 || wd <= 0 || wd >= dd) continue;
+    const long num = ww * dd - wd * wd;  // k² · |d|²
+    if (num <= 0 || num % dd != 0) continue;
+    const long k2 = num / dd, r = std::lround(std::sqrt(double(k2)));
+    if (r * r == k2) {
+      k = r;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace crux::test
