@@ -18,6 +18,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <queue>
 #include <iterator>
 #include <map>
 #include <numeric>
@@ -417,14 +418,6 @@ Point commonPoint(const ExactCore& a, const ExactCore& b) {
   return a.points[0];
 }
 
-PlacedTriangles::PlacedTriangles(const Mesh& mesh, const ExactRigid& pose) {
-  std::vector<Point> v;
-  v.reserve(mesh.vertexCount());
-  for (const Vec3& p : mesh.vertices()) v.push_back(pose.apply(p));
-  triangles.reserve(mesh.triangleCount());
-  for (const TriangleIndices& t : mesh.triangles()) triangles.push_back(coreOf(v[t[0]], v[t[1]], v[t[2]]));
-}
-
 FT squaredGap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
   FT sum = 0;
   for (int k = 0; k < 3; ++k) {
@@ -537,6 +530,8 @@ class LazyPlaced {
     return *c;
   }
   std::size_t size() const { return cores_.size(); }
+  /// The conservative box of corner k of triangle t.
+  const CGAL::Bbox_3& corner(std::uint32_t t, int k) const { return boxes_[mesh_.triangles()[t][std::size_t(k)]]; }
 
  private:
   const Mesh& mesh_;
@@ -548,6 +543,127 @@ class LazyPlaced {
 /// Whether the squared double gap `g` of two boxes certainly exceeds `limit2` (the double
 /// differences are correctly rounded, so g is within a few ulps of the exact squared gap).
 bool certainlyBeyond(double g, double limit2) { return g > limit2 * (1 + 1e-9) + std::numeric_limits<double>::denorm_min(); }
+
+/// A lower bound on the squared distance of triangles i of `a` and j of `b` (their exactly placed
+/// corners) from their corners' conservative boxes, in double: the gap between the two triangles'
+/// projections on each one's approximate normal (from the boxes' centres; any direction gives a
+/// lower bound, and this one is sharp for a triangle far from the other's plane, where the box gap
+/// is not: a big triangle's box holds everything near it). Each projection is rounded outward
+/// by 8 ulps of its terms' magnitude; 0 when no bound is found (degenerate, non-finite).
+double planeGap(const LazyPlaced& a, std::uint32_t i, const LazyPlaced& b, std::uint32_t j) {
+  const double eps = std::numeric_limits<double>::epsilon();
+  auto centre = [](const CGAL::Bbox_3& x, int k) { return 0.5 * x.min(k) + 0.5 * x.max(k); };
+  // the projection interval of a triangle's three corner boxes on n
+  auto project = [&](const LazyPlaced& m, std::uint32_t t, const double* n, double& lo, double& hi) {
+    lo = HUGE_VAL;
+    hi = -HUGE_VAL;
+    for (int c = 0; c < 3; ++c) {
+      const CGAL::Bbox_3& x = m.corner(t, c);
+      double l = 0, h = 0, mag = 0;
+      for (int k = 0; k < 3; ++k) {
+        const double p = n[k] * x.min(k), q = n[k] * x.max(k);
+        l += std::min(p, q);
+        h += std::max(p, q);
+        mag += std::max(std::fabs(p), std::fabs(q));
+      }
+      lo = std::min(lo, l - 8 * eps * mag);
+      hi = std::max(hi, h + 8 * eps * mag);
+    }
+  };
+  double best = 0;
+  for (int side = 0; side < 2; ++side) {
+    const LazyPlaced& m = side == 0 ? a : b;
+    const std::uint32_t t = side == 0 ? i : j;
+    double p[3][3];
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k) p[c][k] = centre(m.corner(t, c), k);
+    const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const double v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    const double n2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (!(n2 > 0) || !std::isfinite(n2)) continue;
+    double loA, hiA, loB, hiB;
+    project(a, i, n, loA, hiA);
+    project(b, j, n, loB, hiB);
+    const double gap = std::max(loB - hiA, loA - hiB);
+    if (gap > 0 && std::isfinite(gap)) best = std::max(best, gap * gap / n2);
+  }
+  return best;
+}
+
+/// A binary tree over a LazyPlaced mesh's conservative triangle boxes (flat, children of an inner
+/// node at left and left + 1; leaves of <= 4 triangles, `items[first, first + count)`), split at
+/// the median of the box centres along the longest axis of their spread. Only an order of work
+/// and a conservative prune for the exact mesh–mesh distance: every decision on a triangle pair
+/// stays exact. The oracle's own tree, not crux::Bvh: crux::Bvh holds Real boxes, which cannot
+/// hold the conservative double enclosures as they are, and an arbiter's pruning must not rest
+/// on the native structure it judges.
+struct BoxTree {
+  struct Node {
+    CGAL::Bbox_3 box;
+    std::uint32_t first = 0, count = 0;  // a leaf's items (count > 0)
+    std::uint32_t left = 0;              // an inner node's first child
+  };
+  std::vector<Node> nodes;
+  std::vector<std::uint32_t> items;
+
+  explicit BoxTree(const LazyPlaced& placed) {
+    const std::uint32_t n = std::uint32_t(placed.size());
+    std::vector<CGAL::Bbox_3> boxes(n);
+    std::vector<std::array<double, 3>> centre(n);
+    for (std::uint32_t t = 0; t < n; ++t) {
+      boxes[t] = placed.bound(t);
+      for (int k = 0; k < 3; ++k) centre[t][std::size_t(k)] = 0.5 * boxes[t].min(k) + 0.5 * boxes[t].max(k);
+    }
+    items.resize(n);
+    std::iota(items.begin(), items.end(), 0u);
+    nodes.reserve(2 * std::size_t(n));
+    nodes.push_back(Node{});
+    nodes[0].first = 0;
+    nodes[0].count = n;
+    std::vector<std::uint32_t> work{0};
+    while (!work.empty()) {
+      const std::uint32_t at = work.back();
+      work.pop_back();
+      const std::uint32_t first = nodes[at].first, count = nodes[at].count;
+      CGAL::Bbox_3 box = boxes[items[first]];
+      double lo[3], hi[3];
+      for (int k = 0; k < 3; ++k) lo[k] = hi[k] = centre[items[first]][std::size_t(k)];
+      for (std::uint32_t u = first; u < first + count; ++u) {
+        box += boxes[items[u]];
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], centre[items[u]][std::size_t(k)]);
+          hi[k] = std::max(hi[k], centre[items[u]][std::size_t(k)]);
+        }
+      }
+      nodes[at].box = box;
+      if (count <= 4) continue;
+      int axis = 0;
+      for (int k = 1; k < 3; ++k)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+      const std::uint32_t half = count / 2;
+      std::nth_element(items.begin() + first, items.begin() + first + half, items.begin() + first + count,
+                       [&](std::uint32_t x, std::uint32_t y) {
+                         const double cx = centre[x][std::size_t(axis)], cy = centre[y][std::size_t(axis)];
+                         return cx < cy || (cx == cy && x < y);
+                       });
+      const std::uint32_t left = std::uint32_t(nodes.size());
+      Node l, r;
+      l.first = first;
+      l.count = half;
+      r.first = first + half;
+      r.count = count - half;
+      nodes.push_back(l);
+      nodes.push_back(r);
+      nodes[at].count = 0;
+      nodes[at].left = left;
+      work.push_back(left);
+      work.push_back(left + 1);
+    }
+  }
+  /// A node box's size, to choose which of two to split (the sum of its sides).
+  static double extent(const CGAL::Bbox_3& b) { return (b.xmax() - b.xmin()) + (b.ymax() - b.ymin()) + (b.zmax() - b.zmin()); }
+};
 }  // namespace
 
 ExactDistance distance(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb) {
@@ -594,45 +710,75 @@ std::optional<ExactDistance> meshDistance(const Mesh& a, const Transform& ta, co
 std::optional<ExactDistance> detail::meshDistance(const Mesh& a, const ExactRigid& ta, const Mesh& b,
                                                   const ExactRigid& tb, double maxDistance) {
   if (a.triangleCount() == 0 || b.triangleCount() == 0) throw InvalidInput("mesh: the mesh has no triangles");
-  const PlacedTriangles pa(a, ta), pb(b, tb);
-  CGAL::Bbox_3 boxA, boxB;
-  for (const ExactCore& t : pa.triangles) boxA += t.box;
-  for (const ExactCore& t : pb.triangles) boxB += t.box;
-  // Work order: a's triangles nearest b's box first, b's nearest a's box first (memory O(n + m)).
-  const std::vector<std::uint32_t> orderA = byBound(
-      pa.triangles.size(), [&](std::size_t i) { return approxGap(pa.triangles[i].box, boxB); });
-  const std::vector<std::uint32_t> orderB = byBound(
-      pb.triangles.size(), [&](std::size_t j) { return approxGap(pb.triangles[j].box, boxA); });
+  LazyPlaced pa(a, ta), pb(b, tb);
+  const BoxTree treeA(pa), treeB(pb);
   const bool bounded = std::isfinite(maxDistance);
   const FT max2 = bounded ? CGAL::square(FT(maxDistance)) : FT(0);
   const double max2Approx = bounded ? maxDistance * maxDistance : HUGE_VAL;
   std::optional<CoreDistance> best;
   double bestApprox = HUGE_VAL;  // the best squared distance rounded (a filter only)
   std::uint32_t bestI = 0, bestJ = 0;
-  for (const std::uint32_t i : orderA) {
-    if (best && best->relation != CoreRelation::Separated) break;  // distance 0: nothing is nearer
-    for (const std::uint32_t j : orderB) {
-      const CGAL::Bbox_3 &ba = pa.triangles[i].box, &bb = pb.triangles[j].box;
-      // A double filter (its rounding is far below the 1e-9 slack), then the exact prune.
-      const double g = approxGap(ba, bb);
-      if (certainlyBeyond(g, std::min(bestApprox, max2Approx))) continue;
-      const FT gap = squaredGap(ba, bb);
-      if (bounded && max2 < gap) continue;
-      if (best && best->squared < gap) continue;
-      const CoreDistance d = coreDistance(pa.triangles[i], pb.triangles[j]);
-      const bool tie = best && !closer(*best, d) && !closer(d, *best);
-      if (!best || closer(d, *best) || (tie && std::make_pair(i, j) < std::make_pair(bestI, bestJ))) {
-        best = d;
-        bestApprox = CGAL::to_double(d.relation == CoreRelation::Separated ? d.squared : FT(0));
-        bestI = i;
-        bestJ = j;
+  // Branch and bound over the two trees, nearest node pair first (Larsen et al. 1999's scheme
+  // with boxes): a pair is dropped only when its conservative boxes are certainly farther than
+  // the best (or the limit), so every triangle pair that could beat or tie the best is reached
+  // and decided exactly as before (the nearest; ties: the lowest (a, b) index pair).
+  struct Pending {
+    double gap;
+    std::uint32_t na, nb;
+    bool operator<(const Pending& o) const { return gap > o.gap; }  // min-heap on the gap
+  };
+  std::priority_queue<Pending> queue;
+  queue.push({approxGap(treeA.nodes[0].box, treeB.nodes[0].box), 0, 0});
+  auto pairOf = [&](std::uint32_t i, std::uint32_t j) {
+    const double limit = std::min(bestApprox, max2Approx);
+    if (certainlyBeyond(approxGap(pa.bound(i), pb.bound(j)), limit)) return;
+    if (certainlyBeyond(planeGap(pa, i, pb, j), limit)) return;
+    const ExactCore &ca = pa.triangle(i), &cb = pb.triangle(j);
+    // A double filter on the exact cores' boxes (its rounding is far below the 1e-9 slack), then
+    // the exact prune.
+    if (certainlyBeyond(approxGap(ca.box, cb.box), limit)) return;
+    const FT gap = squaredGap(ca.box, cb.box);
+    if (bounded && max2 < gap) return;
+    if (best && best->squared < gap) return;
+    const CoreDistance d = coreDistance(ca, cb);
+    const bool tie = best && !closer(*best, d) && !closer(d, *best);
+    if (!best || closer(d, *best) || (tie && std::make_pair(i, j) < std::make_pair(bestI, bestJ))) {
+      best = d;
+      bestApprox = CGAL::to_double(d.relation == CoreRelation::Separated ? d.squared : FT(0));
+      bestI = i;
+      bestJ = j;
+    }
+  };
+  while (!queue.empty()) {
+    const Pending top = queue.top();
+    queue.pop();
+    // every pair left is at least this far: done when it is certainly beyond the best
+    if (certainlyBeyond(top.gap, std::min(bestApprox, max2Approx))) break;
+    const BoxTree::Node &x = treeA.nodes[top.na], &y = treeB.nodes[top.nb];
+    if (x.count > 0 && y.count > 0) {
+      for (std::uint32_t u = x.first; u < x.first + x.count; ++u) {
+        for (std::uint32_t v = y.first; v < y.first + y.count; ++v) {
+          pairOf(treeA.items[u], treeB.items[v]);
+          if (best && best->relation != CoreRelation::Separated) break;  // distance 0: nothing is nearer
+        }
+        if (best && best->relation != CoreRelation::Separated) break;
       }
-      if (best->relation != CoreRelation::Separated) break;
+      if (best && best->relation != CoreRelation::Separated) break;
+      continue;
+    }
+    // split the inner node (of two inner nodes, the larger box; A on a tie)
+    const bool splitA = y.count > 0 || (x.count == 0 && BoxTree::extent(x.box) >= BoxTree::extent(y.box));
+    if (splitA) {
+      for (std::uint32_t c = x.left; c < x.left + 2; ++c)
+        queue.push({approxGap(treeA.nodes[c].box, y.box), c, top.nb});
+    } else {
+      for (std::uint32_t c = y.left; c < y.left + 2; ++c)
+        queue.push({approxGap(x.box, treeB.nodes[c].box), top.na, c});
     }
   }
   if (!best || (bounded && best->relation == CoreRelation::Separated && max2 < best->squared)) return std::nullopt;
   CoreDistance d = *best;
-  if (d.relation == CoreRelation::Penetrating) d.pointA = d.pointB = commonPoint(pa.triangles[bestI], pb.triangles[bestJ]);
+  if (d.relation == CoreRelation::Penetrating) d.pointA = d.pointB = commonPoint(pa.triangle(bestI), pb.triangle(bestJ));
   if (d.relation != CoreRelation::Separated) d.squared = 0;
   ExactDistance out = toDistance(rounded(d, 0.0, 0.0));
   out.distance = std::abs(out.distance);  // unsigned: 0 when the surfaces touch or cross

@@ -86,12 +86,6 @@ Vec3d toVec3d(const Point& p);
 /// points): for mesh–mesh distance 0. Precondition: they overlap.
 Point commonPoint(const ExactCore& a, const ExactCore& b);
 
-/// Mesh triangles placed exactly.
-struct PlacedTriangles {
-  std::vector<ExactCore> triangles;
-  PlacedTriangles(const Mesh& mesh, const ExactRigid& pose);
-};
-
 /// exact::meshDistance (exact.hpp) with the meshes placed by exact transforms (model_distance:
 /// the models' exactly composed world transforms).
 std::optional<ExactDistance> meshDistance(const Mesh& a, const ExactRigid& ta, const Mesh& b, const ExactRigid& tb,

@@ -21,7 +21,9 @@
 
 #include <gtest/gtest.h>
 
+#include <crux/error.hpp>
 #include <crux/geometry/gjk.hpp>
+#include <crux/geometry/overlap.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 #include <exact/exact.hpp>
@@ -576,6 +578,114 @@ TEST(NativeVsExact, MeshMeshDistance) {
     }
     std::printf("%-10s %d mesh pairs, %d touching or crossing on the grid\n", name(family), perFamily, zeros);
   }
+}
+
+/// A height field of n × n unit quads (two triangles each) over [0, n]², scaled by the family's
+/// scale; heights are the family's coordinates in [-1, 1] (integers on the grids).
+Mesh terrain(Gen& g, int n) {
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  const Real s = Real(g.scale());
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) v.push_back(Vec3(Real(x) * s, Real(y) * s, g.coord(1)));
+  auto at = [&](int x, int y) { return std::uint32_t(y * (n + 1) + x); };
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      t.push_back({at(x, y), at(x + 1, y), at(x + 1, y + 1)});
+      t.push_back({at(x, y), at(x + 1, y + 1), at(x, y + 1)});
+    }
+  return Mesh(v, t, "terrain");
+}
+
+// exact::meshDistance searches two trees of conservative triangle boxes (session 9; it tested all
+// n·m pairs before). Its answer must be the minimum over every triangle pair's exact distance,
+// bit for bit, including near ties: two terrains face to face (b turned over above a), apart,
+// touching (the grids) or crossing, and a distance limit just below and just above the answer. An
+// over-eager prune (a pair dropped that could beat or tie the best) fails here.
+TEST(ExactMeshDistance, TreeSearchEqualsTheMinimumOverEveryTrianglePair) {
+  const int perFamily = test::scaledCases(3, 1);
+  int separated = 0, zero = 0;
+  for (const Family family : kFamilies) {
+    Gen g{0x3e5d0000u + std::uint64_t(family), family};
+    for (int i = 0; i < perFamily; ++i) {
+      const Mesh a = terrain(g, 3), b = terrain(g, 3);
+      const Transform ta = g.pose(1);
+      Transform tb = ta;  // b turned over (a half turn about x) and lifted along a's z
+      tb.rotation = (ta.rotation * Quat(0, 1, 0, 0)).normalized();
+      const Real lift = Real(g.grid() ? g.integer(0, 3) : g.uniform(-0.5, 3) * g.scale());
+      tb.translation = ta.translation + ta.rotation * Vec3(0, Real(3 * g.scale()), lift);
+      double best = HUGE_VAL;
+      std::vector<double> per(std::size_t(a.triangleCount()) * b.triangleCount());
+      for (std::uint32_t x = 0; x < a.triangleCount(); ++x)
+        for (std::uint32_t y = 0; y < b.triangleCount(); ++y) {
+          per[x * b.triangleCount() + y] = exact::distance(a.triangle(x), ta, b.triangle(y), tb).distance;
+          best = std::min(best, per[x * b.triangleCount() + y]);
+        }
+      const std::string what = std::string(name(family)) + " case " + std::to_string(i) + ": lift " + str(double(lift)) +
+                               " a at " + str(ta) + ", b at " + str(tb) + ", minimum over pairs " + str(best);
+      const std::optional<exact::ExactDistance> e = exact::meshDistance(a, ta, b, tb);
+      ASSERT_TRUE(e.has_value()) << what;
+      const double pair = per[e->triangleA * b.triangleCount() + e->triangleB];
+      if (best > 0) {
+        ++separated;
+        EXPECT_EQ(e->distance, best) << what;
+        EXPECT_EQ(pair, best) << "triangles " << e->triangleA << "," << e->triangleB << ": " << what;
+        // (the answer is rounded from the exact squared distance: a limit 1e-12 below or above it)
+        EXPECT_FALSE(exact::meshDistance(a, ta, b, tb, best * (1 - 1e-12)).has_value()) << what;
+        const std::optional<exact::ExactDistance> at = exact::meshDistance(a, ta, b, tb, best * (1 + 1e-12));
+        ASSERT_TRUE(at.has_value()) << what;
+        EXPECT_EQ(at->distance, best) << what;
+      } else {
+        ++zero;
+        EXPECT_EQ(e->distance, 0.0) << what;
+        EXPECT_LE(pair, 0.0) << "triangles " << e->triangleA << "," << e->triangleB << " apart: " << what;
+      }
+    }
+  }
+  std::printf("%d terrain pairs apart, %d touching or crossing\n", separated, zero);
+  EXPECT_GT(separated, 0);
+  EXPECT_GT(zero, 0);
+}
+
+// withinDistance (overlap.hpp) on two cores of 1-3 points against the exact backend's contacts
+// verdict (within the margin, decided in rationals): points, segments and triangles (degenerate
+// ones included) on a small integer grid, integer radii, the margin the exact distance rounded to
+// an integer (so many pairs sit exactly at it). The predicate decides the convex pair and
+// sphere/capsule-triangle contacts at the margin (docs/narrowphase.md).
+TEST(WithinDistance, EqualsTheExactContactsVerdictOnTheGrid) {
+  std::mt19937_64 rng(0x3e5e0000u);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  const int cases = test::scaledCases(600, 120);
+  int atTheMargin = 0, within = 0;
+  for (int i = 0; i < cases; ++i) {
+    Vec3 pa[3], pb[3];
+    const int na = integer(1, 3), nb = integer(1, 3);
+    for (Vec3& v : pa) v = point(3);
+    for (Vec3& v : pb) v = point(3) + Vec3(Real(integer(0, 4)), 0, 0);
+    if (integer(0, 4) == 0) pa[2] = pa[1];  // degenerate cores now and then
+    if (integer(0, 4) == 0) pb[1] = pb[0];
+    const Real ra = na == 3 ? Real(0) : Real(integer(0, 1)), rb = nb == 3 ? Real(0) : Real(integer(0, 1));
+    auto shape = [](const Vec3* p, int n, Real r) {
+      return n == 1 ? ConvexShape(Sphere{p[0], r}) : n == 2 ? ConvexShape(Capsule{p[0], p[1], r}) : ConvexShape(Triangle{p[0], p[1], p[2]});
+    };
+    const ConvexShape A = shape(pa, na, ra), B = shape(pb, nb, rb);
+    const double d = exact::distance(A, Transform::identity(), B, Transform::identity()).distance;
+    const Real margin = Real(std::max(0.0, std::round(d)));
+    const bool exactWithin = !exact::contacts(A, Transform::identity(), B, Transform::identity(), double(margin)).empty();
+    WVec3 wa[3], wb[3];
+    for (int k = 0; k < 3; ++k) wa[k] = wide(pa[k]), wb[k] = wide(pb[k]);
+    const bool got = withinDistance(wa, na, wb, nb, Wide(ra), Wide(rb), Wide(margin));
+    atTheMargin += d == double(margin);
+    within += exactWithin;
+    EXPECT_EQ(got, exactWithin) << "case " << i << ": " << na << " and " << nb << " points, radii " << ra << ", " << rb
+                                << ", margin " << margin << ", exact distance " << str(d);
+    ContactManifold m;
+    EXPECT_EQ(contacts(A, Transform::identity(), B, Transform::identity(), margin, m), exactWithin) << "contacts, case " << i;
+  }
+  std::printf("%d core pairs, %d within the margin, %d exactly at it\n", cases, within, atTheMargin);
+  EXPECT_GT(atTheMargin, cases / 20);
+  EXPECT_THROW(withinDistance(nullptr, 0, nullptr, 1, 0, 0, 0), InvalidInput);
 }
 
 }  // namespace
