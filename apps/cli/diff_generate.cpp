@@ -1035,6 +1035,87 @@ const std::vector<std::string> kNarrowRealMeshes = {"blob-closed", "sphere"};
 const std::vector<std::string> kNarrowLargeRealMeshes = {"bunny00", "cow"};
 constexpr double kLargeRealMeshChance = 0.05;
 
+/// The chance that a `mesh_distance` case of the mesh family is between two real meshes (the
+/// exact backend's tree search makes them cheap: ~40 ms for bunny00 against cow).
+constexpr double kRealMeshPairChance = 0.35;
+
+/// Unit quaternion (w, x, y, z) turning unit vector w onto unit vector u, then spinning by
+/// `spin` radians about u.
+std::array<double, 4> turnOnto(V w, V u, double spin) {
+  const V c = cross(w, u);
+  double q[4] = {1 + dot(w, u), c[0], c[1], c[2]};
+  if (q[0] < 1e-9) {  // opposite: a half turn about any axis normal to w
+    const V a = std::fabs(w[0]) < 0.9 ? V{1, 0, 0} : V{0, 1, 0};
+    const V n = cross(w, a);
+    q[0] = 0;
+    q[1] = n[0];
+    q[2] = n[1];
+    q[3] = n[2];
+  }
+  const double l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  for (double& x : q) x /= l;
+  const double h = 0.5 * spin, sw = std::cos(h), s = std::sin(h);
+  const double p[4] = {sw, s * u[0], s * u[1], s * u[2]};  // spin ∘ turn (Hamilton product p·q)
+  return {p[0] * q[0] - p[1] * q[1] - p[2] * q[2] - p[3] * q[3], p[0] * q[1] + p[1] * q[0] + p[2] * q[3] - p[3] * q[2],
+          p[0] * q[2] - p[1] * q[3] + p[2] * q[0] + p[3] * q[1], p[0] * q[3] + p[1] * q[2] - p[2] * q[1] + p[3] * q[0]};
+}
+
+/// `mesh_distance` between two real meshes (kNarrowRealMeshes, or kNarrowLargeRealMeshes with
+/// kLargeRealMeshChance each): a randomly turned; b turned so that it lies beyond one of its
+/// vertices, that vertex placed near one of a's along a's outward direction there (from a's box
+/// centre), at -2 % to +10 % of the smaller mesh's size: apart by a little, touching near a point or
+/// crossing. False (nothing written) when a mesh is not available.
+bool realMeshPair(Rng& rng, DiffGenerator& g, J& q, DiffCase& c) {
+  auto pick = [&]() -> const std::string& {
+    const std::vector<std::string>& names = rng.chance(kLargeRealMeshChance) ? kNarrowLargeRealMeshes : kNarrowRealMeshes;
+    return names[rng.next() % names.size()];
+  };
+  const std::string na = pick(), nb = pick();
+  const Mesh* ma = realMesh(g, na);
+  const Mesh* mb = realMesh(g, nb);
+  if (!ma || !mb) return false;
+  auto centreSize = [](const Mesh& m, V& centre, double& size, double& mag) {
+    const Aabb& bb = m.bounds();
+    size = mag = 0;
+    for (int k = 0; k < 3; ++k) {
+      centre[std::size_t(k)] = 0.5 * (double(bb.min[k]) + double(bb.max[k]));
+      size = std::max(size, double(bb.max[k] - bb.min[k]));
+      mag = std::max({mag, std::fabs(double(bb.min[k])), std::fabs(double(bb.max[k]))});
+    }
+  };
+  V ca{}, cb{};
+  double sa = 0, sb = 0, magA = 0, magB = 0;
+  centreSize(*ma, ca, sa, magA);
+  centreSize(*mb, cb, sb, magB);
+  auto unit = [](V v) {
+    const double l = std::sqrt(dot(v, v));
+    return l > 0 ? V{v[0] / l, v[1] / l, v[2] / l} : V{0, 0, 1};
+  };
+  const auto ra = randomRotation(rng);
+  const auto Ra = rotationMatrix(ra);
+  const V va = apply(Ra, toV(ma->vertices()[rng.next() % ma->vertexCount()]));
+  const V outward = unit(sub(va, apply(Ra, ca)));
+  const V vb = toV(mb->vertices()[rng.next() % mb->vertexCount()]);
+  const auto rb = turnOnto(unit(sub(cb, vb)), outward, rng.uniform(0, 2 * M_PI));
+  const double gap = std::min(sa, sb) * rng.uniform(-0.02, 0.1);
+  const std::array<V, 3> Rb = rotationMatrix(rb);
+  const V at = apply(Rb, vb);
+  const V tb = toFloat(V{va[0] + gap * outward[0] - at[0], va[1] + gap * outward[1] - at[1], va[2] + gap * outward[2] - at[2]});
+  c.setup.push_back(J{{"op", "load_mesh"}, {"name", na}, {"path", realMeshPath(g, na)}}.dump());
+  if (nb != na) c.setup.push_back(J{{"op", "load_mesh"}, {"name", nb}, {"path", realMeshPath(g, nb)}}.dump());
+  c.sharedSetup = true;
+  q["a"] = na;
+  q["b"] = nb;
+  q["transform_a"] = J{{"rotation", rotationJson(ra)}, {"translation", vec(V{0, 0, 0})}};
+  q["transform_b"] = J{{"rotation", rotationJson(rb)}, {"translation", vec(tb)}};
+  if (rng.chance(0.2)) q["max"] = num(toFloat(std::min(sa, sb) * rng.uniform(0, 0.1)));
+  c.exactGrid = false;
+  c.featureSize = 0.05 * std::min(sa, sb);
+  c.extraMagnitude = std::max(magA, std::sqrt(dot(tb, tb)) + magB);
+  c.query = q.dump();
+  return true;
+}
+
 /// A narrow-phase case of the mesh family: `distance` / `contacts` between a mesh (small
 /// generated, or a small real mesh) and a convex operand near one of its triangles, in either
 /// operand order; `mesh_distance` between two small meshes under grid or random motions.
@@ -1042,6 +1123,7 @@ DiffCase narrowMeshCase(std::string_view op, Rng& rng, DiffGenerator& g) {
   DiffCase c;
   J q = request(op);
   if (op == "mesh_distance") {
+    if (rng.chance(kRealMeshPairChance) && realMeshPair(rng, g, q, c)) return c;
     const bool general = rng.chance(0.35);
     c.setup.push_back(meshLine("a", smallMesh(rng, general)).dump());
     c.setup.push_back(meshLine("b", smallMesh(rng, general)).dump());

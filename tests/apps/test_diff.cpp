@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <map>
 #include <sstream>
 
@@ -398,6 +399,31 @@ TEST(DiffNarrowPhase, LargeRealMeshesAppearAndAgree) {
     ++checked;
   }
   EXPECT_EQ(checked, 2) << large << " large-mesh cases in 4000";
+}
+
+// The mesh family's mesh_distance cases include pairs of real meshes (kRealMeshPairChance), placed
+// near each other at a vertex: some apart, some touching or crossing; native agrees with exact on
+// them (the exact tree search makes them affordable), and the witness points are checked.
+TEST(DiffNarrowPhase, RealMeshPairsAppearApartAndCrossingAndAgree) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  g.ops = {"mesh_distance"};
+  DiffRunner runner;
+  int pairs = 0, apart = 0, zero = 0;
+  for (std::uint64_t i = 0; i < 400 && (apart < 2 || zero < 2); ++i) {
+    const auto c = generateCase("mesh", 12, i, g);
+    ASSERT_TRUE(c.has_value());
+    if (c->setup.empty() || c->setup[0].find("load_mesh") == std::string::npos) continue;
+    ++pairs;
+    const J got = runner.run(*c, "native"), exact = runner.run(*c, "exact");
+    const auto k = classifyAnswer(*c, "native", got, exact, runner.tolerance("native"), runner.tolerance("exact"),
+                                  [&](const DiffCase& moved) { return runner.run(moved, "exact"); });
+    EXPECT_TRUE(k.verdict == Verdict::Agree || k.verdict == Verdict::WithinTolerance) << describe(k) << "\n" << c->query;
+    if (exact.value("found", false)) (exact["distance"].get<double>() > 0 ? apart : zero) += 1;
+  }
+  std::printf("%d real mesh pairs: %d apart, %d touching or crossing\n", pairs, apart, zero);
+  EXPECT_GE(apart, 2) << pairs << " real mesh pairs";
+  EXPECT_GE(zero, 2) << pairs << " real mesh pairs";
 }
 
 // A unit square mesh; model p under a quarter turn about x (the square in the plane y = 0, x and
