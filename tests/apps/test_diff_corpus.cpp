@@ -42,6 +42,37 @@ bool witnessConsistent(const Answer& a) {
   return std::abs(std::sqrt(gap2) - std::abs(a["distance"].get<double>())) <= 1e-9 * scale;
 }
 
+/// A setup line's `load_mesh` path relative to the repository root (the corpus must not name
+/// the checkout it was recorded in: CI replays it from another one), made absolute.
+std::string withSourcePaths(const std::string& line) {
+  Answer request = Answer::parse(line, nullptr, false);
+  if (!request.is_object() || request.value("op", "") != "load_mesh" || !request.contains("path") ||
+      !request["path"].is_string())
+    return line;
+  const fs::path path = request["path"].get<std::string>();
+  if (path.is_absolute()) return line;
+  request["path"] = (fs::path(CRUX_SOURCE_DIR) / path).string();
+  return request.dump();
+}
+
+TEST(KnownPeerDisagreements, CorpusNamesMeshFilesRelativeToTheRepository) {
+  const fs::path dir = fs::path(CRUX_SOURCE_DIR) / "oracle" / "known-peer-disagreements";
+  int meshFiles = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".jsonl") continue;
+    std::ifstream in(entry.path());
+    for (std::string line; std::getline(in, line);) {
+      const Answer request = Answer::parse(line, nullptr, false);
+      if (!request.is_object() || request.value("op", "") != "load_mesh") continue;
+      ++meshFiles;
+      const fs::path path = request.value("path", "");
+      EXPECT_FALSE(path.is_absolute()) << entry.path().filename() << ": " << line;
+      EXPECT_TRUE(fs::exists(fs::path(CRUX_SOURCE_DIR) / path)) << entry.path().filename() << ": " << line;
+    }
+  }
+  EXPECT_GT(meshFiles, 0);
+}
+
 TEST(KnownPeerDisagreements, PeersStillAnswerAsRecorded) {
   const fs::path dir = fs::path(CRUX_SOURCE_DIR) / "oracle" / "known-peer-disagreements";
   std::vector<fs::path> files;
@@ -71,8 +102,9 @@ TEST(KnownPeerDisagreements, PeersStillAnswerAsRecorded) {
       BatchState peerState(peerOptions), exactState(exactOptions);
       Answer peer, exact;
       for (const auto& l : lines) {
-        peer = answerLine(l, peerState);
-        exact = answerLine(l, exactState);
+        const std::string resolved = withSourcePaths(l);
+        peer = answerLine(resolved, peerState);
+        exact = answerLine(resolved, exactState);
       }
       std::string text;
       for (const auto& l : lines) text += "  " + l + "\n";
