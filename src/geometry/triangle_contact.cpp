@@ -263,10 +263,11 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
     } else {
       const V3 qp = q - p;
       const double d2 = qp.squaredNorm();
-      // clearly beyond radius + margin (by 1e-12 relative, far above the rounding of the exact
-      // test below): out before the root and the division
-      const double reach = r + m;
-      if (d2 > reach * reach * (1 + 1e-12)) return false;
+      // clearly beyond radius + margin + the margin decision's band below (the rounding of q and
+      // d, on the scale of the coordinates, not of the radius: a small sphere far from the origin
+      // touching an edge computes d off by ~|p|·ulp): out before the root and the division
+      const double reach = r + m + kGjkScaleTolerance * (bound + pMax + r + m);
+      if (d2 > reach * reach) return false;
       d = std::sqrt(d2);
       n = d > 0 ? V3(qp * (1 / d)) : V3::Zero();
     }

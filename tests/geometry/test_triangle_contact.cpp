@@ -605,5 +605,50 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
   EXPECT_GT(degenerate, 0);
 }
 
+// A sphere touching a triangle's edge far from the origin (integer coordinates up to ~4e6, still
+// exact in float): the computed distance to the edge's foot rounds by ~|coordinates| × ulp, far
+// more than a tolerance relative to the radius alone, so an early reject on the radius scale
+// would drop a touching pair the exact decision reports.
+TEST(TriangleContact, SphereTouchingFarFromTheOriginIsReported) {
+  std::mt19937_64 rng(0xfa70u);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  const int cases = test::scaledCases(2000, 300);
+  int built = 0, missed = 0, falseHits = 0;
+  std::string first;
+  for (int i = 0; i < cases; ++i) {
+    const Vec3 X = point(5);
+    Vec3 s0, d;
+    long k = 0;
+    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    // beyond the plane through the foot normal to X → foot: n·(c − X) >= |d|²k² (n = |d|²(foot − X))
+    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
+    Vec3 c;
+    int tries = 0;
+    do c = s0 + point(4);
+    while (double(n.dot(c - X)) < double(d.squaredNorm()) * double(k * k) && ++tries < 1000);
+    if (tries == 1000) continue;
+    const int scale = 1 << integer(12, 22);
+    const Vec3 offset(Real(scale * (integer(0, 1) ? 1 : -1)), Real(integer(-scale, scale)), Real(integer(-scale, scale)));
+    const Triangle tri{s0 + offset, s0 + d + offset, c + offset};
+    const Vec3 centre = X + offset;
+    const Real margin = Real(integer(0, 1)), radius = Real(k) - margin;
+    ++built;
+    ContactManifold m;
+    if (!sphereTriangleContacts(tri, centre, radius, margin, m) && ++missed == 1) {
+      std::ostringstream what;
+      what << "triangle " << tri.a.transpose() << " | " << tri.b.transpose() << " | " << tri.c.transpose()
+           << ", sphere " << centre.transpose() << " radius " << radius << " margin " << margin;
+      first = what.str();
+    }
+    EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
+    falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
+  }
+  std::printf("%d far touching cases built\n", built);
+  EXPECT_GT(built, cases / 2);
+  EXPECT_EQ(missed, 0) << first;
+  EXPECT_EQ(falseHits, 0);
+}
+
 }  // namespace
 }  // namespace crux
