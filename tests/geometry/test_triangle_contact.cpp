@@ -609,7 +609,7 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
 // exact in float): the computed distance to the edge's foot rounds by ~|coordinates| × ulp, far
 // more than a tolerance relative to the radius alone, so an early reject on the radius scale
 // would drop a touching pair the exact decision reports.
-TEST(TriangleContact, SphereTouchingFarFromTheOriginIsReported) {
+TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   std::mt19937_64 rng(0xfa70u);
   auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
   auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
@@ -643,6 +643,30 @@ TEST(TriangleContact, SphereTouchingFarFromTheOriginIsReported) {
     }
     EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
     falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
+    // the same pair as a capsule (the segment) against a triangle cornered at the sphere's centre
+    Vec3 v[2];
+    for (Vec3& w : v) {
+      do w = X + point(4);
+      while (double(n.dot(w - X)) > 0);  // the far half-space from the segment (see the grid test)
+    }
+    const Triangle corner{centre, v[0] + offset, v[1] + offset};
+    const Vec3 p0 = s0 + offset, p1 = s0 + d + offset;
+    if (!capsuleTriangleContacts(corner, p0, p1, radius, margin, m) && ++missed == 1) {
+      std::ostringstream what;
+      what << "triangle " << corner.a.transpose() << " | " << corner.b.transpose() << " | " << corner.c.transpose()
+           << ", capsule " << p0.transpose() << " -> " << p1.transpose() << " radius " << radius << " margin " << margin;
+      first = what.str();
+    }
+    falseHits += capsuleTriangleContacts(corner, p0, p1, radius - 1, margin, m);
+    // and through the generic convex pair routine (GJK with the exact margin decision)
+    if (!contacts(ConvexShape(tri), Transform::identity(), ConvexShape(Sphere{centre, radius}), Transform::identity(),
+                  margin, m) &&
+        ++missed == 1)
+      first = "contacts(): sphere of the first case kind";
+    if (!contacts(ConvexShape(corner), Transform::identity(), ConvexShape(Capsule{p0, p1, radius}),
+                  Transform::identity(), margin, m) &&
+        ++missed == 1)
+      first = "contacts(): capsule of the second case kind";
   }
   std::printf("%d far touching cases built\n", built);
   EXPECT_GT(built, cases / 2);
