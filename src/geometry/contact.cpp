@@ -286,24 +286,30 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);
   out.normal = dr.normal;
-  // The margin decision. Spheres, capsules and triangles (cores of 1-3 points) are decided
-  // exactly (withinDistance, overlap.hpp) when the distance is within its rounding of the
-  // margin, so that touching on integer grids is reported exactly (a capsule's foot on a triangle
-  // corner at an unrepresentable parameter puts the double distance an ulp off); a pair found
-  // within the margin but computed beyond it gets the margin as its separation.
+  // The margin decision. Cores of 1-3 points (spheres, capsules, triangles, and hulls of at most
+  // 3 vertices) are decided exactly (withinDistance, overlap.hpp) when the distance is within its
+  // rounding of the margin, so that touching on integer grids is reported exactly (a capsule's
+  // foot on a triangle corner at an unrepresentable parameter puts the double distance an ulp
+  // off); a pair found within the margin but computed beyond it gets the margin as its separation.
   bool clampToMargin = false;
   {
-    auto cores = [](const ConvexShape& s) {
-      return s.kind == ConvexKind::Sphere ? 1 : s.kind == ConvexKind::Capsule ? 2 : s.kind == ConvexKind::Triangle ? 3 : 0;
+    // the core's points (the placed vertices) and their count, 0 for larger cores
+    auto cores = [](const Placed& s, V3 (&pts)[3]) {
+      const ConvexKind k = s.shape->kind;
+      const int n = k == ConvexKind::Sphere ? 1 : k == ConvexKind::Capsule ? 2 : k == ConvexKind::Triangle ? 3
+                    : k == ConvexKind::Hull && s.vertexCount() <= 3 ? s.vertexCount() : 0;
+      for (int i = 0; i < n; ++i) pts[i] = s.vertex(i);
+      return n;
     };
-    const int na = cores(a), nb = cores(b);
+    V3 pa[3], pb[3];
+    const int na = cores(A, pa), nb = cores(B, pb);
     const double m = double(margin),
                  band = kGjkScaleTolerance * (detail::pairScale(A, B) + A.t.cwiseAbs().maxCoeff() +
                                               B.t.cwiseAbs().maxCoeff() + m) +
                         4 * double(std::numeric_limits<Real>::epsilon()) * m;
     if (na > 0 && nb > 0) {
       if (!contact_detail::withinMargin(
-              double(dr.distance), m, band, [&] { return withinDistance(A.p, na, B.p, nb, A.radius, B.radius, m); },
+              double(dr.distance), m, band, [&] { return withinDistance(pa, na, pb, nb, A.radius, B.radius, m); },
               clampToMargin))
         return false;
     } else if (!(dr.distance <= margin)) {

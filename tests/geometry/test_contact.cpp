@@ -824,6 +824,62 @@ TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
   EXPECT_EQ(falseHits, 0);
 }
 
+// Hulls of 1-3 points (degenerate ConvexHulls: a point, a segment, a triangle) keep GJK's margin
+// decision in contacts() (withinDistance is asked for spheres, capsules and triangles only); on
+// the same integer-grid constructions they must still report every touching pair.
+TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
+  std::mt19937_64 rng(0x4a11u);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  const int cases = test::scaledCases(3000, 600);
+  int built = 0, missed = 0, falseHits = 0;
+  std::string first;
+  for (int i = 0; i < cases; ++i) {
+    const Vec3 X = point(5);
+    Vec3 s0, d;
+    long k = 0;
+    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);  // X towards the foot, scaled
+    Vec3 v[2];
+    for (Vec3& c : v) {
+      do c = X + point(4);
+      while (double(n.dot(c - X)) > 0);
+    }
+    const Vec3 s1 = s0 + d;
+    // (a ConvexShape views its hull: the hulls live here)
+    const ConvexHull corner = ConvexHull::build({X}), segment = ConvexHull::build({s0, s1}),
+                     triangle = ConvexHull::build({X, v[0], v[1]});
+    ConvexShape A, B;
+    Real m = Real(k);  // hulls have no radius: the whole distance is margin
+    switch (i % 3) {
+      case 0: A = ConvexShape(Triangle{X, v[0], v[1]}); B = ConvexShape(segment); break;
+      case 1: A = ConvexShape(corner); B = ConvexShape(segment); break;
+      default: {
+        const Real margin = Real(integer(0, 1));
+        m = margin;
+        A = ConvexShape(triangle);
+        B = ConvexShape(Capsule{s0, s1, Real(k) - margin});
+        break;
+      }
+    }
+    ++built;
+    std::ostringstream what;
+    what << "case " << i % 3 << ": X " << X.transpose() << " | " << v[0].transpose() << " | " << v[1].transpose()
+         << ", segment " << s0.transpose() << " -> " << s1.transpose() << " k " << k << " margin " << m;
+    ContactManifold out;
+    if (contacts(A, Transform::identity(), B, Transform::identity(), m, out)) {
+      for (int j = 0; j < out.count; ++j) EXPECT_LE(out.points[j].separation, m) << what.str();
+    } else if (++missed == 1) {
+      first = what.str();
+    }
+    if (m >= 1) falseHits += contacts(A, Transform::identity(), B, Transform::identity(), m - Real(0.5), out);
+  }
+  std::printf("%d touching pairs built\n", built);
+  EXPECT_GT(built, cases / 2);
+  EXPECT_EQ(missed, 0) << first;
+  EXPECT_EQ(falseHits, 0);
+}
+
 // A manifold is never shallower than the closest (deepest) pair beyond the face snapping's
 // allowance: the overlap along any direction is at least the minimum, so a reference face within
 // 2° of the contact normal measures its deepest support point at least as deep, unless the clip
