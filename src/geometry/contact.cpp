@@ -6,6 +6,7 @@
 
 #include <crux/error.hpp>
 #include <crux/geometry/overlap.hpp>
+#include <crux/geometry/predicates.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -279,6 +280,76 @@ void validateContactMargin(Real margin) {
     throw InvalidInput("margin: expected a finite contact margin >= 0, got " + std::to_string(double(margin)));
 }
 
+namespace {
+
+/// Calls f(a, b, c) on the triangles of a placed polytope's boundary (a box's 12, each face of a
+/// hull fanned from its first vertex), in world coordinates, until f returns true; returns
+/// whether it did.
+template <class F>
+bool anyBoundaryTriangle(const Placed& s, const F& f) {
+  if (s.shape->kind == ConvexKind::Box) {
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      for (int side = 0; side < 2; ++side) {
+        const int base = side << a;  // corner i: bit k set for +half along axis k (Placed::vertex)
+        const V3 q0 = s.vertex(base), q1 = s.vertex(base | 1 << b), q2 = s.vertex(base | 1 << b | 1 << c),
+                 q3 = s.vertex(base | 1 << c);
+        if (f(q0, q1, q2) || f(q0, q2, q3)) return true;
+      }
+    }
+    return false;
+  }
+  const ConvexHull& h = *s.shape->hull;
+  const auto& loop = h.faceVertices();
+  for (const HullFace& face : h.faces()) {
+    const V3 q0 = s.vertex(int(loop[face.first]));
+    for (std::uint32_t i = 1; i + 1 < face.count; ++i)
+      if (f(q0, s.vertex(int(loop[face.first + i])), s.vertex(int(loop[face.first + i + 1])))) return true;
+  }
+  return false;
+}
+
+/// Whether the placed polytope (a box or a solid hull) holds x, its boundary included, by the
+/// exact side of x against every boundary triangle's plane compared with an interior point's.
+/// False for a polytope without interior (a flat box, a planar hull): its boundary triangles
+/// then cover all of it.
+bool polytopeHolds(const Placed& s, const V3& x) {
+  V3 centre = V3::Zero();
+  if (s.shape->kind == ConvexKind::Box) {
+    if (!(s.half.minCoeff() > 0)) return false;
+    centre = s.p[0];
+  } else {
+    if (s.shape->hull->dimension() < 3) return false;
+    for (int i = 0; i < s.vertexCount(); ++i) centre += s.vertex(i);
+    centre /= double(s.vertexCount());
+  }
+  return !anyBoundaryTriangle(s, [&](const V3& a, const V3& b, const V3& c) {
+    const int sx = predicates::orient3dExact(a, b, c, x);
+    return sx != 0 && sx != predicates::orient3dExact(a, b, c, centre);  // beyond this face's plane
+  });
+}
+
+/// The exact margin decision of a polytope (box or hull) P against a core of 1-3 points q: within
+/// rP + rQ + margin of each other. q's first point inside P, or a boundary triangle of P within
+/// that distance of q (withinDistance; triangles whose box is beyond it, by a conservative box
+/// test with `slack`, skipped).
+bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, double margin, double slack) {
+  if (polytopeHolds(P, q[0])) return true;
+  V3 lo = q[0], hi = q[0];
+  for (int i = 1; i < nq; ++i) lo = lo.cwiseMin(q[i]), hi = hi.cwiseMax(q[i]);
+  const double reach = rP + rQ + margin + slack;
+  lo.array() -= reach;
+  hi.array() += reach;
+  return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
+    if ((a.cwiseMin(b).cwiseMin(c).array() > hi.array()).any() || (a.cwiseMax(b).cwiseMax(c).array() < lo.array()).any())
+      return false;
+    const V3 t[3] = {a, b, c};
+    return withinDistance(t, 3, q, nq, rP, rQ, margin);
+  });
+}
+
+}  // namespace
+
 bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
               ContactManifold& out) {
   out.count = 0;
@@ -312,7 +383,19 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
               double(dr.distance), m, band, [&] { return withinDistance(pa, na, pb, nb, A.radius, B.radius, m); },
               clampToMargin))
         return false;
-    } else if (!(dr.distance <= margin)) {
+    } else if (na > 0 || nb > 0) {
+      // a box or larger hull against a core of 1-3 points: its boundary triangles (and whether it
+      // holds the core) decide exactly
+      const bool polytopeIsA = na == 0;
+      if (!contact_detail::withinMargin(
+              double(dr.distance), m, band,
+              [&] {
+                return polytopeIsA ? polytopeWithin(A, pb, nb, A.radius, B.radius, m, band)
+                                   : polytopeWithin(B, pa, na, B.radius, A.radius, m, band);
+              },
+              clampToMargin))
+        return false;
+    } else if (!(dr.distance <= margin)) {  // two polytopes: GJK's decision
       return false;
     }
   }

@@ -67,8 +67,9 @@ bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius
 /// The general form: two cores of 1 to 3 points each (a point, a segment, a triangle;
 /// coincident or collinear points classified exactly) within radiusA + radiusB + margin of each
 /// other (two triangles: 0 when they meet, else a corner against the other or two edges). The
-/// convex pair contacts (contact.hpp) ask it for spheres, capsules, triangles and hulls of <= 3
-/// vertices near the margin.
+/// convex pair contacts (contact.hpp) ask it near the margin for cores of 1-3 points (spheres,
+/// capsules, triangles, hulls of <= 3 vertices), against each other or against a box's or
+/// larger hull's boundary triangles.
 /// Throws InvalidInput for other point counts.
 bool withinDistance(const WVec3* a, int na, const WVec3* b, int nb, Wide radiusA, Wide radiusB, Wide margin);
 
