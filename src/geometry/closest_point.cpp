@@ -25,6 +25,10 @@ WVec3 closestOnSegment(const WVec3& a, const WVec3& b, const WVec3& p) {
   return a + ab * (t / len2);  // 0 < t < len2, so len2 > 0
 }
 
+/// Height / longest edge below which closestOnTriangle also takes the boundary's nearest point
+/// (the region tests of a thinner triangle can pick the wrong region).
+constexpr Wide kSliverHeightRelative = Wide(1e-3);
+
 /// The nearest of the three edges' closest points: the fallback for a triangle too thin for its
 /// plane normal to be formed in Wide (|n|² underflows), where the boundary is the whole set up
 /// to rounding.
@@ -82,7 +86,19 @@ WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
     case predicates::TriangleKind::Triangle:
       break;
   }
-  return closestOnProperTriangle(wide(t.a), wide(t.b), wide(t.c), p);
+  const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
+  const WVec3 q = closestOnProperTriangle(a, b, c, p);
+  // A sliver (height below kSliverHeightRelative of its longest edge): the region tests' products
+  // cancel (fuzz_geometry: an edge of 1.6e-28 against edges of 75 read its dot products with
+  // p − a and p − b, ±|ab|² exactly, as 0, and the tiny edge's region was taken, 110 from p with
+  // a corner 66 from it). Every point of a sliver is within its height of the boundary, so the
+  // nearer of q and the nearest boundary point is the answer.
+  const Wide longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+  if ((b - a).cross(c - a).squaredNorm() <= kSliverHeightRelative * kSliverHeightRelative * longest2 * longest2) {
+    const WVec3 r = closestOnBoundary(a, b, c, p);
+    if ((r - p).squaredNorm() < (q - p).squaredNorm()) return r;
+  }
+  return q;
 }
 
 WVec3 closestOnRay(const Ray& r, const WVec3& p) {

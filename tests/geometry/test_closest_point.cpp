@@ -143,6 +143,24 @@ TEST(ClosestPointTriangle, NearlyCollinearSliverIsFinite) {
   EXPECT_TRUE(std::isfinite(squaredDistance(t, Vec3(1, 1, 0))));
 }
 
+TEST(ClosestPointTriangle, SliverWithATinyEdgeIsNotTakenForThatEdge) {
+  // Found by fuzz_geometry: an edge of ~1.6e-28 against edges of ~75. In double the region tests'
+  // products for the tiny edge (its dot products with p − a and p − b, exactly ±|ab|² in exact
+  // arithmetic) round to 0, and RTCD's edge-AB test took the tiny edge's region: the answer was
+  // corner a, 110 from p, while corner c is 66 from it.
+  const Triangle t{Vec3(Real(-1.4012984643248171e-45), Real(1.1443742118159064e-28), Real(1.1443742118159064e-28)),
+                   Vec3(Real(1.1443742118159064e-28), Real(1.1443742118159064e-28), Real(-1.4012984643248171e-45)),
+                   Vec3(Real(0.049000002443790436), -53, -53)};
+  const Vec3 p(-64, -64, -64);
+  const Vec3 q = closestPoint(t, p);
+  const double dq = (q - p).cast<double>().norm();
+  for (int i = 0; i < 3; ++i) EXPECT_LE(dq, (t[i] - p).cast<double>().norm() * (1 + 1e-6)) << "corner " << i;
+  // the triangle is within 1e-27 of its long edge a → c: the closest point of that segment
+  const Vec3 s = closestPoint(Segment{t.a, t.c}, p);
+  EXPECT_NEAR(dq, (s - p).cast<double>().norm(), 1e-4);
+  EXPECT_NEAR(double(squaredDistance(t, p)), (s - p).cast<double>().squaredNorm(), 1e-2);
+}
+
 // ---- other shapes: regressions ----------------------------------------------------------------
 
 TEST(ClosestPointSegment, StartEqualsEndIsAPoint) {
