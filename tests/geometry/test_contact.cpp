@@ -791,12 +791,8 @@ TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
     long k = 0;
     if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
     ++built;
-    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);  // X towards the foot, scaled
-    Vec3 v[2];
-    for (Vec3& c : v) {
-      do c = X + point(4);
-      while (double(n.dot(c - X)) > 0);
-    }
+    const Vec3 n = test::towardsFoot(X, s0, d);
+    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
     const Real margin = Real(integer(0, 1)), rest = Real(k) - margin;  // radii sum to rest
     const Real rA = Real(integer(0, int(rest))), rB = rest - rA;
     ConvexShape A, B;
@@ -839,12 +835,8 @@ TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
     Vec3 s0, d;
     long k = 0;
     if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
-    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);  // X towards the foot, scaled
-    Vec3 v[2];
-    for (Vec3& c : v) {
-      do c = X + point(4);
-      while (double(n.dot(c - X)) > 0);
-    }
+    const Vec3 n = test::towardsFoot(X, s0, d);
+    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
     const Vec3 s1 = s0 + d;
     // (a ConvexShape views its hull: the hulls live here)
     const ConvexHull corner = ConvexHull::build({X}), segment = ConvexHull::build({s0, s1}),
@@ -898,19 +890,14 @@ TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
     Vec3 s0, d;
     long k = 0;
     if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
-    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);  // X towards the foot, scaled
+    const Vec3 n = test::towardsFoot(X, s0, d);
     const Vec3 s1 = s0 + d;
     const Vec3 half(Real(integer(1, 3)), Real(integer(1, 3)), Real(integer(1, 3)));
     Vec3 sign;
     for (int a = 0; a < 3; ++a) sign[a] = n[a] > 0 ? -1 : n[a] < 0 ? 1 : (integer(0, 1) ? 1 : -1);
     const Obb box{X + sign.cwiseProduct(half), half, Mat3::Identity()};
     std::vector<Vec3> pts{X};
-    for (int j = 0; j < 3 + i % 3; ++j) {
-      Vec3 w;
-      do w = X + point(4);
-      while (double(n.dot(w - X)) > 0);
-      pts.push_back(w);
-    }
+    for (int j = 0; j < 3 + i % 3; ++j) pts.push_back(test::pointBehind(point, X, n));
     const ConvexHull hull = ConvexHull::build(pts);
     if (hull.vertices().size() <= 3) continue;
     ++built;

@@ -566,12 +566,8 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
       long k = 0;
       if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
       // the far half-space: (y - X)·(foot - X) <= 0, with foot - X = (s0 - X) + t·d scaled by |d|²
-      const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
-      Vec3 v[2];
-      for (Vec3& c : v) {
-        do c = X + point(4);
-        while (double(n.dot(c - X)) > 0);
-      }
+      const Vec3 n = test::towardsFoot(X, s0, d);
+      Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
       if (i % 6 == 0) v[1] = v[0];  // a segment triangle (a point when v[0] == X)
       const Triangle tri{X, v[0], v[1]};
       degenerate += (v[1] - X).cross(v[0] - X).squaredNorm() == 0;
@@ -622,7 +618,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
     long k = 0;
     if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
     // beyond the plane through the foot normal to X → foot: n·(c − X) >= |d|²k² (n = |d|²(foot − X))
-    const Vec3 n = (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
+    const Vec3 n = test::towardsFoot(X, s0, d);
     Vec3 c;
     int tries = 0;
     do c = s0 + point(4);
@@ -644,11 +640,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
     EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
     falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
     // the same pair as a capsule (the segment) against a triangle cornered at the sphere's centre
-    Vec3 v[2];
-    for (Vec3& w : v) {
-      do w = X + point(4);
-      while (double(n.dot(w - X)) > 0);  // the far half-space from the segment (see the grid test)
-    }
+    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
     const Triangle corner{centre, v[0] + offset, v[1] + offset};
     const Vec3 p0 = s0 + offset, p1 = s0 + d + offset;
     if (!capsuleTriangleContacts(corner, p0, p1, radius, margin, m) && ++missed == 1) {

@@ -31,4 +31,21 @@ bool segmentAtIntegerDistance(Point& point, const Vec3& X, Vec3& s0, Vec3& d, lo
   return false;
 }
 
+/// |d|²·(foot − X), integer: from X towards the nearest point (foot) of the line s0 + t·d.
+inline Vec3 towardsFoot(const Vec3& X, const Vec3& s0, const Vec3& d) {
+  return (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
+}
+
+/// A random integer point X + point(r) behind X as seen from the foot: n·(c − X) <= 0 with n =
+/// towardsFoot(...). The line lies in the plane parallel to n·(y − X) = 0 at distance k (|foot −
+/// X|), so every such point is at least k from it, and a convex shape of X and such points is
+/// exactly k from the segment, at X.
+template <class Point>
+Vec3 pointBehind(Point& point, const Vec3& X, const Vec3& n, int r = 4) {
+  Vec3 c;
+  do c = X + point(r);
+  while (double(n.dot(c - X)) > 0);
+  return c;
+}
+
 }  // namespace crux::test
