@@ -801,21 +801,19 @@ struct TouchingTally {
 // either way; before the exact margin decision in contacts() some of these were missed
 // (distance 4.4e-16 or 1 + 2e-16 with margin 0 or 1).
 TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
-  std::mt19937_64 rng(0x5eed9u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0x5eed9u);
   const int cases = 2000;
   TouchingTally tally;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = point(5);
+    const Vec3 X = draws.point(5);
     Vec3 s0, d;
     long k = 0;
-    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
     ++tally.built;
     const Vec3 n = test::towardsFoot(X, s0, d);
-    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
-    const Real margin = Real(integer(0, 1)), rest = Real(k) - margin;  // radii sum to rest
-    const Real rA = Real(integer(0, int(rest))), rB = rest - rA;
+    const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
+    const Real margin = Real(draws.integer(0, 1)), rest = Real(k) - margin;  // radii sum to rest
+    const Real rA = Real(draws.integer(0, int(rest))), rB = rest - rA;
     ConvexShape A, B;
     switch (i % 4) {
       case 0: A = ConvexShape(Triangle{X, v[0], v[1]}); B = ConvexShape(Capsule{s0, Vec3(s0 + d), rest}); break;
@@ -837,18 +835,16 @@ TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
 // triangles' (before session 10 they kept GJK's decision and a triangle hull 5 from a capsule of
 // radius 5 at margin 0 was missed).
 TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
-  std::mt19937_64 rng(0x4a11u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0x4a11u);
   const int cases = test::scaledCases(3000, 600);
   TouchingTally tally;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = point(5);
+    const Vec3 X = draws.point(5);
     Vec3 s0, d;
     long k = 0;
-    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
     const Vec3 n = test::towardsFoot(X, s0, d);
-    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
+    const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Vec3 s1 = s0 + d;
     // (a ConvexShape views its hull: the hulls live here)
     const ConvexHull corner = ConvexHull::build({X}), segment = ConvexHull::build({s0, s1}),
@@ -859,7 +855,7 @@ TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
       case 0: A = ConvexShape(Triangle{X, v[0], v[1]}); B = ConvexShape(segment); break;
       case 1: A = ConvexShape(corner); B = ConvexShape(segment); break;
       default: {
-        const Real margin = Real(integer(0, 1));
+        const Real margin = Real(draws.integer(0, 1));
         m = margin;
         A = ConvexShape(triangle);
         B = ConvexShape(Capsule{s0, s1, Real(k) - margin});
@@ -881,30 +877,28 @@ TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
 // contacts() decides their margin exactly too (the polytope's boundary triangles and whether it
 // holds the core; 172 box and 105 tetrahedron pairs of 40,000 were missed by GJK's decision).
 TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
-  std::mt19937_64 rng(0xb0c5u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0xb0c5u);
   const int cases = test::scaledCases(4000, 600);
   int built = 0, missed = 0, falseHits = 0;
   std::string first;
   const Transform I = Transform::identity();
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = point(5);
+    const Vec3 X = draws.point(5);
     Vec3 s0, d;
     long k = 0;
-    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
     const Vec3 n = test::towardsFoot(X, s0, d);
     const Vec3 s1 = s0 + d;
-    const Vec3 half(Real(integer(1, 3)), Real(integer(1, 3)), Real(integer(1, 3)));
+    const Vec3 half(Real(draws.integer(1, 3)), Real(draws.integer(1, 3)), Real(draws.integer(1, 3)));
     Vec3 sign;
-    for (int a = 0; a < 3; ++a) sign[a] = n[a] > 0 ? -1 : n[a] < 0 ? 1 : (integer(0, 1) ? 1 : -1);
+    for (int a = 0; a < 3; ++a) sign[a] = n[a] > 0 ? -1 : n[a] < 0 ? 1 : (draws.integer(0, 1) ? 1 : -1);
     const Obb box{X + sign.cwiseProduct(half), half, Mat3::Identity()};
     std::vector<Vec3> pts{X};
-    for (int j = 0; j < 3 + i % 3; ++j) pts.push_back(test::pointBehind(point, X, n));
+    for (int j = 0; j < 3 + i % 3; ++j) pts.push_back(test::pointBehind(draws, X, n));
     const ConvexHull hull = ConvexHull::build(pts);
     if (hull.vertices().size() <= 3) continue;
     ++built;
-    const Real margin = Real(integer(0, 1)), radius = Real(k) - margin;
+    const Real margin = Real(draws.integer(0, 1)), radius = Real(k) - margin;
     for (int which = 0; which < 4; ++which) {
       const ConvexShape P = which % 2 == 0 ? ConvexShape(box) : ConvexShape(hull);
       const bool capsule = which < 2;

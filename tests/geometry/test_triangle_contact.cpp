@@ -523,15 +523,13 @@ TEST(TriangleContact, CapsuleThroughTheFaceTakesTheMinimumTranslation) {
 //   parallel to the plane through X + k·u: the distance is k·L in the face region.
 // Also the withinDistance predicates directly. The first fails without the exact margin decision.
 TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
-  std::mt19937_64 rng(0x70c4u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0x70c4u);
   const int cases = test::scaledCases(3000, 300);
   int missed = 0, falseHits = 0, corner = 0, degenerate = 0;
   std::string first;
   auto check = [&](const char* kind, const Triangle& tri, const Vec3* centre, const Vec3& p0, const Vec3& p1,
                    Real reach) {
-    const Real margin = Real(integer(0, 1)), radius = reach - margin;
+    const Real margin = Real(draws.integer(0, 1)), radius = reach - margin;
     std::ostringstream what;
     what << kind << ": triangle " << tri.a.transpose() << " | " << tri.b.transpose() << " | " << tri.c.transpose()
          << ", radius " << radius << " margin " << margin << ", ";
@@ -559,15 +557,15 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
     falseHits += capsuleTriangleContacts(tri, p0, p1, radius - 1, margin, m);
   };
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = point(5);
+    const Vec3 X = draws.point(5);
     if (i % 2 == 0) {
       // corner: search a segment at an integer distance from X, its foot strictly inside
       Vec3 s0, d;
       long k = 0;
-      if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+      if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
       // the far half-space: (y - X)·(foot - X) <= 0, with foot - X = (s0 - X) + t·d scaled by |d|²
       const Vec3 n = test::towardsFoot(X, s0, d);
-      Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
+      Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
       if (i % 6 == 0) v[1] = v[0];  // a segment triangle (a point when v[0] == X)
       const Triangle tri{X, v[0], v[1]};
       degenerate += (v[1] - X).cross(v[0] - X).squaredNorm() == 0;
@@ -579,18 +577,18 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
         int x, y, z, length;
       };
       static const Quad quads[] = {{0, 3, 4, 5}, {1, 2, 2, 3}, {2, 3, 6, 7}, {1, 4, 8, 9}, {4, 4, 7, 9}, {2, 6, 9, 11}};
-      const Quad& q = quads[std::size_t(integer(0, 5))];
-      const Vec3 u(Real(q.x * (integer(0, 1) ? 1 : -1)), Real(q.y * (integer(0, 1) ? 1 : -1)),
-                   Real(q.z * (integer(0, 1) ? 1 : -1)));
-      Vec3 e1 = u.cross(point(2));
+      const Quad& q = quads[std::size_t(draws.integer(0, 5))];
+      const Vec3 u(Real(q.x * (draws.integer(0, 1) ? 1 : -1)), Real(q.y * (draws.integer(0, 1) ? 1 : -1)),
+                   Real(q.z * (draws.integer(0, 1) ? 1 : -1)));
+      Vec3 e1 = u.cross(draws.point(2));
       if (e1.squaredNorm() == 0) e1 = u.cross(Vec3(1, 0, 0)).squaredNorm() > 0 ? u.cross(Vec3(1, 0, 0)) : u.cross(Vec3(0, 1, 0));
       const Vec3 e2 = u.cross(e1);  // e1, e2: integer, normal to u and to each other
       const Vec3 a = X + Real(2) * e1, b = X - e1 + e2, c = X - e1 - e2;  // centroid X
       const Triangle tri{a, b, c};
-      const int k = integer(1, 2);
+      const int k = draws.integer(1, 2);
       const Vec3 centre = X + Real(k) * u;
       check("face", tri, &centre, centre, centre, Real(k * q.length));
-      const Vec3 p0 = centre - Real(integer(0, 2)) * e1, p1 = centre + Real(integer(1, 2)) * e1;
+      const Vec3 p0 = centre - Real(draws.integer(0, 2)) * e1, p1 = centre + Real(draws.integer(1, 2)) * e1;
       check("face", tri, nullptr, p0, p1, Real(k * q.length));
     }
   }
@@ -606,29 +604,28 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
 // more than a tolerance relative to the radius alone, so an early reject on the radius scale
 // would drop a touching pair the exact decision reports.
 TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
-  std::mt19937_64 rng(0xfa70u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0xfa70u);
   const int cases = test::scaledCases(2000, 300);
   int built = 0, missed = 0, falseHits = 0;
   std::string first;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = point(5);
+    const Vec3 X = draws.point(5);
     Vec3 s0, d;
     long k = 0;
-    if (!test::segmentAtIntegerDistance(point, X, s0, d, k)) continue;
+    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
     // beyond the plane through the foot normal to X → foot: n·(c − X) >= |d|²k² (n = |d|²(foot − X))
     const Vec3 n = test::towardsFoot(X, s0, d);
     Vec3 c;
     int tries = 0;
-    do c = s0 + point(4);
+    do c = s0 + draws.point(4);
     while (double(n.dot(c - X)) < double(d.squaredNorm()) * double(k * k) && ++tries < 1000);
     if (tries == 1000) continue;
-    const int scale = 1 << integer(12, 22);
-    const Vec3 offset(Real(scale * (integer(0, 1) ? 1 : -1)), Real(integer(-scale, scale)), Real(integer(-scale, scale)));
+    const int scale = 1 << draws.integer(12, 22);
+    const Vec3 offset(Real(scale * (draws.integer(0, 1) ? 1 : -1)), Real(draws.integer(-scale, scale)),
+                      Real(draws.integer(-scale, scale)));
     const Triangle tri{s0 + offset, s0 + d + offset, c + offset};
     const Vec3 centre = X + offset;
-    const Real margin = Real(integer(0, 1)), radius = Real(k) - margin;
+    const Real margin = Real(draws.integer(0, 1)), radius = Real(k) - margin;
     ++built;
     ContactManifold m;
     if (!sphereTriangleContacts(tri, centre, radius, margin, m) && ++missed == 1) {
@@ -640,7 +637,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
     EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
     falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
     // the same pair as a capsule (the segment) against a triangle cornered at the sphere's centre
-    const Vec3 v[2] = {test::pointBehind(point, X, n), test::pointBehind(point, X, n)};
+    const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Triangle corner{centre, v[0] + offset, v[1] + offset};
     const Vec3 p0 = s0 + offset, p1 = s0 + d + offset;
     if (!capsuleTriangleContacts(corner, p0, p1, radius, margin, m) && ++missed == 1) {

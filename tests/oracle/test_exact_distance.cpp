@@ -27,6 +27,7 @@
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 #include <exact/exact.hpp>
+#include <support/grid_touching.hpp>
 #include <support/test_scale.hpp>
 
 #include <algorithm>
@@ -653,19 +654,17 @@ TEST(ExactMeshDistance, TreeSearchEqualsTheMinimumOverEveryTrianglePair) {
 // an integer (so many pairs sit exactly at it). The predicate decides the convex pair and
 // sphere/capsule-triangle contacts at the margin (docs/narrowphase.md).
 TEST(WithinDistance, EqualsTheExactContactsVerdictOnTheGrid) {
-  std::mt19937_64 rng(0x3e5e0000u);
-  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
-  auto point = [&](int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); };
+  test::GridDraws draws(0x3e5e0000u);
   const int cases = test::scaledCases(600, 120);
   int atTheMargin = 0, within = 0;
   for (int i = 0; i < cases; ++i) {
     Vec3 pa[3], pb[3];
-    const int na = integer(1, 3), nb = integer(1, 3);
-    for (Vec3& v : pa) v = point(3);
-    for (Vec3& v : pb) v = point(3) + Vec3(Real(integer(0, 4)), 0, 0);
-    if (integer(0, 4) == 0) pa[2] = pa[1];  // degenerate cores now and then
-    if (integer(0, 4) == 0) pb[1] = pb[0];
-    const Real ra = na == 3 ? Real(0) : Real(integer(0, 1)), rb = nb == 3 ? Real(0) : Real(integer(0, 1));
+    const int na = draws.integer(1, 3), nb = draws.integer(1, 3);
+    for (Vec3& v : pa) v = draws.point(3);
+    for (Vec3& v : pb) v = draws.point(3) + Vec3(Real(draws.integer(0, 4)), 0, 0);
+    if (draws.integer(0, 4) == 0) pa[2] = pa[1];  // degenerate cores now and then
+    if (draws.integer(0, 4) == 0) pb[1] = pb[0];
+    const Real ra = na == 3 ? Real(0) : Real(draws.integer(0, 1)), rb = nb == 3 ? Real(0) : Real(draws.integer(0, 1));
     auto shape = [](const Vec3* p, int n, Real r) {
       return n == 1 ? ConvexShape(Sphere{p[0], r}) : n == 2 ? ConvexShape(Capsule{p[0], p[1], r}) : ConvexShape(Triangle{p[0], p[1], p[2]});
     };
@@ -686,6 +685,48 @@ TEST(WithinDistance, EqualsTheExactContactsVerdictOnTheGrid) {
   std::printf("%d core pairs, %d within the margin, %d exactly at it\n", cases, within, atTheMargin);
   EXPECT_GT(atTheMargin, cases / 20);
   EXPECT_THROW(withinDistance(nullptr, 0, nullptr, 1, 0, 0, 0), InvalidInput);
+}
+
+// contacts() of a box or a hull of 4-6 points against a core of 1-3 points (sphere, capsule,
+// triangle) against the exact backend's verdict, on the grid with the margin the exact distance
+// rounded to an integer (many pairs exactly at it): the polytope's exact margin decision
+// (boundary triangles and containment, contact.cpp) where the GJK distance is within rounding.
+TEST(ExactContacts, PolytopeAgainstACoreEqualsTheExactVerdictOnTheGrid) {
+  test::GridDraws draws(0x9017e5u);
+  const int cases = test::scaledCases(600, 120);
+  int atTheMargin = 0, within = 0, hulls = 0;
+  for (int i = 0; i < cases; ++i) {
+    std::vector<Vec3> pts;
+    for (int j = draws.integer(4, 6); j > 0; --j) pts.push_back(draws.point(3));
+    const ConvexHull hull = ConvexHull::build(pts);
+    const Obb box{draws.point(3), Vec3(Real(draws.integer(1, 3)), Real(draws.integer(0, 2)), Real(draws.integer(1, 2))), Mat3::Identity()};
+    const bool useHull = i % 2 == 1 && hull.vertices().size() > 3;
+    hulls += useHull;
+    const ConvexShape P = useHull ? ConvexShape(hull) : ConvexShape(box);
+    Vec3 q[3];
+    for (Vec3& v : q) v = draws.point(3) + Vec3(Real(draws.integer(2, 6)), 0, 0);
+    const int nq = draws.integer(1, 3);
+    const Real r = nq == 3 ? Real(0) : Real(draws.integer(0, 1));
+    const ConvexShape Q = nq == 1 ? ConvexShape(Sphere{q[0], r})
+                          : nq == 2 ? ConvexShape(Capsule{q[0], q[1], r})
+                                    : ConvexShape(Triangle{q[0], q[1], q[2]});
+    const Transform I = Transform::identity();
+    const double d = exact::distance(P, I, Q, I).distance;
+    const Real margin = Real(std::max(0.0, std::round(d)));
+    const bool exactWithin = !exact::contacts(P, I, Q, I, double(margin)).empty();
+    atTheMargin += d == double(margin);
+    within += exactWithin;
+    ContactManifold m;
+    const std::string what = "case " + std::to_string(i) + (useHull ? ": hull" : ": box") + " vs a core of " +
+                             std::to_string(nq) + " points, margin " + std::to_string(double(margin)) +
+                             ", exact distance " + str(d);
+    EXPECT_EQ(contacts(P, I, Q, I, margin, m), exactWithin) << what;
+    EXPECT_EQ(contacts(Q, I, P, I, margin, m), exactWithin) << "(swapped) " << what;
+  }
+  std::printf("%d polytope-core pairs (%d hulls), %d within the margin, %d exactly at it\n", cases, hulls, within,
+              atTheMargin);
+  EXPECT_GT(atTheMargin, cases / 20);
+  EXPECT_GT(hulls, cases / 4);
 }
 
 }  // namespace

@@ -5,8 +5,20 @@
 #include <crux/math.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 
 namespace crux::test {
+
+/// The grid tests' seeded draws: integer(lo, hi), and point(r), an integer point within r per
+/// coordinate (also as operator(), the `point` callable the functions below take).
+struct GridDraws {
+  explicit GridDraws(std::uint64_t seed) : rng(seed) {}
+  int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); }
+  Vec3 point(int r) { return Vec3(Real(integer(-r, r)), Real(integer(-r, r)), Real(integer(-r, r))); }
+  Vec3 operator()(int r) { return point(r); }
+  std::mt19937_64 rng;
+};
 
 /// Searches a segment s0 + t·d (integer points, from `point(r)`: a random integer point within r
 /// per coordinate) whose nearest point to the integer point X is strictly inside it, at t =
