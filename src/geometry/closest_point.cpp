@@ -7,8 +7,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/predicates.hpp>
+
+#include "geometry/closest_point_internal.hpp"
 
 namespace crux {
 namespace {
@@ -24,10 +28,6 @@ WVec3 closestOnSegment(const WVec3& a, const WVec3& b, const WVec3& p) {
   if (t >= len2) return b;
   return a + ab * (t / len2);  // 0 < t < len2, so len2 > 0
 }
-
-/// Height / longest edge below which closestOnTriangle also takes the boundary's nearest point
-/// (the region tests of a thinner triangle can pick the wrong region).
-constexpr Wide kSliverHeightRelative = Wide(1e-3);
 
 /// The nearest of the three edges' closest points: the fallback for a triangle too thin for its
 /// plane normal to be formed in Wide (|n|² underflows), where the boundary is the whole set up
@@ -87,18 +87,14 @@ WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
       break;
   }
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
-  const WVec3 q = closestOnProperTriangle(a, b, c, p);
-  // A sliver (height below kSliverHeightRelative of its longest edge): the region tests' products
-  // cancel (fuzz_geometry: an edge of 1.6e-28 against edges of 75 read its dot products with
-  // p − a and p − b, ±|ab|² exactly, as 0, and the tiny edge's region was taken, 110 from p with
-  // a corner 66 from it). Every point of a sliver is within its height of the boundary, so the
-  // nearer of q and the nearest boundary point is the answer.
   const Wide longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-  if ((b - a).cross(c - a).squaredNorm() <= kSliverHeightRelative * kSliverHeightRelative * longest2 * longest2) {
-    const WVec3 r = closestOnBoundary(a, b, c, p);
-    if ((r - p).squaredNorm() < (q - p).squaredNorm()) return r;
+  constexpr Wide k = closest_detail::kSliverHeightRelative;
+  if ((b - a).cross(c - a).squaredNorm() <= k * k * longest2 * longest2) {
+    WVec3 q;
+    closest_detail::closestOnSliver(a, b, c, p, q);
+    return q;
   }
-  return q;
+  return closestOnProperTriangle(a, b, c, p);
 }
 
 WVec3 closestOnRay(const Ray& r, const WVec3& p) {
@@ -206,3 +202,59 @@ Real squaredDistance(const Plane& pl, const Vec3& p) {
 }
 
 }  // namespace crux
+
+namespace crux::closest_detail {
+
+int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                    const Eigen::Vector3d& p, Eigen::Vector3d& q) {
+  using V = Eigen::Vector3d;
+  constexpr double kMinSine = 1e-7, kInsideSlackUlps = 64;
+  const V v[3] = {a, b, c};
+  const double len2[3] = {(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};  // edge i: v[i] -> v[i+1]
+  // the nearest boundary point (RTCD 5.1.2 per edge), with its region
+  // (the nearest point of x on the three edges, its squared distance and region)
+  auto boundary = [&](const V& x, V& nearest) {
+    double best = std::numeric_limits<double>::infinity();
+    int region = 3;
+    for (int i = 0; i < 3; ++i) {
+      const V e = v[(i + 1) % 3] - v[i];
+      const double t = (x - v[i]).dot(e);
+      V y;
+      int r = i;
+      if (t <= 0) y = v[i], r = 3 + i;
+      else if (t >= len2[i]) y = v[(i + 1) % 3], r = 3 + (i + 1) % 3;
+      else y = v[i] + e * (t / len2[i]);  // 0 < t < len2: len2 > 0
+      const double d2 = (y - x).squaredNorm();
+      if (d2 < best) best = d2, nearest = y, region = r;
+    }
+    return std::make_pair(best, region);
+  };
+  const auto [best, region] = boundary(p, q);
+  const int longest = len2[0] >= len2[1] ? (len2[0] >= len2[2] ? 0 : 2) : (len2[1] >= len2[2] ? 1 : 2);
+  const int o = (longest + 2) % 3;  // the corner opposite the longest edge
+  // (v[o+1] − v[o]) × (v[o+2] − v[o]): the normal (b − a) × (c − a), cyclically; |n| = |e||e'|·sine
+  const V n = (v[(o + 1) % 3] - v[o]).cross(v[(o + 2) % 3] - v[o]);
+  const double nn = n.squaredNorm();
+  if (!(nn > kMinSine * kMinSine * len2[(o + 2) % 3] * len2[o])) return region;
+  const V f = p - n * (n.dot(p - v[o]) / nn);
+  const double scale = std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(), c.cwiseAbs().maxCoeff(),
+                                 p.cwiseAbs().maxCoeff()});
+  const double slack = kInsideSlackUlps * std::numeric_limits<double>::epsilon() * scale;
+  for (int i = 0; i < 3; ++i) {
+    const V e = v[(i + 1) % 3] - v[i];
+    // |e||n| × the signed distance of f from edge i's line, in the plane, positive inside
+    if (e.cross(f - v[i]).dot(n) < -slack * std::sqrt(nn * len2[i])) return region;
+  }
+  // Within the slack of every edge's half-plane is not yet near the triangle: beyond a needle's
+  // sharp corner the two long edges' half-planes stay within the slack for a long way (fuzz_geometry:
+  // p projected 2.7 beyond the corner of a needle of width 6e-14). Every point of the triangle is
+  // within half its height of the boundary.
+  V fNearest;
+  const double halfHeight = 0.5 * std::sqrt(nn / len2[longest]) + slack;
+  if (!(boundary(f, fNearest).first <= halfHeight * halfHeight)) return region;
+  if (!((f - p).squaredNorm() < best)) return region;
+  q = f;
+  return -1;
+}
+
+}  // namespace crux::closest_detail

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "geometry/bits.hpp"
+#include "geometry/closest_point_internal.hpp"
 #include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
@@ -249,12 +250,15 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
   }
   // t.finish(ab, ac) from the locals
   t.len = mm.norm();
-  t.degenerate = !(t.len > kTriangleContactDegenerateRelative *
-                               std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()}));
+  const double longest2 = std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()});
+  t.degenerate = !(t.len > kTriangleContactDegenerateRelative * longest2);
   region = SphereTriangleContact::kDegenerate;
   if (!t.degenerate) {
-    region = closestRegionOnTriangle(a, b, c, p, q);
-    if (region == SphereTriangleContact::kFace) {  // exact projection: distance and normal from the plane, not from q - p
+    // a sliver takes no region tests (they cancel: closest_detail::closestOnSliver), and its
+    // face point comes from there (the better-conditioned normal), not from the plane of mm
+    const bool sliver = t.len <= closest_detail::kSliverHeightRelative * longest2;
+    region = sliver ? closest_detail::closestOnSliver(a, b, c, p, q) : closestRegionOnTriangle(a, b, c, p, q);
+    if (region == SphereTriangleContact::kFace && !sliver) {  // exact projection: distance and normal from the plane, not from q - p
       const V3 mh = mm / t.len;
       const double h = mh.dot(p - a);
       d = std::abs(h);

@@ -230,8 +230,26 @@ void checkClosestOnTriangle(const Triangle& t, const Vec3& p) {
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
   const WVec3 n = (b - a).cross(c - a);
   const Wide longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
-  // Degenerate or sliver (height below 1e-3 of the longest edge): skip the in-triangle test.
-  if (!(n.norm() > 1e-3 * longest * longest)) return;
+  // Degenerate or sliver (height below 1e-3 of the longest edge): the in-triangle test's edge
+  // normals are noise. Every point of a triangle is within half its height h of the boundary, so
+  // q must be that near the boundary and no nearer to p than the boundary is minus h/2 (a
+  // projection onto the plane 0.016 off a sliver passed the corner test above).
+  if (!(n.norm() > 1e-3 * longest * longest)) {
+    const Wide halfHeight = longest > 0 ? Wide(0.5) * n.norm() / longest : Wide(0);
+    const auto toBoundary = [&](const WVec3& x) {
+      Wide d = std::numeric_limits<Wide>::infinity();
+      for (int i = 0; i < 3; ++i) {
+        const WVec3 u = wide(t[i]), e = wide(t[(i + 1) % 3]) - u;
+        const Wide l2 = e.squaredNorm();
+        const Wide s = l2 > 0 ? std::clamp((x - u).dot(e) / l2, Wide(0), Wide(1)) : Wide(0);
+        d = std::min(d, (u + s * e - x).norm());
+      }
+      return d;
+    };
+    if (toBoundary(wq) > halfHeight + tol) fail("closest point off the sliver" + where());
+    if (dq < toBoundary(wp) - halfHeight - tol) fail("closest point nearer than the sliver" + where());
+    return;
+  }
   const WVec3 un = n.normalized();
   if (std::abs(un.dot(wq - a)) > tol) fail("closest point off the triangle's plane" + where());
   const WVec3 corners[3] = {a, b, c};

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "exact/exact.hpp"
 #include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
@@ -159,6 +160,39 @@ TEST(ClosestPointTriangle, SliverWithATinyEdgeIsNotTakenForThatEdge) {
   const Vec3 s = closestPoint(Segment{t.a, t.c}, p);
   EXPECT_NEAR(dq, (s - p).cast<double>().norm(), 1e-4);
   EXPECT_NEAR(double(squaredDistance(t, p)), (s - p).cast<double>().squaredNorm(), 1e-2);
+}
+
+// Slivers with a tiny edge (needles). (1) Found by a scratch search after session 10 (the fuzz
+// check skipped slivers' in-triangle test): a tiny edge near the origin (1e-17) against edges of
+// 0.07; RTCD's products vc, vb, va cancelled, the face region was taken and p was projected onto
+// the plane 0.016 off the triangle, nearer to p than any point of it. (2) Found by fuzz_geometry
+// with the sliver check added: the fix's first inside test (each edge's half-plane within a
+// slack) let through p's projection 2.7 beyond the sharp corner of a needle 6e-14 wide, where the
+// two long edges' half-planes stay within the slack. Every point of a triangle lies within half
+// its height of the boundary, so the answer is on the triangle when it is that near the boundary,
+// and it is no nearer to p than the boundary's nearest point minus that half height.
+TEST(ClosestPointTriangle, SliverWithATinyEdgeGivesAPointOnIt) {
+  auto f = [](double x, double y, double z) { return Vec3(Real(float(x)), Real(float(y)), Real(float(z))); };
+  const std::pair<Triangle, Vec3> cases[] = {
+      {{f(0.0665027276, 0.00491674384, -0.0257796571), f(3.0587098e-18, -1.37824486e-17, -5.48197045e-19),
+        f(-2.65880437e-18, -1.47912483e-17, -1.12998703e-17)},
+       f(0.0375160649, -0.047955174, 0.00895366911)},
+      {{f(4, 0, 0), f(62, 5.8999998625835354e-14, -64), f(62, 0, -64)}, f(0, 0, 0)}};
+  for (const auto& [t, p] : cases) {
+    const Vec3 q = closestPoint(t, p);
+    auto boundary = [&](const Vec3& x) {
+      double d = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 3; ++i)
+        d = std::min(d, (closestPoint(Segment{t[i], t[(i + 1) % 3]}, x) - x).cast<double>().norm());
+      return d;
+    };
+    const Eigen::Vector3d a = t.a.cast<double>(), b = t.b.cast<double>(), c = t.c.cast<double>();
+    const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+    const double height = (b - a).cross(c - a).norm() / longest;
+    const double tol = 1e-6 * longest;
+    EXPECT_LE(boundary(q), height / 2 + tol) << "q off the triangle, p " << p.transpose();
+    EXPECT_GE((q - p).cast<double>().norm(), boundary(p) - height / 2 - tol) << "nearer to p than the triangle";
+  }
 }
 
 // ---- other shapes: regressions ----------------------------------------------------------------

@@ -384,6 +384,33 @@ TEST(TriangleContact, SphereCentreOnTheTriangleGetsMinusTheFrontNormal) {
   EXPECT_EQ(m.points[0].separation, Real(-1));
 }
 
+// Slivers (height below 1e-3 of the longest edge, above the degenerate threshold) with a tiny edge
+// near the origin: RTCD's region tests cancel there. Found by a scratch search in double builds:
+// the face region was taken and the distance measured from the plane of (b − a) × (c − a), whose
+// direction the rounding tilts by ~1 %, so a sphere 0.00085 from the triangle was reported at
+// 0.00080 (deeper than it is). The separation must be the triangle's distance minus the radius,
+// that distance lying within half the sliver's height of the boundary's (computed here per edge).
+TEST(TriangleContact, SphereAgainstASliverWithATinyEdgeMeasuresTheTriangle) {
+  auto f = [](double x, double y, double z) { return Vec3(Real(float(x)), Real(float(y)), Real(float(z))); };
+  const Triangle t{f(-0.0922143372, 0.11088197, 0.117350176), f(9.92430456e-16, -4.73706923e-16, 5.76330799e-16),
+                   f(-1.57302142e-15, -1.69576038e-15, 2.22014493e-15)};
+  const Vec3 p = f(-0.0171521575, 0.020356842, 0.0205872674);
+  double boundary = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i)
+    boundary = std::min(boundary, (closestPoint(Segment{t[i], t[(i + 1) % 3]}, p) - p).cast<double>().norm());
+  const Eigen::Vector3d a = t.a.cast<double>(), b = t.b.cast<double>(), c = t.c.cast<double>();
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  const double halfHeight = 0.5 * (b - a).cross(c - a).norm() / longest;
+  const Real radius = Real(0.5 * boundary), margin = Real(0.6 * boundary);
+  SphereTriangleContact h;
+  ASSERT_TRUE(sphereTriangleContact(t, p, radius, margin, h));
+  const double tol = 1e-6 * boundary + halfHeight;  // float builds: the Real rounding of the inputs and output
+  EXPECT_NEAR(double(h.separation), boundary - double(radius), tol) << "region " << h.region;
+  ContactManifold m;
+  ASSERT_TRUE(sphereTriangleContacts(t, p, radius, margin, m));
+  EXPECT_NEAR(double(m.points[0].separation), boundary - double(radius), tol);
+}
+
 TEST(TriangleContact, SphereFarFromThePlaneIsRejected) {
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   ContactManifold m;

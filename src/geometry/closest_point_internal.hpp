@@ -1,0 +1,29 @@
+// The closest point of a sliver triangle, shared by closestPoint(Triangle) (closest_point.cpp)
+// and the sphere–triangle contact (triangle_contact.cpp), which also needs the point's region.
+#pragma once
+
+#include <crux/math.hpp>
+
+namespace crux::closest_detail {
+
+/// A triangle is a sliver when its height is below this × its longest edge (|(b−a)×(c−a)| <=
+/// this × longest²): RTCD 5.1.5's region tests can cancel on it (see closestOnSliver).
+inline constexpr double kSliverHeightRelative = 1e-3;
+
+/// Closest point q of the sliver triangle (a, b, c) to p, without RTCD's region tests, whose
+/// products cancel on slivers (fuzz_geometry: an edge of 1.6e-28 against edges of 75 read its
+/// dot products with p − a and p − b, ±|ab|² exactly, as 0, and its region was taken, 110 from p
+/// with a corner 66 from it; a scratch search: a tiny edge near the origin against edges of 0.07
+/// made vc, vb, va cancel, the face region was taken and p projected onto the plane 0.016 off the
+/// triangle, nearer to p than the triangle is). The nearest boundary point, or the projection of
+/// p onto the plane when it lies inside (each edge's half-plane within 64 ulps of the coordinates'
+/// scale) and is nearer; the plane's normal is the cross product of the two shorter edges (at the
+/// corner opposite the longest), which is well conditioned for a needle (one tiny edge). A flat
+/// cap (an angle near 180°) whose shorter edges' sine is below 1e-7 has a normal off by up to
+/// eps/sine: it is taken as its boundary, within half its height (< 1e-7 × its longest edge) of
+/// every point of it. Returns the region as SphereTriangleContact names it: −1 the face, i the
+/// edge from corner i to corner i+1 (mod 3), 3 + i corner i.
+int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                    const Eigen::Vector3d& p, Eigen::Vector3d& q);
+
+}  // namespace crux::closest_detail
