@@ -201,6 +201,13 @@ ConvexHull ConvexHull::build(const std::vector<Vec3>& input, const std::string& 
   }
   const double diag = (hi - lo).norm();
   const double tol = double(kHullRelativeTolerance) * diag;
+  // The build works on the points relative to their box's centre, on the hull's own scale: a
+  // plane test n·p − d at coordinates far larger than the hull rounds beyond tol (double builds:
+  // a hull of extent 50 at 2^18 from the origin came out with missing faces and ConvexShape
+  // contacts between touching hulls were missed). The difference of two doubles is rounded once,
+  // relative to the result.
+  const V3 origin = 0.5 * (lo + hi);
+  for (V3& q : pts) q -= origin;
 
   ConvexHull h;
   h.tolerance_ = static_cast<Real>(tol);
@@ -270,7 +277,7 @@ ConvexHull ConvexHull::build(const std::vector<Vec3>& input, const std::string& 
     h.dimension_ = 2;
     finish(loop);
     const auto m = static_cast<std::uint32_t>(loop.size());
-    const double off = pts[loop[0]].dot(n);
+    const double off = pts[loop[0]].dot(n) + n.dot(origin);
     h.faces_.push_back({n.cast<Real>(), static_cast<Real>(off), 0, m});
     h.faces_.push_back({(-n).cast<Real>(), static_cast<Real>(-off), m, m});
     for (std::uint32_t i = 0; i < m; ++i) h.faceVertices_.push_back(i);
@@ -376,7 +383,7 @@ ConvexHull ConvexHull::build(const std::vector<Vec3>& input, const std::string& 
       h.faceVertices_.push_back(remap[p]);
     }
     hf.normal = fn.cast<Real>();
-    hf.offset = static_cast<Real>(off);
+    hf.offset = static_cast<Real>(off + fn.dot(origin));
     h.faces_.push_back(hf);
   }
   finish(used);

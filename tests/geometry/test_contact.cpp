@@ -923,6 +923,72 @@ TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
   EXPECT_EQ(falseHits, 0);
 }
 
+// Two polytopes keep GJK's margin decision (contacts() decides exactly only against 1-3-point
+// cores): checked here on the integer grid where the closest features are not corners. Two hulls
+// (or an axis-aligned box and a hull) separated by a slab of integer-normed normal w (|w| = 3, 7,
+// 9, 11 or 5: Pythagorean quadruples and triples), touching its two planes at skew edges (edge–
+// edge: their projections along w cross at a rational, unrepresentable point), at a vertex and the
+// middle of a face, or at a face and a vertex; the distance is m·|w| exactly, at offsets up to
+// 2^21 from the origin (integer coordinates, exact in float). Every pair is reported at margin
+// m·|w|, in both operand orders; none at m·|w| − 0.5.
+TEST(ContactsIssue6, TouchingPolytopesOnTheIntegerGridHaveAContact) {
+  test::GridDraws draws(0x9017u);
+  using L3 = Eigen::Matrix<long, 3, 1>;
+  const L3 normals[] = {L3(1, 2, 2), L3(2, 3, 6), L3(1, 4, 8), L3(2, 6, 9), L3(4, 4, 7),
+                        L3(2, 10, 11), L3(6, 6, 7), L3(3, 4, 12), L3(0, 3, 4), L3(0, 0, 1)};
+  const long norms[] = {3, 7, 9, 11, 9, 15, 11, 13, 5, 1};
+  auto point = [](const L3& v) { return Vec3(Real(v.x()), Real(v.y()), Real(v.z())); };
+  auto draw = [&](int r) { return L3(draws.integer(-r, r), draws.integer(-r, r), draws.integer(-r, r)); };
+  const int cases = test::scaledCases(6000, 900);
+  TouchingTally tally;
+  for (int i = 0; i < cases; ++i) {
+    const int which = draws.integer(0, 9), kind = i % 4;  // edge-edge, vertex-face, face-vertex, box edge-edge
+    L3 w = normals[which];
+    const long wn = norms[which];
+    ASSERT_EQ(w.squaredNorm(), wn * wn);
+    for (int a = 0; a < 3; ++a)
+      if (draws.integer(0, 1)) w[a] = -w[a];
+    if (kind != 3) std::swap(w[draws.integer(0, 2)], w[draws.integer(0, 2)]);
+    else if (w.x() != 0) continue;  // the box's touching edge runs along x: w ⟂ x
+    // u, v: integer directions perpendicular to w (a box's edge: x), not parallel to each other
+    const L3 u = kind == 3 ? L3(draws.integer(1, 3), 0, 0) : L3(w.cross(draw(3))), v = w.cross(draw(3));
+    if (u.squaredNorm() == 0 || v.squaredNorm() == 0 || u.cross(v).squaredNorm() == 0) continue;
+    const int big = 1 << draws.integer(0, 21);
+    const L3 X(draws.integer(-big, big), draws.integer(-big, big), draws.integer(-big, big));
+    const long m = draws.integer(0, 2);
+    const L3 Y = X + m * w;  // A touches the plane (p - X)·w = 0 from below, B the one through Y from above
+    std::vector<Vec3> a, b;
+    switch (kind) {
+      case 1: a = {point(X)}; b = {point(Y - u), point(Y + u), point(Y - v), point(Y + v)}; break;
+      case 2: a = {point(X - u), point(X + u), point(X - v), point(X + v)}; b = {point(Y)}; break;
+      default: a = {point(X - u), point(X + u)}; b = {point(Y - v), point(Y + v)}; break;
+    }
+    auto beyond = [&] {  // r − k·w, strictly below the plane through 0 normal to w
+      L3 r;
+      do r = draw(4) - draws.integer(1, 3) * w;
+      while (r.dot(w) >= 0);
+      return r;
+    };
+    for (int j = 0; j < 3 + i % 3; ++j) {  // the rest strictly beyond the planes
+      a.push_back(point(X + beyond()));
+      b.push_back(point(Y - beyond()));
+    }
+    // the box: its edge X ± u (along x) on top, the box below it in y and z, away from w
+    const Vec3 half(Real(u.x()), Real(draws.integer(1, 3)), Real(draws.integer(1, 3)));
+    const Vec3 centre = point(X) - Vec3(0, w.y() > 0 ? half.y() : -half.y(), w.z() > 0 ? half.z() : -half.z());
+    const ConvexHull ha = ConvexHull::build(a), hb = ConvexHull::build(b);
+    if (ha.vertices().size() < 4 || hb.vertices().size() < 4) continue;
+    const ConvexShape A = kind == 3 ? ConvexShape(Obb{centre, half, Mat3::Identity()}) : ConvexShape(ha), B(hb);
+    ++tally.built;
+    std::ostringstream what;
+    what << "kind " << kind << ": w " << w.transpose() << " u " << u.transpose() << " v " << v.transpose() << " X "
+         << X.transpose() << " m " << m;
+    tally.check(A, B, Real(m * wn), what.str());
+    tally.check(B, A, Real(m * wn), what.str() + " (swapped)");
+  }
+  tally.expectEveryPairReported(cases);
+}
+
 // A manifold is never shallower than the closest (deepest) pair beyond the face snapping's
 // allowance: the overlap along any direction is at least the minimum, so a reference face within
 // 2° of the contact normal measures its deepest support point at least as deep, unless the clip

@@ -141,6 +141,43 @@ TEST(ConvexHull, IntegerGridBoxWithManyCoplanarPoints) {
   EXPECT_NEAR(h.volume(), 24, 64 * kEps * 24);
 }
 
+// The build is translation invariant on integer points: a cloud moved by up to 2^21 (exact in
+// float and double) has the moved hull of the cloud at the origin, vertex for vertex and face for
+// face. Before session 11 the build's plane tests n·p − d ran on the raw coordinates, whose
+// rounding far from the origin exceeded its tolerance (100 ulps of the cloud's small diagonal) in
+// double builds: hulls came out with missing faces, and touching hulls were not reported
+// (ContactsIssue6.TouchingPolytopesOnTheIntegerGridHaveAContact).
+TEST(ConvexHull, IntegerCloudsFarFromTheOriginHaveTheMovedHull) {
+  std::mt19937_64 rng(2718);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  int compared = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<Vec3> pts;
+    const int n = 4 + trial % 12;
+    for (int i = 0; i < n; ++i) pts.emplace_back(Real(integer(-20, 20)), Real(integer(-20, 20)), Real(integer(-20, 20)));
+    const ConvexHull h0 = ConvexHull::build(pts);
+    if (h0.dimension() != 3) continue;
+    const int big = 1 << integer(10, 21);
+    const Vec3 shift(Real(integer(-big, big)), Real(integer(-big, big)), Real(integer(-big, big)));
+    std::vector<Vec3> moved;
+    for (const Vec3& p : pts) moved.push_back(p + shift);
+    const ConvexHull h = ConvexHull::build(moved);
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", shift " + std::to_string(double(shift.x())));
+    ASSERT_EQ(h.dimension(), 3);
+    ASSERT_EQ(h.vertices().size(), h0.vertices().size());
+    ASSERT_EQ(h.faces().size(), h0.faces().size());
+    for (const Vec3& v : h0.vertices())
+      EXPECT_NE(std::find(h.vertices().begin(), h.vertices().end(), Vec3(v + shift)), h.vertices().end());
+    // every point on or below every face plane (the offsets carry the shift's rounding)
+    const double tol = 64 * kEps * (shift.cwiseAbs().maxCoeff() + 60);
+    for (const HullFace& f : h.faces())
+      for (const Vec3& p : moved) EXPECT_LE(f.normal.cast<double>().dot(p.cast<double>()) - f.offset, tol);
+    EXPECT_NEAR(h.volume(), h0.volume(), 1e-9 * h0.volume());
+    ++compared;
+  }
+  EXPECT_GT(compared, 200);
+}
+
 TEST(ConvexHull, InvalidInputNamesTheField) {
   EXPECT_THROW(ConvexHull::build({}), InvalidInput);
   try {

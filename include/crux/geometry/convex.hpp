@@ -51,7 +51,8 @@ class ConvexHull {
   /// Builds the hull of `points` by the incremental farthest-point construction of QuickHull
   /// (Barber, Dobkin, Huhdanpaa, ACM TOMS 1996): start from an extreme simplex, repeatedly add
   /// the point farthest outside the current hull, replace its visible faces by a cone to the
-  /// horizon; all tests in double with the scaled tolerance above. Duplicates and coplanar
+  /// horizon; all tests in double with the scaled tolerance above, on the points relative to their
+  /// bounding box's centre (so that hulls far from the origin are built on their own scale). Duplicates and coplanar
   /// points are handled; collinear / coplanar / single-point inputs give the segment / polygon
   /// / point. Throws InvalidInput naming `name[i]` for an empty set or a non-finite coordinate.
   static ConvexHull build(const std::vector<Vec3>& points, const std::string& name = "points");
