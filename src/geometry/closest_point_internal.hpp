@@ -17,7 +17,8 @@ inline constexpr double kSliverHeightRelative = 1e-3;
 /// made vc, vb, va cancel, the face region was taken and p projected onto the plane 0.016 off the
 /// triangle, nearer to p than the triangle is). The nearest boundary point, or the projection of
 /// p onto the plane when it lies inside (each edge's half-plane within 64 ulps of the coordinates'
-/// scale) and is nearer; the plane's normal is the cross product of the two shorter edges (at the
+/// scale, and within half the height of the boundary: beyond a needle's sharp corner the long
+/// edges' half-planes stay within that slack for a long way) and is nearer; the plane's normal is the cross product of the two shorter edges (at the
 /// corner opposite the longest), which is well conditioned for a needle (one tiny edge). A flat
 /// cap (an angle near 180°) whose shorter edges' sine is below 1e-7 has a normal off by up to
 /// eps/sine: it is taken as its boundary, within half its height (< 1e-7 × its longest edge) of

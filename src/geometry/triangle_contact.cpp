@@ -4,6 +4,7 @@
 
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/geometry/overlap.hpp>
+#include <crux/geometry/raycast.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -30,6 +31,9 @@ struct TriD {
   V3 m;         // (b - a) × (c - a)
   double len = 0;   // |m|
   bool degenerate = true;
+  /// Not degenerate, but thinner than closest_detail::kSliverHeightRelative: its plane from m is
+  /// unreliable (the region tests and plane distances cancel; see closestOnSliver).
+  bool sliver = false;
   TriD() = default;
   explicit TriD(const Triangle& t) {
     p[0] = t.a.cast<double>();
@@ -44,6 +48,7 @@ struct TriD {
     len = m.norm();
     const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()});
     degenerate = !(len > kTriangleContactDegenerateRelative * longest);
+    sliver = !degenerate && len <= closest_detail::kSliverHeightRelative * longest;
   }
   double maxAbs() const { return std::max({p[0].norm(), p[1].norm(), p[2].norm()}); }
   V3 centroid() const { return (p[0] + p[1] + p[2]) / 3; }
@@ -382,9 +387,10 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     mh = t.m / t.len;
     h0 = mh.dot(s[0] - t.p[0]);
     h1 = mh.dot(s[1] - t.p[0]);
-    // Both ends beyond the plane on one side by more than radius + margin: nothing to report.
-    if ((h0 > 0 && h1 > 0 && std::min(h0, h1) - r > mg + tolAbs) ||
-        (h0 < 0 && h1 < 0 && std::min(-h0, -h1) - r > mg + tolAbs))
+    // Both ends beyond the plane on one side by more than radius + margin: nothing to report (not
+    // for a sliver, whose plane is unreliable: a scratch search found capsules rejected there).
+    if (!t.sliver && ((h0 > 0 && h1 > 0 && std::min(h0, h1) - r > mg + tolAbs) ||
+                      (h0 < 0 && h1 < 0 && std::min(-h0, -h1) - r > mg + tolAbs)))
       return false;
   }
   // ---- core distance: segment vs triangle (RTCD 5.1.10's decomposition).
@@ -400,7 +406,21 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     }
   }
   bool crossing = false;
-  if (!t.degenerate) {
+  if (t.sliver) {
+    // the ends' closest points on the sliver without its plane (closestOnSliver), and whether the
+    // segment crosses it by the exact segment-triangle test
+    for (int k = 0; k < 2; ++k) {
+      V3 q;
+      closest_detail::closestOnSliver(t.p[0], t.p[1], t.p[2], s[k], q);
+      const double d2 = (q - s[k]).squaredNorm();
+      if (d2 < best2) {
+        best2 = d2;
+        pa = q;
+        pb = s[k];
+      }
+    }
+    crossing = intersects(Segment{p0In, p1In}, tri);
+  } else if (!t.degenerate) {
     auto inside = [&](const V3& x) {  // x on the plane: inside the closed triangle
       for (int i = 0; i < 3; ++i)
         if (t.m.dot((t.p[(i + 1) % 3] - t.p[i]).cross(x - t.p[i])) < 0) return false;
