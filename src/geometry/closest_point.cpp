@@ -29,20 +29,6 @@ WVec3 closestOnSegment(const WVec3& a, const WVec3& b, const WVec3& p) {
   return a + ab * (t / len2);  // 0 < t < len2, so len2 > 0
 }
 
-/// The nearest of the three edges' closest points: the fallback for a triangle too thin for its
-/// plane normal to be formed in Wide (|n|² underflows), where the boundary is the whole set up
-/// to rounding.
-WVec3 closestOnBoundary(const WVec3& a, const WVec3& b, const WVec3& c, const WVec3& p) {
-  const WVec3 q[3] = {closestOnSegment(a, b, p), closestOnSegment(b, c, p), closestOnSegment(c, a, p)};
-  int best = 0;
-  Wide bestD2 = (q[0] - p).squaredNorm();
-  for (int i = 1; i < 3; ++i) {
-    const Wide d2 = (q[i] - p).squaredNorm();
-    if (d2 < bestD2) bestD2 = d2, best = i;
-  }
-  return q[best];
-}
-
 /// Closest point of a proper (non-collinear) triangle: RTCD 5.1.5 ClosestPtPointTriangle.
 /// The vertex tests come first and are inclusive (<=, >=), so where an edge test would tie
 /// with a vertex test the vertex wins (the errata's (2,-0.5,0) case).
@@ -72,7 +58,11 @@ WVec3 closestOnProperTriangle(const WVec3& a, const WVec3& b, const WVec3& c, co
   // from va/vb/vc, whose cancellation grows with the distance of p.
   const WVec3 n = ab.cross(ac);
   const Wide nn = n.squaredNorm();
-  if (!(nn > 0)) return closestOnBoundary(a, b, c, p);
+  if (!(nn > 0)) {  // too thin for its normal to be formed: its boundary (closestOnSliver's)
+    WVec3 q;
+    closest_detail::closestOnSliver(a, b, c, p, q);
+    return q;
+  }
   return p - n * (n.dot(ap) / nn);
 }
 
