@@ -69,7 +69,7 @@ struct Classification {
 };
 
 /// Every family name, in generation order: general, grid, coplanar, touching, degenerate,
-/// near_degenerate, huge, tiny, transformed, mesh, hierarchy, scene.
+/// near_degenerate, sliver, huge, tiny, transformed, mesh, hierarchy, scene.
 const std::vector<std::string_view>& diffFamilies();
 /// The query ops a family generates.
 const std::vector<std::string_view>& diffFamilyOps(std::string_view family);

@@ -165,6 +165,51 @@ Tri degenerateTriangle(Rng& rng) {
   }
 }
 
+/// x moved 1-4 float ulps up or down (a float again).
+double nudgedFloat(double x, Rng& rng) {
+  float f = float(x);
+  const int steps = rng.integer(1, 4);
+  const float toward = rng.chance(0.5) ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
+  for (int i = 0; i < steps; ++i) f = std::nextafter(f, toward);
+  return double(f);
+}
+
+/// A sliver triangle (height far below its longest edge, rarely exactly degenerate), float
+/// corners in a random order: a needle whose tiny edge lies near the origin (10^-8 to 10^-25)
+/// against a corner ~1 away, a needle whose tiny edge is a few float ulps long at a corner ~1
+/// from the origin, or a flat cap (the midpoint of two corners moved a few ulps). RTCD's region
+/// tests cancel on such triangles (session 11: closest points off the triangle, a sphere contact
+/// 6 % too deep, capsules rejected by the tilted plane).
+Tri sliverTriangle(Rng& rng) {
+  Tri t;
+  switch (rng.integer(0, 2)) {
+    case 0: {
+      const double s = std::pow(10.0, -rng.uniform(8, 25));
+      t = {toFloat(rng.floatPoint(s)), toFloat(rng.floatPoint(s)), toFloat(rng.floatPoint(1))};
+      break;
+    }
+    case 1: {
+      const V a = toFloat(rng.floatPoint(1));
+      V b = a;
+      for (double& x : b) x = nudgedFloat(x, rng);
+      t = {a, b, toFloat(rng.floatPoint(1))};
+      break;
+    }
+    default: {
+      const V a = toFloat(rng.floatPoint(1)), b = toFloat(rng.floatPoint(1));
+      V m = toFloat(mul(add(a, b), 0.5));
+      double& x = m[std::size_t(rng.integer(0, 2))];
+      x = nudgedFloat(x, rng);
+      t = {a, b, m};
+    }
+  }
+  switch (rng.integer(0, 2)) {
+    case 0: return t;
+    case 1: return {t.b, t.c, t.a};
+    default: return {t.c, t.a, t.b};
+  }
+}
+
 /// A point of triangle t with integer coordinates when t's are multiples of 6: a corner, an
 /// edge midpoint or the centroid.
 V pointOn(const Tri& t, Rng& rng) {
@@ -418,6 +463,9 @@ DiffCase primitiveCase(std::string_view family, std::string_view op, Rng& rng) {
     mode = Mode::Touching;
   } else if (family == "degenerate") {
     mode = Mode::Degenerate;
+  } else if (family == "sliver") {
+    mode = Mode::General;
+    grid = false;
   } else if (family != "grid") {
     // near_degenerate, huge, tiny, transformed: a grid-built case, then modified
     const std::array<Mode, 4> bases = {Mode::Touching, Mode::Coplanar, Mode::Grid, Mode::General};
@@ -425,7 +473,9 @@ DiffCase primitiveCase(std::string_view family, std::string_view op, Rng& rng) {
     grid = false;
   }
   Tri t;
-  if (mode == Mode::General) {
+  if (family == "sliver") {
+    t = sliverTriangle(rng);
+  } else if (mode == Mode::General) {
     t = {toFloat(rng.floatPoint(1)), toFloat(rng.floatPoint(1)), toFloat(rng.floatPoint(1))};
   } else if (mode == Mode::Degenerate) {
     t = degenerateTriangle(rng);
@@ -996,12 +1046,16 @@ J placement(Rng& rng, bool general) {
 /// (general, grid, touching, degenerate, near_degenerate, huge, tiny, transformed).
 DiffCase narrowConvexCase(std::string_view family, std::string_view op, Rng& rng) {
   DiffCase c;
-  const bool general = family == "general" || family == "transformed";
+  const bool general = family == "general" || family == "transformed" || family == "sliver";
   J q = request(op);
   if (family == "touching" || family == "near_degenerate") {
     const auto [a, b] = touchingOperands(rng);
     q["a"] = a;
     q["b"] = b;
+  } else if (family == "sliver") {  // a sliver triangle against a general operand near it
+    q["a"] = J{{"triangle", triJson(sliverTriangle(rng))}};
+    q["b"] = convexOperand(rng, true, toFloat(rng.floatPoint(1)), false);
+    if (rng.chance(0.5)) std::swap(q["a"], q["b"]);
   } else {
     q["a"] = convexOperand(rng, general, {0, 0, 0}, family == "degenerate" && rng.chance(0.5));
     const V offset = general ? toFloat(rng.floatPoint(2.5)) : rng.gridPoint(3);
@@ -1202,7 +1256,7 @@ const std::vector<std::string_view> kSceneOps = {"scene_ray", "scene_query", "sc
 
 const std::vector<std::string_view>& diffFamilies() {
   static const std::vector<std::string_view> families = {"general", "grid",        "coplanar", "touching",
-                                                         "degenerate", "near_degenerate", "huge", "tiny",
+                                                         "degenerate", "near_degenerate", "sliver", "huge", "tiny",
                                                          "transformed", "mesh",    "hierarchy", "scene"};
   return families;
 }

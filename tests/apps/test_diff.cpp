@@ -554,7 +554,7 @@ TEST(DiffNarrowPhase, ShortRunFindsNoCruxWrong) {
   if (!exactAnswersNarrowPhase()) GTEST_SKIP() << "the exact backend does not answer distance/contacts in this build";
   DiffOptions o;
   o.seed = 2026;
-  o.cases = 120;
+  o.cases = 10 * diffFamilies().size();  // 10 cases per family
   o.backends = {"native"};
   o.ops = {"distance", "contacts", "mesh_distance", "model_distance"};
   o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
