@@ -221,9 +221,10 @@ struct Simplex {
   V3<T> p, q;  ///< segment endpoints / the point
 };
 
-template <class T>
-Simplex<T> toSimplex(const Triangle& t, const TriangleShape& shape) {
-  return {shape.kind, {lift<T>(t.a), lift<T>(t.b), lift<T>(t.c)}, lift<T>(shape.p), lift<T>(shape.q)};
+/// The simplex of the corners x, y, z (Real or Wide vectors), classified as `shape`.
+template <class T, class P>
+Simplex<T> simplexOf(const TriangleShape& shape, const P& x, const P& y, const P& z) {
+  return {shape.kind, {lift<T>(x), lift<T>(y), lift<T>(z)}, lift<T>(shape.p), lift<T>(shape.q)};
 }
 
 /// Point x against any simplex.
@@ -383,7 +384,7 @@ Simplex<T> coreSimplex(const WVec3* c, int n) {
   const WVec3& x = c[0];
   const WVec3& y = c[n >= 2 ? 1 : 0];
   const WVec3& z = c[n >= 3 ? 2 : 0];
-  return {shape.kind, {lift<T>(x), lift<T>(y), lift<T>(z)}, lift<T>(shape.p), lift<T>(shape.q)};
+  return simplexOf<T>(shape, x, y, z);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -448,7 +449,7 @@ bool overlapsOrdered(const Triangle& a, const Triangle& b) {
   const TriangleShape shapeA = predicates::classify(a), shapeB = predicates::classify(b);
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
-    const Simplex<T> sa = toSimplex<T>(a, shapeA), sb = toSimplex<T>(b, shapeB);
+    const Simplex<T> sa = simplexOf<T>(shapeA, a.a, a.b, a.c), sb = simplexOf<T>(shapeB, b.a, b.b, b.c);
     switch (sa.kind) {
       case TriangleKind::Triangle:
         if (sb.kind == TriangleKind::Triangle) return triangleTriangle(judge, sa.v, sb.v);
@@ -484,7 +485,7 @@ bool overlaps(const Triangle& t, const Sphere& s) {
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
     const T r = T(Wide(s.radius));
-    return pointWithinSimplex(judge, lift<T>(s.center), toSimplex<T>(t, shape), r * r);
+    return pointWithinSimplex(judge, lift<T>(s.center), simplexOf<T>(shape, t.a, t.b, t.c), r * r);
   });
 }
 
