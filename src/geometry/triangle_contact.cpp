@@ -46,9 +46,12 @@ struct TriD {
   /// len and degenerate from p and m = ab × ac.
   void finish(const V3& ab, const V3& ac) {
     len = m.norm();
-    const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()});
-    degenerate = !(len > kTriangleContactDegenerateRelative * longest);
-    sliver = !degenerate && len <= closest_detail::kSliverHeightRelative * longest;
+    classify(std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()}));
+  }
+  /// degenerate and sliver from len and the longest edge's squared length.
+  void classify(double longest2) {
+    degenerate = !(len > kTriangleContactDegenerateRelative * longest2);
+    sliver = !degenerate && len <= closest_detail::kSliverHeightRelative * longest2;
   }
   double maxAbs() const { return std::max({p[0].norm(), p[1].norm(), p[2].norm()}); }
   V3 centroid() const { return (p[0] + p[1] + p[2]) / 3; }
@@ -255,15 +258,13 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
   }
   // t.finish(ab, ac) from the locals
   t.len = mm.norm();
-  const double longest2 = std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()});
-  t.degenerate = !(t.len > kTriangleContactDegenerateRelative * longest2);
+  t.classify(std::max({ab.squaredNorm(), ac.squaredNorm(), (c - b).squaredNorm()}));
   region = SphereTriangleContact::kDegenerate;
   if (!t.degenerate) {
     // a sliver takes no region tests (they cancel: closest_detail::closestOnSliver), and its
     // face point comes from there (the better-conditioned normal), not from the plane of mm
-    const bool sliver = t.len <= closest_detail::kSliverHeightRelative * longest2;
-    region = sliver ? closest_detail::closestOnSliver(a, b, c, p, q) : closestRegionOnTriangle(a, b, c, p, q);
-    if (region == SphereTriangleContact::kFace && !sliver) {  // exact projection: distance and normal from the plane, not from q - p
+    region = t.sliver ? closest_detail::closestOnSliver(a, b, c, p, q) : closestRegionOnTriangle(a, b, c, p, q);
+    if (region == SphereTriangleContact::kFace && !t.sliver) {  // exact projection: distance and normal from the plane, not from q - p
       const V3 mh = mm / t.len;
       const double h = mh.dot(p - a);
       d = std::abs(h);
