@@ -178,7 +178,9 @@ TEST(ClosestPointTriangle, SliverWithATinyEdgeGivesAPointOnIt) {
         f(-2.65880437e-18, -1.47912483e-17, -1.12998703e-17)},
        f(0.0375160649, -0.047955174, 0.00895366911)},
       {{f(4, 0, 0), f(62, 5.8999998625835354e-14, -64), f(62, 0, -64)}, f(0, 0, 0)}};
-  for (const auto& [t, p] : cases) {
+  for (const auto& tp : cases) {
+    const Triangle& t = tp.first;  // (named, not a structured binding: the lambda below captures it)
+    const Vec3& p = tp.second;
     const Vec3 q = closestPoint(t, p);
     auto boundary = [&](const Vec3& x) {
       double d = std::numeric_limits<double>::infinity();
