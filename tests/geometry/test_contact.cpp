@@ -805,12 +805,11 @@ TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
   const int cases = 2000;
   TouchingTally tally;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = draws.point(5);
-    Vec3 s0, d;
-    long k = 0;
-    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
+    test::PointAndSegment g;
+    if (!test::drawPointAndSegment(draws, g)) continue;
+    const Vec3 &X = g.X, &s0 = g.s0, &d = g.d, &n = g.n;
+    const long k = g.k;
     ++tally.built;
-    const Vec3 n = test::towardsFoot(X, s0, d);
     const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Real margin = Real(draws.integer(0, 1)), rest = Real(k) - margin;  // radii sum to rest
     const Real rA = Real(draws.integer(0, int(rest))), rB = rest - rA;
@@ -839,11 +838,10 @@ TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
   const int cases = test::scaledCases(3000, 600);
   TouchingTally tally;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = draws.point(5);
-    Vec3 s0, d;
-    long k = 0;
-    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
-    const Vec3 n = test::towardsFoot(X, s0, d);
+    test::PointAndSegment g;
+    if (!test::drawPointAndSegment(draws, g)) continue;
+    const Vec3 &X = g.X, &s0 = g.s0, &d = g.d, &n = g.n;
+    const long k = g.k;
     const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Vec3 s1 = s0 + d;
     // (a ConvexShape views its hull: the hulls live here)
@@ -883,11 +881,10 @@ TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
   std::string first;
   const Transform I = Transform::identity();
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = draws.point(5);
-    Vec3 s0, d;
-    long k = 0;
-    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
-    const Vec3 n = test::towardsFoot(X, s0, d);
+    test::PointAndSegment g;
+    if (!test::drawPointAndSegment(draws, g)) continue;
+    const Vec3 &X = g.X, &s0 = g.s0, &d = g.d, &n = g.n;
+    const long k = g.k;
     const Vec3 s1 = s0 + d;
     const Vec3 half(Real(draws.integer(1, 3)), Real(draws.integer(1, 3)), Real(draws.integer(1, 3)));
     Vec3 sign;

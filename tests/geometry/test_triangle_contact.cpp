@@ -658,12 +658,11 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   int built = 0, missed = 0, falseHits = 0;
   std::string first;
   for (int i = 0; i < cases; ++i) {
-    const Vec3 X = draws.point(5);
-    Vec3 s0, d;
-    long k = 0;
-    if (!test::segmentAtIntegerDistance(draws, X, s0, d, k)) continue;
+    test::PointAndSegment g;
+    if (!test::drawPointAndSegment(draws, g)) continue;
+    const Vec3 &X = g.X, &s0 = g.s0, &d = g.d, &n = g.n;
+    const long k = g.k;
     // beyond the plane through the foot normal to X → foot: n·(c − X) >= |d|²k² (n = |d|²(foot − X))
-    const Vec3 n = test::towardsFoot(X, s0, d);
     Vec3 c;
     int tries = 0;
     do c = s0 + draws.point(4);

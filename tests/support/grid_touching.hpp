@@ -48,6 +48,20 @@ inline Vec3 towardsFoot(const Vec3& X, const Vec3& s0, const Vec3& d) {
   return (s0 - X) * d.squaredNorm() + d * (X - s0).dot(d);
 }
 
+/// The grid tests' common draw: an integer point X = point(5), a segment s0 + t·d at an integer
+/// distance k from it (segmentAtIntegerDistance, same draws) and n = towardsFoot(X, s0, d).
+struct PointAndSegment {
+  Vec3 X, s0, d, n;
+  long k = 0;
+};
+/// Draws a PointAndSegment; false when no segment was found (the case is skipped).
+inline bool drawPointAndSegment(GridDraws& draws, PointAndSegment& g) {
+  g.X = draws.point(5);
+  if (!segmentAtIntegerDistance(draws, g.X, g.s0, g.d, g.k)) return false;
+  g.n = towardsFoot(g.X, g.s0, g.d);
+  return true;
+}
+
 /// A random integer point X + point(r) behind X as seen from the foot: n·(c − X) <= 0 with n =
 /// towardsFoot(...). The line lies in the plane parallel to n·(y − X) = 0 at distance k (|foot −
 /// X|), so every such point is at least k from it, and a convex shape of X and such points is

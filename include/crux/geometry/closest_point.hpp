@@ -9,7 +9,10 @@ namespace crux {
 
 /// Closest point of triangle t to p by Voronoi-region classification (Ericson, RTCD 5.1.5,
 /// ClosestPtPointTriangle), with ties resolved inclusively so a vertex region wins where two
-/// edge tests tie. A degenerate triangle is treated as the segment or point it spans.
+/// edge tests tie. A degenerate triangle is treated as the segment or point it spans. A sliver
+/// (height below 1e-3 of its longest edge), whose region tests cancel, takes no region test: its
+/// nearest boundary point, or the projection of p onto its plane when that lies inside it and is
+/// nearer (docs/geometry.md, "Closest point on a sliver triangle").
 Vec3 closestPoint(const Triangle& t, const Vec3& p);
 /// Closest point of segment s to p (RTCD 5.1.2); start == end is a point.
 Vec3 closestPoint(const Segment& s, const Vec3& p);

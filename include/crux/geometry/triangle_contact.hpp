@@ -30,7 +30,8 @@ inline constexpr double kTriangleContactDegenerateRelative = 64 * std::numeric_l
 
 /// Sphere (centre, radius >= 0) against a triangle: the closest point of the triangle to the
 /// centre (Ericson, RTCD 5.1.5, Voronoi regions, in double; a degenerate triangle by its
-/// edges), one contact point. When the centre lies on the triangle (within kGjkScaleTolerance ×
+/// edges; a sliver, height below 1e-3 of its longest edge, as closestPoint(Triangle) takes it:
+/// no region tests), one contact point. When the centre lies on the triangle (within kGjkScaleTolerance ×
 /// the pair's length scale, max|vertex| + |centre| + radius, the generic routine's flat case) the
 /// normal is minus the front face normal: the sphere is taken to be on the front side,
 /// deterministically (a degenerate triangle: a fixed perpendicular of its longest edge, or −z
@@ -63,7 +64,9 @@ bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius,
 /// Capsule (segment [p0, p1] ⊕ ball of `radius`) against a triangle.
 ///   - Separated cores: the closest points of the segment and the triangle (the minimum over
 ///     the segment–edge pairs, RTCD 5.1.9, and the endpoint–face projections inside the face;
-///     RTCD 5.1.10's decomposition).
+///     RTCD 5.1.10's decomposition). A sliver (height below 1e-3 of its longest edge) has an
+///     unreliable plane: its endpoints' closest points as closestPoint(Triangle) takes them, no
+///     plane reject, and crossing decided by the exact segment–triangle test.
 ///   - Crossing cores (the segment meets the triangle): the minimum translation of the core
 ///     pair by the separating-axis test on the faces of their Minkowski difference (a prism:
 ///     ±face normal, and ±(edge × segment) for the three edges), i.e. the EPA depth of the
