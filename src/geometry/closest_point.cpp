@@ -149,6 +149,19 @@ Vec3 closestPoint(const Plane& pl, const Vec3& p) {
   return narrow(x - n * ((n.dot(x) - Wide(pl.d)) / n.squaredNorm()));
 }
 
+bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
+  const Eigen::Vector3d v[3] = {t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()};
+  const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]);
+  const Eigen::Vector3d q = p.cast<double>();
+  const double lim = double(d) * double(d) * n.squaredNorm();
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d e = v[(i + 1) % 3] - v[i];
+    const double s = e.cross(q - v[i]).dot(n);  // in-plane signed distance × |e| |n|
+    if (s < 0 && s * s > lim * e.squaredNorm()) return true;
+  }
+  return false;
+}
+
 Real squaredDistance(const Triangle& t, const Vec3& p) {
   const WVec3 x = wide(p);
   return Real((closestOnTriangle(t, x) - x).squaredNorm());

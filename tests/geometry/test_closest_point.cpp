@@ -465,5 +465,56 @@ TEST(ClosestPointProperty, SegmentRayAabbObbSphereAndPlaneAreProjections) {
   }
 }
 
+TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTriangleIs) {
+  // Random triangles (a third of them slivers: one corner within 1e-4 of the opposite edge's
+  // line), points placed beyond or inside an edge line at a random in-plane offset and a random
+  // height, and d random. Reference: the in-plane signed distances from the edge lines in long
+  // double, from the unit inward normals n × e (a different formula from the routine's). The
+  // answer must equal "some edge line is more than d away on the outside" wherever that
+  // distance is not within 1e-9 relative of d, and a true answer must mean the exact distance
+  // to the triangle exceeds d.
+  std::mt19937_64 rng(0xED6E);
+  std::uniform_real_distribution<double> coord(-8, 8), unit(0, 1), off(-3, 3);
+  using L3 = Eigen::Matrix<long double, 3, 1>;
+  int beyond = 0, within = 0;
+  const int cases = test::scaledCases(20000, 2000);
+  for (int i = 0; i < cases; ++i) {
+    const auto v = [&] { return Vec3(Real(coord(rng)), Real(coord(rng)), Real(coord(rng))); };
+    Triangle t{v(), v(), v()};
+    if (i % 3 == 0) {  // a sliver: c near the line through a and b
+      const Vec3 dir = t.b - t.a;
+      t.c = t.a + Real(unit(rng) * 1.5) * dir + Vec3(Real(1e-4 * unit(rng)), 0, 0);
+    }
+    const L3 c[3] = {t.a.cast<long double>(), t.b.cast<long double>(), t.c.cast<long double>()};
+    const L3 n = (c[1] - c[0]).cross(c[2] - c[0]);
+    if (!(n.norm() > 0)) continue;
+    // p: a random point of the triangle's plane moved by `off` along edge k's inward normal
+    // (negative: outside), plus a height along n
+    const int k = int(rng() % 3);
+    const L3 e = c[(k + 1) % 3] - c[k];
+    const L3 inward = n.cross(e).normalized();
+    const long double w = unit(rng);
+    const L3 base = c[k] + w * e + inward * (long double)(off(rng)) + n.normalized() * (long double)(off(rng));
+    const Vec3 p = base.cast<Real>();
+    const Real d = Real(2 * unit(rng));
+    long double worst = std::numeric_limits<long double>::infinity();  // smallest inward distance
+    for (int j = 0; j < 3; ++j) {
+      const L3 ej = c[(j + 1) % 3] - c[j];
+      worst = std::min(worst, n.cross(ej).normalized().dot(p.cast<long double>() - c[j]));
+    }
+    const bool got = beyondAnEdgeLine(t, p, d);
+    const long double gap = -worst - (long double)d;  // > 0: some edge line farther than d outside
+    if (std::abs(gap) > 1e-9L * (1 + (long double)d)) {
+      ASSERT_EQ(got, gap > 0) << str(t) << " p " << str(p) << " d " << d << " edge-line gap " << double(gap);
+      (got ? beyond : within) += 1;
+    }
+    if (got) ASSERT_GT(std::sqrt(exact::squaredDistance(t, p)), double(d) * (1 - 1e-9)) << str(t) << " p " << str(p);
+  }
+  EXPECT_GT(beyond, cases / 10);
+  EXPECT_GT(within, cases / 10);
+  // a degenerate triangle (collinear corners) says nothing
+  EXPECT_FALSE(beyondAnEdgeLine({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, Vec3(0, -5, 0), Real(1)));
+}
+
 }  // namespace
 }  // namespace crux

@@ -721,7 +721,7 @@ TEST(MeshContact, EdgeActivityOfRidgeValleyFlatAndBoundaryEdges) {
   EXPECT_EQ(MeshAdjacency(sliver).edgeActivity(0), 0x3fu);
 }
 
-TEST(MeshContact, EdgeActivityMatchesTheDihedralSignOnABumpyGridAndBySlot) {
+TEST(MeshContact, EdgeActivityMatchesTheDihedralSignOnABumpyGridAndBySlotWithTheFeatureTolerance) {
   // A random height field (a few exactly flat patches): each interior edge is convex on exactly
   // one side unless flat; the sign of the neighbour's opposite vertex against the plane,
   // computed here in double from the mesh arrays, decides it wherever it is far from the
@@ -769,6 +769,10 @@ TEST(MeshContact, EdgeActivityMatchesTheDihedralSignOnABumpyGridAndBySlot) {
   const auto& prims = grid.bvh().primIndices;
   for (std::size_t k = 0; k < prims.size(); ++k)
     ASSERT_EQ(adjacency.edgeActivityBySlot(std::uint32_t(k)), adjacency.edgeActivity(prims[k])) << "slot " << k;
+  // the feature tolerance table: the value a query would compute from the slot's triangle
+  for (std::size_t k = 0; k < prims.size(); ++k)
+    ASSERT_EQ(adjacency.featureToleranceBySlot(std::uint32_t(k)), meshFeatureTolerance(grid.triangle(prims[k])))
+        << "slot " << k;
 }
 
 }  // namespace

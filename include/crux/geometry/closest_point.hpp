@@ -27,6 +27,14 @@ Vec3 closestPoint(const Obb& b, const Vec3& p);
 /// Orthogonal projection of p onto the plane (RTCD 5.1.1).
 Vec3 closestPoint(const Plane& pl, const Vec3& p);
 
+/// Whether p lies beyond one of t's edge lines, in t's plane and on the outside, by more than
+/// d >= 0: then p is farther than d from t (t lies within each edge's half-plane), whatever p's
+/// height above the plane. A cheap conservative "far from the triangle" test (three cross
+/// products, no square root, in double from the exact edge differences of the corners: with
+/// n = (b − a) × (c − a), (e × (p − v))·n / (|e| |n|) is p's in-plane signed distance from the
+/// edge line through v along e); false says nothing. A degenerate triangle (n = 0) gives false.
+bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d);
+
 /// Squared Euclidean distance from p to the shape (0 inside solids).
 Real squaredDistance(const Triangle& t, const Vec3& p);
 Real squaredDistance(const Segment& s, const Vec3& p);
