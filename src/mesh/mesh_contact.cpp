@@ -89,12 +89,9 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
     activity_[t] = bits;
   }
   const auto& prims = mesh.bvh().primIndices;
-  activityBySlot_.resize(prims.size());
-  toleranceBySlot_.resize(prims.size());
-  for (std::size_t k = 0; k < prims.size(); ++k) {
-    activityBySlot_[k] = activity_[prims[k]];
-    toleranceBySlot_[k] = meshFeatureTolerance(mesh.triangle(prims[k]));
-  }
+  bySlot_.resize(prims.size());
+  for (std::size_t k = 0; k < prims.size(); ++k)
+    bySlot_[k] = {meshFeatureTolerance(mesh.triangle(prims[k])), activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
 }
 
@@ -380,19 +377,23 @@ struct Collector {
   /// The per-triangle part of the internal-edge correction (see the header): what depends only
   /// on the triangle and the manifold's normal, computed once for all of its points. `keepAll`:
   /// every point stands unchanged (a degenerate triangle, a normal within the face cone, or all
-  /// three edges active on the shape's side); otherwise `face` is the unit normal on the shape's
-  /// side, `activeSide` bit i says edge i is active there and `tol` is the feature tolerance.
+  /// three edges active on the shape's side); `face` is the unit normal on the shape's side,
+  /// `activeSide` bit i says edge i is active there, `activeCorners` bit i that corner i has an
+  /// active edge (edge i or edge i + 2 mod 3), `tol` is the feature tolerance.
   struct FaceRule {
     bool keepAll = true;
-    Vec3 face;
+    Vec3 face = Vec3::Zero();
     unsigned activeSide = 7u;
+    unsigned activeCorners = 7u;
     Real tol = 0;
+    Real cornerTol2 = 0;  // (tol/2)², as 0.25·tol·tol
   };
 
   /// FaceRule of triangle t for points of normal `normal`, in `frame` (the mesh frame; a box's
   /// own frame for a box, whose points are corrected, merged and reduced there and only the
   /// reduced ones mapped back): `ft` is triangle t in that frame, `tri` in the mesh frame (it
-  /// sets the feature tolerance).
+  /// sets the feature tolerance). Every part is computed (no early return on the face cone or
+  /// on all edges active): the outcomes are unpredictable branches, dearer than the arithmetic.
   FaceRule faceRule(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft,
                     const Vec3& normal) const {
     FaceRule r;
@@ -400,46 +401,47 @@ struct Collector {
     const Real len = face.norm();
     if (!(len > 0)) return r;  // degenerate triangle: no face cone
     face /= len;
-    if (std::abs(face.dot(normal)) >= kMeshFaceConeCos) return r;  // within the face cone
-    bool back = false;  // the shape is on the triangle's back side
-    {
-      // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
-      // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
-      Real lo = 0, hi = 0;
-      frame.project(face, lo, hi);
-      const Real base = face.dot(ft.a);
-      back = base - lo > hi - base;
-      if (back) face = -face;
-    }
+    const bool inCone = std::abs(face.dot(normal)) >= kMeshFaceConeCos;
+    // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
+    // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
+    Real lo = 0, hi = 0;
+    frame.project(face, lo, hi);
+    const Real base = face.dot(ft.a);
+    const bool back = base - lo > hi - base;
+    r.face = back ? Vec3(-face) : face;
     // the side in the mesh's own orientation (a left-handed box frame turns the triangle over)
     const bool meshBack = back != (&frame != &ls && ls.boxMirrored);
     const unsigned active = activity(t, slot);
     // bit i: edge i is active on that side
     r.activeSide = ((active >> meshBack) & 1u) | ((active >> (2 + meshBack)) & 1u) << 1 |
                    ((active >> (4 + meshBack)) & 1u) << 2;
+    r.activeCorners = (r.activeSide | (r.activeSide >> 2 & 1u) | (r.activeSide << 1 & 6u)) & 7u;
     // All three edges active (a convex ridge all round, the usual case on a curved surface):
     // the point stands wherever it lies (on an edge: active; in the face interior: the convex
     // routine's normal), so no edge test is needed.
-    if (r.activeSide == 7u) return r;
-    r.keepAll = false;
-    r.face = face;
+    r.keepAll = inCone | (r.activeSide == 7u);
     r.tol = tolerance(slot, tri);
+    r.cornerTol2 = Real(0.25) * r.tol * r.tol;
     return r;
   }
 
-  /// The per-point part of the correction under rule r (not keepAll) of triangle ft (in
-  /// `frame`). Returns false to drop the point (p is then unchanged: it changes only when kept
-  /// with the face normal).
-  bool correctPoint(const FaceRule& r, const Triangle& ft, MeshContactPoint& p) const {
+  /// Whether point pa of a manifold under rule r stands without further tests: keepAll, or it
+  /// lies at a corner (within tol/2, where onEdgeWithin's test is certain for both of the
+  /// corner's edges whatever the rounding: the usual box and capsule point is a triangle vertex)
+  /// with an active edge. Branch-free (three comparisons into a mask).
+  static bool standsAtOnce(const FaceRule& r, const Triangle& ft, const Vec3& pa) {
+    unsigned near = 0;
+    for (int i = 0; i < 3; ++i) near |= unsigned((pa - ft[i]).squaredNorm() <= r.cornerTol2) << i;
+    return r.keepAll | ((near & r.activeCorners) != 0);
+  }
+
+  /// The rest of the correction of a point that does not stand at once (standsAtOnce false) under
+  /// rule r of triangle ft (in `frame`). Returns false to drop the point (p is then unchanged: it
+  /// changes only when kept with the face normal).
+  bool correctOffCorner(const FaceRule& r, const Triangle& ft, MeshContactPoint& p) const {
     const Real tol = r.tol;
     const unsigned activeSide = r.activeSide;
     const Vec3& pa = p.pointA;
-    // A point at a corner (within tol/2, where onEdgeWithin's test is certain for both of the
-    // corner's edges whatever the rounding: the usual box and capsule point is a triangle vertex)
-    // stands when one of those two edges is active.
-    for (int i = 0; i < 3; ++i)
-      if ((pa - ft[i]).squaredNorm() <= Real(0.25) * tol * tol && (activeSide & (1u << i | 1u << (i + 2) % 3)) != 0)
-        return true;
     bool onEdge[3];
     int edges = 0;
     for (int i = 0; i < 3; ++i) {
@@ -463,10 +465,10 @@ struct Collector {
     return true;
   }
 
-  /// Internal-edge correction of one point: faceRule then correctPoint.
+  /// Internal-edge correction of one point: faceRule, standsAtOnce, correctOffCorner.
   bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, MeshContactPoint& p) const {
     const FaceRule r = faceRule(t, slot, tri, ft, p.normal);
-    return r.keepAll || correctPoint(r, ft, p);
+    return standsAtOnce(r, ft, p.pointA) || correctOffCorner(r, ft, p);
   }
 
   /// The inactive-feature contact (see the header): the shape's deepest point along the unit face
@@ -640,7 +642,7 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (!rule.keepAll && !correctPoint(rule, ft, p)) {
+      if (adjacency && !standsAtOnce(rule, ft, p.pointA) && !correctOffCorner(rule, ft, p)) {
         drop(p);  // unchanged: the raw point
         continue;
       }

@@ -99,11 +99,11 @@ class MeshAdjacency {
   /// edgeActivity of the triangle in BVH slot k (mesh.bvh().primIndices[k]): the same data in
   /// the BVH's leaf order, read by the BVH query next to the slot's triangle (cache locality:
   /// one byte per triangle instead of the neighbour's vertex).
-  std::uint8_t edgeActivityBySlot(std::uint32_t k) const { return activityBySlot_[k]; }
+  std::uint8_t edgeActivityBySlot(std::uint32_t k) const { return bySlot_[k].activity; }
   /// meshFeatureTolerance of the triangle in BVH slot k, computed once here from the mesh's own
   /// triangle (the same value a query would compute: it takes a sqrt and nine maxima per
   /// triangle, ~4 % of a box-vs-mesh contact query when recomputed).
-  Real featureToleranceBySlot(std::uint32_t k) const { return toleranceBySlot_[k]; }
+  Real featureToleranceBySlot(std::uint32_t k) const { return bySlot_[k].tolerance; }
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
   /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
   std::size_t vertexCount() const { return vertexCount_; }
@@ -112,8 +112,12 @@ class MeshAdjacency {
   std::vector<std::uint32_t> neighbors_;
   std::vector<std::uint32_t> opposite_;
   std::vector<std::uint8_t> activity_;
-  std::vector<std::uint8_t> activityBySlot_;
-  std::vector<Real> toleranceBySlot_;
+  /// What a BVH query reads per triangle, in slot order, together (one cache line, not two).
+  struct SlotData {
+    Real tolerance;
+    std::uint8_t activity;
+  };
+  std::vector<SlotData> bySlot_;
   std::size_t vertexCount_ = 0;
 };
 
