@@ -424,7 +424,7 @@ void transformShapes(J& q, const std::array<V, 3>& m, V t) {
   }
 }
 
-/// Moves one coordinate of one point of the query a few float ulps (std::nextafter).
+/// Moves one coordinate of one point of the query a few float ulps (nudgedFloat).
 void nudge(J& q, Rng& rng) {
   std::vector<J*> coords;
   std::function<void(J&, const std::string&)> collect = [&](J& j, const std::string& key) {
@@ -440,11 +440,7 @@ void nudge(J& q, Rng& rng) {
   collect(q, "");
   if (coords.empty()) return;
   J& c = *coords[rng.next() % coords.size()];
-  float x = float(c.get<double>());
-  const int steps = rng.integer(1, 4);
-  const float toward = rng.chance(0.5) ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
-  for (int i = 0; i < steps; ++i) x = std::nextafter(x, toward);
-  c = num(double(x));
+  c = num(nudgedFloat(c.get<double>(), rng));
 }
 
 J request(std::string_view op) { return J{{"op", std::string(op)}}; }

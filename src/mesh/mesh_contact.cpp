@@ -62,8 +62,10 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
       }
     }
   activity_.assign(tris.size(), 0);
+  std::vector<Real> tolerances(tris.size());  // meshFeatureTolerance by triangle (for bySlot_)
   for (std::uint32_t t = 0; t < tris.size(); ++t) {
     const Triangle tri = mesh.triangle(t);
+    const Real tol = tolerances[t] = meshFeatureTolerance(tri);
     // the unit face normal as Collector::correct() computes it in the mesh frame (a box's points
     // are corrected in the box frame: the same normal rotated, to rounding)
     Vec3 face = (tri.b - tri.a).cross(tri.c - tri.a);
@@ -73,7 +75,6 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
       continue;
     }
     face /= len;
-    const Real tol = meshFeatureTolerance(tri);
     std::uint8_t bits = 0;
     for (int e = 0; e < 3; ++e) {
       const std::uint32_t w = opposite_[3 * std::size_t(t) + e];
@@ -91,7 +92,7 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
   const auto& prims = mesh.bvh().primIndices;
   bySlot_.resize(prims.size());
   for (std::size_t k = 0; k < prims.size(); ++k)
-    bySlot_[k] = {meshFeatureTolerance(mesh.triangle(prims[k])), activity_[prims[k]]};
+    bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
 }
 
@@ -465,10 +466,15 @@ struct Collector {
     return true;
   }
 
-  /// Internal-edge correction of one point: faceRule, standsAtOnce, correctOffCorner.
-  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, MeshContactPoint& p) const {
-    const FaceRule r = faceRule(t, slot, tri, ft, p.normal);
+  /// The correction of one point under rule r of triangle ft: standsAtOnce, else
+  /// correctOffCorner. False: drop the point (unchanged).
+  bool correctUnder(const FaceRule& r, const Triangle& ft, MeshContactPoint& p) const {
     return standsAtOnce(r, ft, p.pointA) || correctOffCorner(r, ft, p);
+  }
+
+  /// Internal-edge correction of one point: its FaceRule, then correctUnder.
+  bool correct(std::uint32_t t, std::uint32_t slot, const Triangle& tri, const Triangle& ft, MeshContactPoint& p) const {
+    return correctUnder(faceRule(t, slot, tri, ft, p.normal), ft, p);
   }
 
   /// The inactive-feature contact (see the header): the shape's deepest point along the unit face
@@ -642,7 +648,7 @@ struct Collector {
       p.separation = m.points[i].separation;
       p.triangle = t;
       p.featureB = m.points[i].featureB;
-      if (adjacency && !standsAtOnce(rule, ft, p.pointA) && !correctOffCorner(rule, ft, p)) {
+      if (adjacency && !correctUnder(rule, ft, p)) {
         drop(p);  // unchanged: the raw point
         continue;
       }

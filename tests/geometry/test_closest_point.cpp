@@ -514,6 +514,11 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   EXPECT_GT(within, cases / 10);
   // a degenerate triangle (collinear corners) says nothing
   EXPECT_FALSE(beyondAnEdgeLine({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, Vec3(0, -5, 0), Real(1)));
+  // NaN in the point or in d says nothing either (no comparison holds)
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)));
+  EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), nan));
+  EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)
 }
 
 }  // namespace
