@@ -14,8 +14,8 @@
 /// number of disagreements; then times every engine and prints ns/query and the ratio peer /
 /// crux. Convex workloads: median of 5 runs (3 with --quick), each repeating the pair set for
 /// ~0.2 s (0.05 s). Mesh distance and mesh contacts: interleaved (timeInterleaved), 9 rounds (5
-/// with --quick) in which every engine runs a ~0.1 s (0.03 s) slice in turn; the ratio is the
-/// median over the rounds of the per-round peer / crux.
+/// with --quick) in which every engine runs a ~0.1 s (0.03 s) slice in turn (the order rotating
+/// by one engine per round); the ratio is the median over the rounds of the per-round peer / crux.
 /// Options: --quick, --json FILE (every figure, schema in docs/bench.md), --mesh PATH, --mesh-only
 /// (skip the convex workloads).
 
@@ -140,8 +140,9 @@ double timeIt(std::size_t n, const std::function<double()>& body) {
 }
 
 /// Interleaved timing of several engines on the same n queries: `rounds` rounds, in each every
-/// body runs repeatedly for ~`slice` seconds in turn (so the load of a shared machine falls on
-/// all engines alike). median[e]: median ns/query of engine e; ratio[e]: median over the rounds
+/// body runs repeatedly for ~`slice` seconds in turn, starting one engine later each round (so
+/// the load of a shared machine, and the cold caches after another engine's slice, fall on all
+/// engines alike). median[e]: median ns/query of engine e; ratio[e]: median over the rounds
 /// of (engine e / engine 0) in the same round; runs[e]: ns/query per round.
 struct Interleaved {
   std::vector<double> median, ratio;
@@ -154,7 +155,11 @@ Interleaved timeInterleaved(std::size_t n, const std::vector<std::function<doubl
   r.runs.assign(bodies.size(), {});
   volatile double sink = 0;
   for (int k = 0; k < rounds; ++k)
-    for (std::size_t e = 0; e < bodies.size(); ++e) {
+    for (std::size_t j = 0; j < bodies.size(); ++j) {
+      // The order rotates by one engine per round, so no engine always runs first, right after
+      // the last engine's slice (crux + MeshAdjacency did, and read 1.13-1.17x the uncorrected
+      // query where an in-process A/B harness measured 1.06: docs/narrowphase.md, session 12).
+      const std::size_t e = (j + std::size_t(k)) % bodies.size();
       std::size_t reps = 0;
       const auto t0 = std::chrono::steady_clock::now();
       double elapsed = 0;
