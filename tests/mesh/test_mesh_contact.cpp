@@ -3,7 +3,9 @@
 // test itself; internal-edge (ghost contact) correction on flat grids; a box on the bunny with
 // every point on both surfaces. Seeded randomness; failing cases printed with 17 digits.
 
+#include <crux/geometry/box_triangle_contact.hpp>
 #include <crux/geometry/closest_point.hpp>
+#include <crux/geometry/triangle_contact.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 
 #include <crux/error.hpp>
@@ -607,6 +609,220 @@ TEST(MeshContact, SphereCorrectionAgreesWithTheGenericOneOnAPointCapsule) {
   std::printf("%d of %d placements compared, %d changed by the correction\n", compared, cases, corrected);
   EXPECT_GT(compared, cases * 9 / 10);
   EXPECT_GT(corrected, cases / 4);
+}
+
+// --- The internal-edge correction against a reference written from the header's rule ----------
+
+/// A raw per-triangle point in the frame the reference corrects it in (the mesh frame; a box's
+/// own frame for a box, as mesh_contact.cpp computes its points there).
+struct RefPoint {
+  Vec3 a, b, normal;
+  Real separation;
+  std::uint32_t triangle;
+};
+
+/// The shape as the reference sees it in its correction frame: projection interval on a unit
+/// direction and support point.
+struct RefShape {
+  ConvexKind kind;
+  Vec3 p0 = Vec3::Zero(), p1 = Vec3::Zero(), half = Vec3::Zero();
+  Real radius = 0;
+  void project(const Vec3& u, Real& lo, Real& hi) const {
+    if (kind == ConvexKind::Box) {
+      hi = half.x() * std::abs(u.x()) + half.y() * std::abs(u.y()) + half.z() * std::abs(u.z());
+      lo = -hi;
+      return;
+    }
+    lo = std::min(u.dot(p0), u.dot(p1)) - radius;
+    hi = std::max(u.dot(p0), u.dot(p1)) + radius;
+  }
+  Vec3 support(const Vec3& d) const {
+    if (kind == ConvexKind::Box)
+      return {d.x() > 0 ? half.x() : -half.x(), d.y() > 0 ? half.y() : -half.y(), d.z() > 0 ? half.z() : -half.z()};
+    return (p1.dot(d) > p0.dot(d) ? p1 : p0) + radius * d.normalized();
+  }
+};
+
+/// The header's internal-edge rule for one point of triangle t, written directly from its text:
+/// no correction for a degenerate triangle or a normal within the face cone; the shape's side
+/// of the plane by its projection; every edge within the feature tolerance by its closest point;
+/// the activity of that side from MeshAdjacency::edgeActivity(t) (by triangle, not by slot); an
+/// inactive feature takes the face normal, the shape's deepest point along it and its
+/// projection, dropped beyond the margin or off the triangle. False: drop.
+bool referenceCorrect(const MeshAdjacency& adjacency, const Triangle& meshTriangle, const Triangle& ft,
+                      const RefShape& shape, Real margin, RefPoint& p) {
+  Vec3 face = (ft.b - ft.a).cross(ft.c - ft.a);
+  const Real len = face.norm();
+  if (!(len > 0)) return true;
+  face /= len;
+  if (std::abs(face.dot(p.normal)) >= kMeshFaceConeCos) return true;
+  Real lo = 0, hi = 0;
+  shape.project(face, lo, hi);
+  const Real base = face.dot(ft.a);
+  const bool back = base - lo > hi - base;
+  const Vec3 side = back ? Vec3(-face) : face;
+  const Real tol = meshFeatureTolerance(meshTriangle);
+  bool onSomeEdge = false;
+  for (int i = 0; i < 3; ++i) {
+    const Segment edge{ft[i], ft[(i + 1) % 3]};
+    if ((closestPoint(edge, p.a) - p.a).squaredNorm() > tol * tol) continue;
+    onSomeEdge = true;
+    if ((adjacency.edgeActivity(p.triangle) >> (2 * i + (back ? 1 : 0))) & 1u) return true;
+  }
+  if (!onSomeEdge) return true;
+  RefPoint q = p;
+  q.normal = -side;
+  q.b = shape.support(q.normal);
+  q.separation = side.dot(q.b - ft.a);
+  if (q.separation > margin) return false;
+  q.a = q.b - q.separation * side;
+  if ((closestPoint(ft, q.a) - q.a).squaredNorm() > tol * tol) return false;
+  p = q;
+  return true;
+}
+
+// contacts() with an adjacency corrects each point by a restructured, branch-reduced form of the
+// rule (a per-triangle FaceRule, a corner mask, a cheap edge-line drop, the activity and
+// tolerance read by BVH slot: docs/narrowphase.md, session 12). Here every triangle of the mesh
+// is run through the per-triangle routine by the test itself and corrected by referenceCorrect
+// (plus the rule that the deepest dropped point is kept when nothing kept is as deep); every
+// point contacts() reports must then be one of the reference's points (same triangle, position,
+// normal and separation to rounding), and the deepest separations must agree. Sphere, capsule
+// and box on the bunny and on a bumpy grid (flat, ridge and valley seams), penetrating and
+// within the margin.
+TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
+  const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
+  std::mt19937 heights(5);
+  std::uniform_int_distribution<int> bump(-1, 1);
+  std::vector<Real> h(6 * 6);  // plateaus of 4 x 4 cells (flat seams) with ridges and valleys between
+  for (Real& z : h) z = Real(0.02) * Real(bump(heights));
+  const Mesh grid = gridMesh(20, 20, Real(0.05), [&](int i, int j) { return h[std::size_t((j / 4) * 6 + i / 4)]; });
+  std::mt19937 rng(2024);
+  std::uniform_real_distribution<double> u(0, 1);
+  int points = 0, corrected = 0, dropped = 0, placements = 0;
+  for (const Mesh* mesh : {&bunny, &grid}) {
+    const MeshAdjacency adjacency(*mesh);
+    const Real diag = (mesh->bounds().max - mesh->bounds().min).norm();
+    const Real s = Real(0.025) * diag;
+    const Real margin = Real(0.01) * s;
+    const Real tol = 64 * kEps * (diag + mesh->bounds().max.cwiseAbs().maxCoeff() + mesh->bounds().min.cwiseAbs().maxCoeff());
+    const std::vector<ConvexShape> shapesHere = {
+        Sphere{Vec3::Zero(), s}, Capsule{Vec3(0, 0, Real(-0.8) * s), Vec3(0, 0, Real(0.8) * s), Real(0.6) * s},
+        Obb{Vec3::Zero(), Vec3(s, Real(0.7) * s, Real(0.5) * s), Mat3::Identity()}};
+    std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(mesh->triangleCount() - 1));
+    for (const ConvexShape& shape : shapesHere) {
+      for (int trial = 0; trial < test::scaledCases(150, 50); ++trial) {
+        // a random point of a random triangle; the shape's deepest point along -n at a depth
+        // in [-0.8 margin, 0.2 s]
+        const Triangle anchor = mesh->triangle(pick(rng));
+        Vec3 n = (anchor.b - anchor.a).cross(anchor.c - anchor.a);
+        if (!(n.norm() > 0)) continue;
+        n.normalize();
+        double w1 = u(rng), w2 = u(rng);
+        if (w1 + w2 > 1) w1 = 1 - w1, w2 = 1 - w2;
+        const Vec3 q = anchor.a + Real(w1) * (anchor.b - anchor.a) + Real(w2) * (anchor.c - anchor.a);
+        Transform pose;
+        pose.rotation = randomRotation(rng);
+        const Vec3 deepest = pose.rotation * support(shape, pose.rotation.conjugate() * Vec3(-n));
+        const Real depth = Real(-0.8 * u(rng)) * margin + (trial % 2 == 0 ? Real(0.2 * u(rng)) * s : Real(0));
+        pose.translation = q - depth * n - deepest;
+        // The shape in the mesh frame (mesh at the identity) as LocalShape takes it: the rotation
+        // in double from the quaternion, the shape's points rounded once.
+        const Eigen::Matrix3d R = pose.rotation.cast<double>().normalized().toRotationMatrix();
+        const Eigen::Vector3d t = pose.translation.cast<double>();
+        RefShape ref{shape.kind};
+        const bool isBox = shape.kind == ConvexKind::Box;
+        Eigen::Matrix3d toBox = Eigen::Matrix3d::Identity();
+        if (isBox) {
+          ref.half = shape.p[1];
+          toBox = (R * shape.axes.cast<double>()).transpose();
+          ASSERT_GT(toBox.determinant(), 0);
+        } else {
+          ref.radius = shape.radius;
+          ref.p0 = (R * shape.p[0].cast<double>() + t).cast<Real>();
+          ref.p1 = (R * shape.p[shape.kind == ConvexKind::Capsule ? 1 : 0].cast<double>() + t).cast<Real>();
+        }
+        const Eigen::Vector3d boxCentre = R * shape.p[0].cast<double>() + t;
+        auto toMesh = [&](const Vec3& v) {
+          return isBox ? Vec3((toBox.transpose() * v.cast<double>() + boxCentre).cast<Real>()) : v;
+        };
+        std::vector<RefPoint> kept;
+        RefPoint deepestDropped{};
+        bool hasDropped = false;
+        for (std::uint32_t ti = 0; ti < mesh->triangleCount(); ++ti) {
+          const Triangle tri = mesh->triangle(ti);
+          const Vec3 c = (tri.a + tri.b + tri.c) / 3;
+          if ((c - pose.translation).norm() > 4 * s + (tri.a - c).norm() + (tri.b - c).norm() + (tri.c - c).norm())
+            continue;  // far beyond the shape (size <= 1.3 s) and the margin
+          Triangle ft = tri;
+          ContactManifold m;
+          bool any = false;
+          if (isBox) {
+            ft = {(toBox * (tri.a.cast<double>() - boxCentre)).cast<Real>(),
+                  (toBox * (tri.b.cast<double>() - boxCentre)).cast<Real>(),
+                  (toBox * (tri.c.cast<double>() - boxCentre)).cast<Real>()};
+            any = boxTriangleContacts(ref.half, ft, margin, m);
+          } else if (shape.kind == ConvexKind::Capsule) {
+            any = capsuleTriangleContacts(tri, ref.p0, ref.p1, ref.radius, margin, m);
+          } else {
+            SphereTriangleContact one;
+            any = sphereTriangleContact(tri, ref.p0, ref.radius, margin, one);
+            m.count = any ? 1 : 0;
+            m.normal = one.normal;
+            m.points[0].pointA = one.pointA;
+            m.points[0].pointB = one.pointB;
+            m.points[0].separation = one.separation;
+          }
+          for (int k = 0; any && k < m.count; ++k) {
+            RefPoint p{m.points[k].pointA, m.points[k].pointB, m.normal, m.points[k].separation, ti};
+            const RefPoint raw = p;
+            if (!referenceCorrect(adjacency, tri, ft, ref, margin, p)) {
+              ++dropped;
+              if (!hasDropped || raw.separation < deepestDropped.separation ||
+                  (raw.separation == deepestDropped.separation && raw.triangle < deepestDropped.triangle))
+                deepestDropped = raw, hasDropped = true;
+              continue;
+            }
+            corrected += (p.normal - raw.normal).norm() > 0;
+            kept.push_back(p);
+          }
+        }
+        Real keptMin = kNoLimit;
+        for (const RefPoint& p : kept) keptMin = std::min(keptMin, p.separation);
+        if (hasDropped && !(keptMin <= deepestDropped.separation)) kept.push_back(deepestDropped);
+        Real refMin = kNoLimit;
+        for (const RefPoint& p : kept) refMin = std::min(refMin, p.separation);
+
+        MeshContactManifold out;
+        contacts(*mesh, Transform::identity(), shape, pose, margin, out, &adjacency);
+        const std::string info = std::string(mesh == &bunny ? "bunny" : "grid") + " kind " +
+                                 std::to_string(int(shape.kind)) + " trial " + std::to_string(trial) + " pose " +
+                                 str(pose);
+        ASSERT_EQ(out.count > 0, !kept.empty()) << info;
+        if (kept.empty()) continue;
+        ++placements;
+        EXPECT_NEAR(minSeparation(out), refMin, tol) << info;
+        for (int k = 0; k < out.count; ++k) {
+          const MeshContactPoint& o = out.points[k];
+          bool found = false;
+          for (const RefPoint& p : kept)
+            found = found || (p.triangle == o.triangle && std::abs(p.separation - o.separation) <= tol &&
+                              (toMesh(p.a) - o.pointA).norm() <= tol && (toMesh(p.b) - o.pointB).norm() <= tol &&
+                              (isBox ? Vec3((toBox.transpose() * p.normal.cast<double>()).cast<Real>()) : p.normal)
+                                          .dot(o.normal) >= 1 - 64 * kEps);
+          EXPECT_TRUE(found) << info << " point " << k << " on triangle " << o.triangle << " at " << str(o.pointA)
+                             << " normal " << str(o.normal) << " separation " << double(o.separation)
+                             << " is none of the reference's " << kept.size() << " points";
+          ++points;
+        }
+      }
+    }
+  }
+  std::printf("%d placements, %d reported points found among the reference's; the reference corrected %d and "
+              "dropped %d raw points\n", placements, points, corrected, dropped);
+  EXPECT_GT(placements, 3 * test::scaledCases(150, 50));  // most placements touch on both meshes
+  EXPECT_GT(corrected, 0);  // the rule acted (grid seams)
+  EXPECT_GT(dropped, 0);
 }
 
 TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: shared machine)
