@@ -14,6 +14,7 @@
 #include <crux/geometry/predicates.hpp>
 #include <crux/geometry/raycast.hpp>
 #include <limits>
+#include <type_traits>
 
 namespace crux {
 namespace {
@@ -301,6 +302,24 @@ WVec3 toBoxFrame(const Obb& b, const WVec3& v) {
   return WVec3(axes.col(0).dot(v), axes.col(1).dot(v), axes.col(2).dot(v));
 }
 
+/// Whether the filter stage's hit parameter s = num / den (num >= 0 and den > 0, both certain;
+/// `s` its value) of a ray crossing the plane of triangle tri may miss the exact parameter by
+/// more than kRayParameterUlps ulps of Real × (S + t) / cos θ (S: the larger |coordinate| of the
+/// origin and the first corner, t = s|d| the hit distance, θ the angle between the ray and the
+/// plane's normal n, whose approximation is `normal`). The bound is the filter's own (Bounded):
+/// to first order s·(num.e/num + den.e/den), so the hit distance's error times cos θ =
+/// |n·d| / (|n||d|) is (num.e + s·den.e) / |n|. Conservative without square roots: |d| and |n|
+/// enter as their largest components, at most the norms. The bound is small for a proper
+/// triangle, but grows as L/h on a sliver (height h, longest edge L), whose normal is the cross
+/// product of two nearly antiparallel edges (`crux diff`'s flat caps, docs/diff.md): such hits
+/// are recomputed by the exact stage. A NaN or infinite bound (overflow) is imprecise too.
+bool imprecise(const Frac<robust::Bounded>& f, Wide s, const WVec3& normal, const Ray& ray, const Triangle& tri) {
+  const Wide S = std::max(wide(ray.origin).cwiseAbs().maxCoeff(), wide(tri.a).cwiseAbs().maxCoeff());
+  const Wide t = s * wide(ray.dir).cwiseAbs().maxCoeff();  // <= s|d|
+  const Wide allowed = Wide(kRayParameterUlps) * Wide(std::numeric_limits<Real>::epsilon()) * (S + t);
+  return !(f.num.e + s * f.den.e <= allowed * normal.cwiseAbs().maxCoeff());
+}
+
 }  // namespace
 
 std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
@@ -311,7 +330,15 @@ std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
     using T = NumberOf<decltype(judge)>;
     const TriangleHit<T> h = firstHit(judge, lift<T>(ray.origin), lift<T>(ray.dir), t, shape);
     if (!h.s) return false;
-    s = h.s->value();
+    const Wide value = h.s->value();
+    if constexpr (std::is_same_v<T, robust::Bounded>) {
+      // a hit parameter the filter cannot bound well enough (slivers): the exact stage instead
+      if (h.crossing != 0 && imprecise(*h.s, value, h.normal, ray, t)) {
+        judge.uncertain = true;
+        return false;
+      }
+    }
+    s = value;
     normal = h.normal;
     // Beyond the exact range (double builds, coordinates past ~√max Wide) n·a and n·d overflow
     // and their ratio is no parameter: it is taken from the (scaled) plane normal instead.

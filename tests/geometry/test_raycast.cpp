@@ -591,10 +591,13 @@ Real extent(const Aabb& b) { return (std::max)(b.min.norm(), b.max.norm()); }
 Real extent(const Obb& b) { return b.center.norm() + b.half.norm(); }
 Real extent(const Plane& p) { return std::abs(p.d) / p.normal.norm(); }
 
-/// cos θ at the exact hit point q (see kDistanceUlps); 1 for hits at t = 0.
+/// cos θ at the exact hit point q (see kDistanceUlps); 1 for hits at t = 0. (The triangle's
+/// normal in long double: a flat cap's edges are nearly antiparallel, and their cross product in
+/// double builds' Real would tilt it by ~eps·L/h.)
 double cosAtHit(const Ray& r, const Triangle& t, const Vec3d&) {
-  const Vec3d n = (t.b - t.a).cast<double>().cross((t.c - t.a).cast<double>());
-  return std::abs(n.normalized().dot(r.dir.cast<double>().normalized()));
+  using L3 = Eigen::Matrix<long double, 3, 1>;
+  const L3 n = (t.b.cast<long double>() - t.a.cast<long double>()).cross(t.c.cast<long double>() - t.a.cast<long double>());
+  return double(std::abs(n.normalized().dot(r.dir.cast<long double>().normalized())));
 }
 double cosAtHit(const Ray& r, const Sphere& s, const Vec3d& q) {
   const Vec3d n = q - s.center.cast<double>();
@@ -781,6 +784,32 @@ void generalRayTriangle(Rng& rng, Ray& r, Triangle& t) {
   r.dir = t.a + u * (t.b - t.a) + v * (t.c - t.a) - r.origin;
 }
 
+/// A flat cap (as `crux diff`'s sliver family): corners a, b in [-4, 4]³ and their midpoint
+/// moved, in half of the cases 1-4 ulps of Real along one axis (height ~1e-7 of the longest
+/// edge in float builds, ~1e-16 in double ones), in the others by 10^-k |b − a| (k uniform in
+/// [1, 15]) in a random direction; corners in a random order; the ray from a random origin aimed
+/// at a random point of the cap (its direction rounded: many miss the thinnest caps).
+void flatCapRayTriangle(Rng& rng, Ray& r, Triangle& t) {
+  const Vec3 a = rng.point(4), b = rng.point(4);
+  Vec3 m = Real(0.5) * (a + b);
+  if (rng.chance(0.5)) {
+    const int axis = rng.integer(0, 2);
+    const Real toward = rng.chance(0.5) ? std::numeric_limits<Real>::infinity() : -std::numeric_limits<Real>::infinity();
+    for (int i = rng.integer(1, 4); i > 0; --i) m[axis] = std::nextafter(m[axis], toward);
+  } else {
+    m += rng.point(1).normalized() * Real(std::pow(10.0, -double(rng.real(1, 15)))) * (b - a).norm();
+  }
+  switch (rng.integer(0, 2)) {
+    case 0: t = {a, b, m}; break;
+    case 1: t = {b, m, a}; break;
+    default: t = {m, a, b};
+  }
+  r.origin = rng.point(8);
+  Real u = rng.real(0, 1), v = rng.real(0, 1);
+  if (u + v > 1) u = 1 - u, v = 1 - v;
+  r.dir = t.a + u * (t.b - t.a) + v * (t.c - t.a) - r.origin;
+}
+
 void gridRaySphere(Rng& rng, Ray& r, Sphere& s) {
   s.center = rng.gridPoint(4);
   s.radius = Real(rng.integer(0, 4));
@@ -903,6 +932,16 @@ void segmentProperty(const char* name, std::uint64_t seed, G1 grid, G2 general) 
 TEST(RaycastProperty, RayTriangleMatchesExact) {
   rayProperty<Triangle>("ray-triangle", 1001, gridRayTriangle, generalRayTriangle);
 }
+// Flat caps: the plane from the cross product of two nearly antiparallel edges is tilted by
+// ~eps·L/h, so a hit parameter from it (the filter stage's n·a / n·d) can miss the exact one by
+// far more than the tolerance in double builds (found by `crux diff`'s sliver family, session
+// 11: 2-4x the native backend's τ). The filter's error bound on that ratio sends such hits to
+// the exact stage (raycast.cpp, kRayParameterUlps).
+TEST(RaycastProperty, RayFlatCapMatchesExact) {
+  expectGood(compareRays<Triangle>(Family::General, 1011, casesPerFamily(), flatCapRayTriangle),
+             "ray-triangle (flat caps)");
+}
+
 TEST(RaycastProperty, RaySphereMatchesExact) {
   rayProperty<Sphere>("ray-sphere", 1003, gridRaySphere, generalRaySphere);
 }
