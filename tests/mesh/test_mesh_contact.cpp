@@ -105,6 +105,19 @@ ConvexHull randomHull(std::mt19937& rng) {
   return ConvexHull::build(pts);
 }
 
+/// A uniformly random point q of triangle tri and its unit normal n (two draws of rng, made
+/// only when the triangle has an area); false for a zero-area triangle.
+bool randomPointOn(const Triangle& tri, std::mt19937& rng, Vec3& q, Vec3& n) {
+  n = (tri.b - tri.a).cross(tri.c - tri.a);
+  if (!(n.norm() > 0)) return false;
+  n.normalize();
+  std::uniform_real_distribution<double> u(0, 1);
+  double s = u(rng), w = u(rng);
+  if (s + w > 1) s = 1 - s, w = 1 - w;
+  q = tri.a + Real(s) * (tri.b - tri.a) + Real(w) * (tri.c - tri.a);
+  return true;
+}
+
 Real minSeparation(const MeshContactManifold& m) {
   Real s = kNoLimit;
   for (int i = 0; i < m.count; ++i) s = std::min(s, m.points[i].separation);
@@ -381,17 +394,11 @@ TEST(MeshContact, BoxOnBunnyPointsLieOnBothSurfaces) {
   const Real tol = 1000 * kEps * scale;
   std::mt19937 rng(99);
   std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(bunny.triangleCount() - 1));
-  std::uniform_real_distribution<double> u(0, 1);
   int points = 0;
   for (int trial = 0; trial < 100; ++trial) {
     const std::uint32_t ti = pick(rng);
-    const Triangle tri = bunny.triangle(ti);
-    Vec3 n = (tri.b - tri.a).cross(tri.c - tri.a);
-    if (!(n.norm() > 0)) continue;
-    n.normalize();
-    double s = u(rng), w = u(rng);
-    if (s + w > 1) s = 1 - s, w = 1 - w;
-    const Vec3 q = tri.a + Real(s) * (tri.b - tri.a) + Real(w) * (tri.c - tri.a);
+    Vec3 q, n;
+    if (!randomPointOn(bunny.triangle(ti), rng, q, n)) continue;
     Obb box;
     box.half = Vec3(Real(0.03), Real(0.02), Real(0.015)) * diag;
     const Quat rot = randomRotation(rng);
@@ -714,13 +721,8 @@ TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
       for (int trial = 0; trial < test::scaledCases(150, 50); ++trial) {
         // a random point of a random triangle; the shape's deepest point along -n at a depth
         // in [-0.8 margin, 0.2 s]
-        const Triangle anchor = mesh->triangle(pick(rng));
-        Vec3 n = (anchor.b - anchor.a).cross(anchor.c - anchor.a);
-        if (!(n.norm() > 0)) continue;
-        n.normalize();
-        double w1 = u(rng), w2 = u(rng);
-        if (w1 + w2 > 1) w1 = 1 - w1, w2 = 1 - w2;
-        const Vec3 q = anchor.a + Real(w1) * (anchor.b - anchor.a) + Real(w2) * (anchor.c - anchor.a);
+        Vec3 q, n;
+        if (!randomPointOn(mesh->triangle(pick(rng)), rng, q, n)) continue;
         Transform pose;
         pose.rotation = randomRotation(rng);
         const Vec3 deepest = pose.rotation * support(shape, pose.rotation.conjugate() * Vec3(-n));
