@@ -590,15 +590,6 @@ TEST(ContactsIssue6, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMargin) {
 
 // ---- degenerate shapes: no duplicate contact points (issue 6) ----------------------------------
 
-/// The full shape, 17 digits: kind, radius, core vertices in the local frame.
-std::string str(const ConvexShape& s) {
-  std::ostringstream os;
-  os.precision(17);
-  os << "kind " << int(s.kind) << " radius " << s.radius << " vertices";
-  for (int i = 0; i < s.vertexCount(); ++i) os << " " << str(s.vertex(i));
-  return os.str();
-}
-
 /// Index pair (i, j) of two points of `m` that coincide on both bodies within `tol`, or (-1, -1).
 std::pair<int, int> coincidentPoints(const ContactManifold& m, double tol) {
   for (int i = 0; i < m.count; ++i)
