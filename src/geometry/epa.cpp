@@ -136,11 +136,15 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
     bool duplicate = false;
     for (int i = 0; i < nv && !duplicate; ++i) duplicate = verts[i].w == w.w;
     if (duplicate) break;
-    // Remove the faces w sees; their unmatched edges form the horizon.
+    // Remove the faces w sees; their unmatched edges form the horizon. A face with w in its
+    // plane (within tolAbs) counts as seen: were it kept, w would lie on the line of its horizon
+    // edge and the new face over that edge would have no area (a "degenerate step", which left
+    // the depth at the origin's face, 0, for crossing shapes on integer grids: `crux diff`,
+    // session 14, e.g. a triangle through a flat box reported touching instead of 0.316 deep).
     int ne = 0;
     for (int f = 0; f < nf; ++f) {
       Face& g = faces[f];
-      if (!g.alive || g.n.dot(w.w - verts[g.i[0]].w) <= 0) continue;
+      if (!g.alive || g.n.dot(w.w - verts[g.i[0]].w) <= -tolAbs) continue;
       g.alive = false;
       for (int k = 0; k < 3; ++k) {
         const std::pair<int, int> ed(g.i[k], g.i[(k + 1) % 3]);

@@ -466,6 +466,54 @@ TEST(GjkExact, PenetrationDepthIsTheSatMinimum) {
   EXPECT_GT(compared, 800);
 }
 
+// Found by `crux diff` (session 14, tests/regressions/*.14201-*, *.14202-*): integer-grid pairs
+// whose Minkowski difference holds the origin on the plane of GJK's final triangle. EPA grew it
+// to a tetrahedron with the origin on a face, and the support point of its first expansion lay on
+// the line of a horizon edge (the face beyond that edge has it in its plane and was kept), so the
+// new face over that edge had no area and EPA stopped ("degenerate step") with the origin's face:
+// depth 0, touching, for pairs crossing by 0.316 and 1/3; a hull and a triangle read 3.6 %
+// shallow. EPA now counts a face with the new point in its plane as seen. Depths against the
+// exact SAT minimum, in both precisions.
+TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
+  struct Case {
+    const char* name;
+    ConvexShape a, b;
+  };
+  Obb flat;  // a rectangle: x in [0, 2], y = 1, z in [0, 2]
+  flat.center = Vec3(1, 1, 1);
+  flat.half = Vec3(1, 0, 1);
+  flat.axes.col(0) = Vec3(0, 0, -1);
+  flat.axes.col(1) = Vec3(0, -1, 0);
+  flat.axes.col(2) = Vec3(1, 0, 0);
+  Obb box;
+  box.center = Vec3(0, -1, -1);
+  box.half = Vec3(1, 2, 1);
+  box.axes.col(0) = Vec3(-1, 0, 0);
+  box.axes.col(1) = Vec3(0, 0, -1);
+  box.axes.col(2) = Vec3(0, 1, 0);
+  const ConvexHull hull = ConvexHull::build({Vec3(-2, 1, 3), Vec3(0, 0, 3), Vec3(0, 0, 3), Vec3(-1, -2, 2), Vec3(0, 0, 4),
+                                             Vec3(-2, 1, 4), Vec3(-1, -2, 4), Vec3(0, 0, 5)});
+  const std::vector<Case> cases = {
+      {"triangle through a flat box", Triangle{Vec3(0, -1, 0), Vec3(1, -1, 0), Vec3(0, 2, 2)}, flat},
+      {"box and triangle crossing by 1/3", box, Triangle{Vec3(-2, -1, -2), Vec3(-1, 0, -2), Vec3(0, 0, -4)}},
+      {"hull with a repeated point through a triangle", hull,
+       Triangle{Vec3(1, 3, 4), Vec3(1, 3, -3), Vec3(-4, -3, 4)}},
+  };
+  for (const Case& c : cases) {
+    for (int order = 0; order < 2; ++order) {
+      const ConvexShape& a = order == 0 ? c.a : c.b;
+      const ConvexShape& b = order == 0 ? c.b : c.a;
+      const Transform id;
+      const DistanceResult r = distance(a, id, b, id);
+      const double S = pairScale(a, id, b, id);
+      const double want = satDepth(a, id, b, id);
+      EXPECT_GT(want, 0.3) << c.name;  // they do cross
+      EXPECT_NEAR(-double(r.distance), want, budget(S, want)) << c.name << ", order " << order << "\n"
+                                                               << describe(a, id, b, id);
+    }
+  }
+}
+
 #if CRUX_HAVE_CCD_ORACLE
 TEST(GjkVsLibccd, PenetrationDepth) {
   // libccd's GJK+EPA (ccdGJKPenetration) is compared on polytope pairs; where it disagrees with
