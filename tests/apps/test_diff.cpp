@@ -194,6 +194,50 @@ TEST(DiffClassify, GrazingRayHitOnATriangleMovedWithinTauIsWithinTolerance) {
   EXPECT_EQ(k.cause, "beyond-tolerance") << describe(k);
 }
 
+// The same rule for a `mesh_ray` (session 14: two grazing hits on blob-closed in a double-build
+// run were reported crux-wrong for lack of it): the triangle both answers name, taken from the
+// mesh, moved by at most tau. A hit on another triangle than exact's is not rescued by it.
+TEST(DiffClassify, GrazingMeshRayHitOnATriangleMovedWithinTauIsWithinTolerance) {
+  DiffRunner runner;
+  auto shifted = [](const J& exact, const J& query, double by) {
+    J got = exact;
+    const J& d = query["ray"]["dir"];
+    const Vec3d u = Vec3d(d[0].get<double>(), d[1].get<double>(), d[2].get<double>()).normalized();
+    got["t"] = exact["t"].get<double>() + by;
+    for (int k = 0; k < 3; ++k) got["point"][k] = exact["point"][k].get<double>() + by * u[k];
+    return got;
+  };
+  auto meshCase = [](const std::string& vertices, const std::string& ray) {
+    DiffCase m = primitive(R"({"op":"mesh_ray","mesh":"m","ray":)" + ray + "}", false);
+    m.setup = {R"({"op":"mesh","name":"m","vertices":)" + vertices + R"(,"triangles":[[0,1,2]]})"};
+    return m;
+  };
+  const DiffCase grazing = meshCase(
+      R"([[-3.7787996453542023,0.265869140625,7.060639381408691],[-3.439453125,1.6386329013511354,7.08203125],)"
+      R"([-7.165391951889235,2.5888671875,5.2898783683776855]])",
+      R"({"origin":[-7.392578125,-1.00146484375,5.533203125],"dir":[3.953125,2.64005532737447,1.549641728401184]})");
+  const double tau = runner.tolerance("native").at(8);
+  const J exact = runner.run(grazing, "exact");
+  ASSERT_TRUE(exact["hit"].get<bool>()) << exact.dump();
+  const J query = J::parse(grazing.query);
+  auto k = classify(runner, grazing, "native", shifted(exact, query, 100 * tau));
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  EXPECT_EQ(k.cause, "grazing-ray") << describe(k);
+  J off = shifted(exact, query, 100 * tau);  // the point no longer at distance t on the ray
+  off["point"][0] = off["point"][0].get<double>() + 100 * tau;
+  k = classify(runner, grazing, "native", off);
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  J other = shifted(exact, query, 100 * tau);  // another triangle than exact's
+  other["triangle"] = 1;
+  k = classify(runner, grazing, "native", other);
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  const DiffCase headOn = meshCase("[[0,0,0],[4,0,0],[0,4,0]]", R"({"origin":[1,1,3],"dir":[0,0,-1]})");
+  const J exactHeadOn = runner.run(headOn, "exact");
+  k = classify(runner, headOn, "native", shifted(exactHeadOn, J::parse(headOn.query), 100 * tau));
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  EXPECT_EQ(k.cause, "beyond-tolerance") << describe(k);
+}
+
 TEST(DiffClassify, BelowMinFeatureIsOutsideBulletsRange) {
   DiffRunner runner;
   auto c = primitive(
