@@ -281,7 +281,10 @@ inline Wide approx(const Expansion& x) { return Wide(x.estimate()); }
 // ---------------------------------------------------------------------------------------------
 
 /// Sign reader of the filter stage: certain signs are returned; an uncertain one sets
-/// `uncertain` (the caller then discards the result and reruns exactly) and reads as 0.
+/// `uncertain` (the caller then discards the result and reruns exactly) and reads as 0. A
+/// predicate may also set `uncertain` itself when a value it reports, not a sign, is too
+/// imprecise in the filter stage (raycast.cpp: a ray–triangle hit distance whose Bounded error
+/// exceeds kRayParameterUlps), to have it recomputed by the exact stage.
 struct FilterJudge {
   using Number = Bounded;
   bool uncertain = false;
