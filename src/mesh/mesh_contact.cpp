@@ -9,6 +9,8 @@
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/error.hpp>
 
+#include "node_tests.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -769,35 +771,27 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
     const bool isSphere = shape.kind == ConvexKind::Sphere;
     // (grow holds the margin and a rounding slack; the capsule test adds 1000 ulps more below)
     const Real reach = (ls.radius + grow) * (1 + kMeshFeatureRelativeTolerance);
+    // A box's pad: the margin and rounding slack (relative 1000 ulps on the box's scale).
+    const mesh_detail::ObbBoxTest obb(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
+    const mesh_detail::ObbBoxTest::Placed placed = obb.place(ls.p[0], ls.half);
     struct Visitor {
       const Mesh& mesh;
       const Aabb& query;
       Collector& c;
       bool isSphere, isCapsule, isBox;
-      Vec3 centre, end;  // sphere centre; capsule ends; box centre
+      Vec3 centre, end;  // sphere centre; capsule ends
       Real reach2;
-      Mat3 axes;         // box axes (mesh frame)
-      Vec3 half;         // box half extents
-      Real boxGrow;      // margin + rounding slack (relative 1000 ulps on the box's scale)
+      const mesh_detail::ObbBoxTest& obb;             // box: its node test (axes in the mesh frame)
+      const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
       bool enter(const BvhNode& node, Real& key) {
         key = 0;
         if (isSphere) {
           const Vec3 d = (node.bounds.min - centre).cwiseMax(centre - node.bounds.max).cwiseMax(Vec3::Zero());
           return d.squaredNorm() <= reach2;
         }
+        // a box: the OBB–AABB SAT's six face axes (its axis-aligned box is loose when it is rotated)
+        if (isBox) return obb.touches(placed, node.bounds);
         if (!boxesOverlap(node.bounds, query)) return false;
-        if (isBox) {
-          // the box's own face axes against the node box (the rest of the OBB–AABB SAT, RTCD
-          // 4.4.1): its axis-aligned box is loose when it is rotated
-          const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max) - centre;
-          const Vec3 h = Real(0.5) * (node.bounds.max - node.bounds.min);
-          for (int k = 0; k < 3; ++k) {
-            const Vec3 u = axes.col(k);
-            const Real r = std::abs(u.x()) * h.x() + std::abs(u.y()) * h.y() + std::abs(u.z()) * h.z();
-            if (std::abs(u.dot(c)) > half[k] + r + boxGrow) return false;
-          }
-          return true;
-        }
         if (!isCapsule) return true;
         // A capsule also by the distance of its segment to the box's circumscribed sphere (its
         // axis-aligned box is loose when it is tilted).
@@ -832,9 +826,8 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
         ls.p[0],
         ls.p[1],
         reach * reach,
-        ls.axes,
-        ls.half,
-        grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm())};
+        obb,
+        placed};
     traverseBvhSlots(mesh.bvh(), v);
   }
   c.keepDeepestDropped();

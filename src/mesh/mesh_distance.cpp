@@ -6,14 +6,11 @@
 #include <crux/mesh/mesh_distance.hpp>
 
 #include "geometry/bits.hpp"
+#include "lanes.hpp"
 #include "node_tests.hpp"
 #include "relative_frame.hpp"
 
 #include <Eigen/Eigenvalues>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include <algorithm>
 #include <cstring>
@@ -98,49 +95,14 @@ static_assert(sizeof(Mat3) == 9 * sizeof(Real) && sizeof(Vec3) == 3 * sizeof(Rea
                   sizeof(MeshDistanceAccel::Node) == 16 * sizeof(Real),
               "MeshDistanceAccel::Node is read as 16 Reals: axes (column-major), center, half, child");
 
-// The 4-wide lanes below use the GCC/Clang vector extension; crux is built with GCC or Clang
-// (README: requirements), so there is no scalar copy of this arithmetic to keep in step.
-#if !defined(__GNUC__)
-#error "crux needs GCC or Clang: src/mesh/mesh_distance.cpp uses their vector extension"
-#endif
-// (Four doubles are 32 bytes, passed differently with and without AVX: the functions taking
-// them are internal to this file, so GCC's ABI note does not apply; it is reported at the end of
-// the file, hence not popped.)
-#pragma GCC diagnostic ignored "-Wpsabi"
 namespace {
 
-// Four lanes of Real (GCC/Clang vector extension: SSE on x86-64 in either precision).
-using Lanes = Real __attribute__((vector_size(4 * sizeof(Real))));
-using LaneInt = std::conditional_t<sizeof(Real) == 4, std::int32_t, std::int64_t>;
-using LaneBits = LaneInt __attribute__((vector_size(4 * sizeof(Real))));
-
+// (Lanes and their helpers: lanes.hpp.)
 #if defined(__clang__)
 #define CRUX_LANE_SHUFFLE(x, y, i0, i1, i2, i3) __builtin_shufflevector(x, y, i0, i1, i2, i3)
 #else
 #define CRUX_LANE_SHUFFLE(x, y, i0, i1, i2, i3) __builtin_shuffle(x, y, LaneBits{i0, i1, i2, i3})
 #endif
-
-/// |x| per lane, exactly (clears the sign bits).
-inline Lanes lanesAbs(const Lanes& x) { return (Lanes)((LaneBits)x & std::numeric_limits<LaneInt>::max()); }
-
-/// Correctly rounded square root per lane (as std::sqrt).
-inline Lanes lanesSqrt(const Lanes& x) {
-#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
-  return (Lanes)_mm_sqrt_ps((__m128)x);
-#elif defined(__SSE2__)
-  __m128d half[2];
-  std::memcpy(half, &x, sizeof half);
-  half[0] = _mm_sqrt_pd(half[0]), half[1] = _mm_sqrt_pd(half[1]);
-  Lanes r;
-  std::memcpy(&r, half, sizeof half);
-  return r;
-#else
-  return Lanes{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
-#endif
-}
-
-/// mask ? x : y per lane (mask lanes all ones or all zeros, as comparisons give).
-inline Lanes lanesSelect(const LaneBits& mask, const Lanes& x, const Lanes& y) { return (Lanes)((mask & (LaneBits)x) | (~mask & (LaneBits)y)); }
 
 /// Reals 4k .. 4k+3 of four nodes, transposed: f[i] holds Real 4k+i of every node (one lane each).
 inline void loadTransposed(const MeshDistanceAccel::Node* const (&n)[4], int k, Lanes* f) {

@@ -18,6 +18,8 @@
 
 #include <crux/geometry/shapes.hpp>
 
+#include "lanes.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -135,39 +137,57 @@ inline bool planeTouchesBox(const Vec3& n, Real d, const Aabb& b, Real padFracti
   return std::fabs(s) <= r + padFraction * (n.cwiseAbs().sum() * scale + std::fabs(d));
 }
 
+static_assert(sizeof(Aabb) == 6 * sizeof(Real), "Aabb is read as 6 contiguous Reals (min, then max)");
+
 /// An OBB (orthonormal axes as columns) prepared for separating-axis tests against axis-aligned
 /// boxes (RTCD 4.4.1 with the AABB as box A), restricted to the six face axes: the nine
 /// edge–edge axes cost more than the few extra "maybe" answers they would remove, and skipping
 /// axes keeps the test conservative. Comparisons are padded by an absolute pad; |R| by kAxisPad.
+/// The six axes are tested at once, one lane per axis (lanes.hpp), in the scalar test's order
+/// of operations (so the same answers).
 class ObbBoxTest {
  public:
-  ObbBoxTest(const Mat3& axes, Real pad) : r_(axes), pad_(pad) { absR_ = r_.cwiseAbs().array() + kAxisPad; }
+  ObbBoxTest(const Mat3& axes, Real pad) : pad2_(2 * pad) {
+    const Mat3 absR = axes.cwiseAbs().array() + kAxisPad;
+    absR_ = absR;
+    for (int i = 0; i < 3; ++i) {
+      rows_[i] = Lanes{axes(i, 0), axes(i, 1), axes(i, 2), 0};
+      absRows_[i] = Lanes{absR(i, 0), absR(i, 1), absR(i, 2), 0};
+    }
+  }
 
   /// An OBB with these axes placed at `center` with half extents `half`, prepared for touches():
-  /// doubled centre and half extents (exact), and its world box grown by the pad.
+  /// doubled centre and half extents (exact), and its world box grown by the pad; each vector
+  /// is followed by one more Real, so touches() reads them as four lanes.
   struct Placed {
     Vec3 center2, half2, lo, hi;
+    Real end = 0;  // hi's fourth lane
   };
   Placed place(const Vec3& center, const Vec3& half) const {
-    const Vec3 ext = absR_ * half + Vec3::Constant(pad_);
+    const Vec3 ext = absR_ * half + Vec3::Constant(pad2_ / 2);
     return {2 * center, 2 * half, center - ext, center + ext};
   }
 
   /// Does the placed OBB touch box b (grown by the pad)?
   bool touches(const Placed& o, const Aabb& b) const {
+    const Real* box = b.min.data();
+    const Lanes mn = lanesLoad(box);  // min, max.x
+    const Lanes tail = lanesLoad(box + 2);  // min.z, max
+    const Lanes mx = Lanes{tail[1], tail[2], tail[3], tail[3]};
     // Box A's face axes: the OBB's world box against b (comparisons only).
-    if ((o.lo.array() > b.max.array()).any() || (o.hi.array() < b.min.array()).any()) return false;
-    // The OBB's face axes u_j: |t·u_j| > Σ_i h_i |R_ij| + e_j, all doubled (2t, 2h, 2e).
-    const Vec3 t2 = o.center2 - (b.min + b.max);
-    const Vec3 h2 = b.max - b.min;
-    for (int j = 0; j < 3; ++j)
-      if (std::fabs(t2.dot(r_.col(j))) > absR_.col(j).dot(h2) + o.half2[j] + 2 * pad_) return false;
-    return true;
+    const LaneBits outside = (lanesLoad(o.lo.data()) > mx) | (lanesLoad(o.hi.data()) < mn);
+    // The OBB's face axes u_j (lane j): |t·u_j| > Σ_i h_i |R_ij| + e_j, all doubled (2t, 2h, 2e).
+    const Lanes t2 = lanesLoad(o.center2.data()) - (mn + mx);
+    const Lanes h2 = mx - mn;
+    const Lanes dot = (t2[0] * rows_[0] + t2[1] * rows_[1]) + t2[2] * rows_[2];
+    const Lanes reach = (((h2[0] * absRows_[0] + h2[1] * absRows_[1]) + h2[2] * absRows_[2]) + lanesLoad(o.half2.data())) + pad2_;
+    return !anyOf3(outside | (lanesAbs(dot) > reach));
   }
 
  private:
-  Mat3 r_, absR_;
-  Real pad_;
+  Lanes rows_[3], absRows_[3];  // row i of the axes (lane j: R_ij), and of |R| + kAxisPad
+  Mat3 absR_;
+  Real pad2_;
 };
 
 }  // namespace crux::mesh_detail

@@ -1,0 +1,91 @@
+#pragma once
+/// @file lanes.hpp  Internal: four lanes of Real (the GCC/Clang vector extension; SSE on x86-64
+/// in either precision) and the per-lane helpers the mesh layer's vectorised node tests share
+/// (mesh_distance.cpp's oriented box pairs, mesh_contact.cpp's box-vs-node test).
+
+#include <crux/geometry/shapes.hpp>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+
+// crux is built with GCC or Clang (README: requirements), so there is no scalar copy of the
+// lane arithmetic to keep in step.
+#if !defined(__GNUC__)
+#error "crux needs GCC or Clang: src/mesh/lanes.hpp uses their vector extension"
+#endif
+
+// Four doubles are 32 bytes, passed differently with and without AVX: the functions taking them
+// are internal (inline here, or in an anonymous namespace of the including file), so GCC's ABI
+// note does not apply. It is reported at the end of a translation unit, so it stays off for the
+// rest of the including file (not popped).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+namespace crux::mesh_detail {
+
+/// Four lanes of Real.
+using Lanes = Real __attribute__((vector_size(4 * sizeof(Real))));
+using LaneInt = std::conditional_t<sizeof(Real) == 4, std::int32_t, std::int64_t>;
+/// Four lanes of integers as wide as Real (comparison results: all ones or all zeros).
+using LaneBits = LaneInt __attribute__((vector_size(4 * sizeof(Real))));
+
+/// |x| per lane, exactly (clears the sign bits).
+inline Lanes lanesAbs(const Lanes& x) { return (Lanes)((LaneBits)x & std::numeric_limits<LaneInt>::max()); }
+
+/// Correctly rounded square root per lane (as std::sqrt).
+inline Lanes lanesSqrt(const Lanes& x) {
+#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
+  return (Lanes)_mm_sqrt_ps((__m128)x);
+#elif defined(__SSE2__)
+  __m128d half[2];
+  std::memcpy(half, &x, sizeof half);
+  half[0] = _mm_sqrt_pd(half[0]), half[1] = _mm_sqrt_pd(half[1]);
+  Lanes r;
+  std::memcpy(&r, half, sizeof half);
+  return r;
+#else
+  return Lanes{std::sqrt(x[0]), std::sqrt(x[1]), std::sqrt(x[2]), std::sqrt(x[3])};
+#endif
+}
+
+/// mask ? x : y per lane (mask lanes all ones or all zeros, as comparisons give).
+inline Lanes lanesSelect(const LaneBits& mask, const Lanes& x, const Lanes& y) {
+  return (Lanes)((mask & (LaneBits)x) | (~mask & (LaneBits)y));
+}
+
+/// Whether any of lanes 0..2 of a comparison result is set; lane 3 is ignored.
+template <class Bits>
+inline bool anyOf3(const Bits& m) {
+  static_assert(sizeof(Bits) == 16 || sizeof(Bits) == 32, "four lanes of 32- or 64-bit integers");
+#if defined(__SSE2__)
+  if constexpr (sizeof(Bits) == 16) {
+    __m128 v;
+    std::memcpy(&v, &m, sizeof v);
+    return (_mm_movemask_ps(v) & 7) != 0;
+  } else {
+    __m128d half[2];
+    std::memcpy(half, &m, sizeof half);
+    return ((_mm_movemask_pd(half[0]) | _mm_movemask_pd(half[1]) << 2) & 7) != 0;
+  }
+#else
+  return (m[0] | m[1] | m[2]) != 0;
+#endif
+}
+
+/// Four Reals from memory (no alignment needed).
+inline Lanes lanesLoad(const Real* p) {
+  Lanes r;
+  std::memcpy(&r, p, sizeof r);
+  return r;
+}
+
+/// {v.x, v.y, v.z, w}.
+inline Lanes lanes(const Vec3& v, Real w) { return Lanes{v.x(), v.y(), v.z(), w}; }
+
+}  // namespace crux::mesh_detail
