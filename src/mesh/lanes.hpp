@@ -59,24 +59,23 @@ inline Lanes lanesSelect(const LaneBits& mask, const Lanes& x, const Lanes& y) {
   return (Lanes)((mask & (LaneBits)x) | (~mask & (LaneBits)y));
 }
 
-/// Whether any of lanes 0..2 of a comparison result is set; lane 3 is ignored.
-template <class Bits>
-inline bool anyOf3(const Bits& m) {
-  static_assert(sizeof(Bits) == 16 || sizeof(Bits) == 32, "four lanes of 32- or 64-bit integers");
-#if defined(__SSE2__)
-  if constexpr (sizeof(Bits) == 16) {
-    __m128 v;
-    std::memcpy(&v, &m, sizeof v);
-    return (_mm_movemask_ps(v) & 7) != 0;
-  } else {
-    __m128d half[2];
-    std::memcpy(half, &m, sizeof half);
-    return ((_mm_movemask_pd(half[0]) | _mm_movemask_pd(half[1]) << 2) & 7) != 0;
-  }
+/// The sign bits of a comparison result's four lanes, lane i as bit i.
+inline unsigned laneMask(const LaneBits& m) {
+#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
+  __m128 v;
+  std::memcpy(&v, &m, sizeof v);
+  return unsigned(_mm_movemask_ps(v));
+#elif defined(__SSE2__)
+  __m128d half[2];
+  std::memcpy(half, &m, sizeof half);
+  return unsigned(_mm_movemask_pd(half[0]) | _mm_movemask_pd(half[1]) << 2);
 #else
-  return (m[0] | m[1] | m[2]) != 0;
+  return unsigned(m[0] & 1) | unsigned(m[1] & 1) << 1 | unsigned(m[2] & 1) << 2 | unsigned(m[3] & 1) << 3;
 #endif
 }
+
+/// Whether any of lanes 0..2 of a comparison result is set; lane 3 is ignored.
+inline bool anyOf3(const LaneBits& m) { return (laneMask(m) & 7u) != 0; }
 
 /// Four Reals from memory (no alignment needed).
 inline Lanes lanesLoad(const Real* p) {

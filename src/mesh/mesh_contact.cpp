@@ -330,23 +330,24 @@ struct Collector {
   }
 
   void add(const MeshContactPoint& p) {
-    // The squared distances to every buffered point first and how many are within the merge
-    // tolerance (a branch-free loop the compiler vectorises); only then, when some are, the
-    // first of those with the same normal. The scan runs to n rounded up to a multiple of 8 (the
-    // slots beyond n hold +∞, never close), so its trip count changes every 8 points, not with
-    // every point added (its exit and the vector epilogue were often mispredicted).
-    static_assert(kMeshContactBuffer % 8 == 0, "add() scans whole blocks of 8");
-    Real d2[kMeshContactBuffer];
+    // The squared distances to every buffered point first, four at a time (lanes.hpp), into a
+    // mask of those within the merge tolerance; then, in slot order, the first of those with
+    // the same normal. The scan runs to n rounded up to a multiple of 8 (the slots beyond n hold
+    // +∞, never close), so its trip count changes every 8 points, not with every point added
+    // (its exit was often mispredicted).
+    static_assert(kMeshContactBuffer % 8 == 0 && kMeshContactBuffer <= 64, "add() scans whole blocks of 8 into 64 bits");
+    using mesh_detail::Lanes;
     const Real x = p.pointA.x(), y = p.pointA.y(), z = p.pointA.z();
-    int close = 0;
+    std::uint64_t close = 0;
     const int scan = (n + 7) & ~7;
-    for (int i = 0; i < scan; ++i) {
-      const Real dx = ax[i] - x, dy = ay[i] - y, dz = az[i] - z;
-      d2[i] = dx * dx + dy * dy + dz * dz;
-      close += d2[i] <= mergeTol2;
+    for (int i = 0; i < scan; i += 4) {
+      const Lanes dx = mesh_detail::lanesLoad(ax + i) - x, dy = mesh_detail::lanesLoad(ay + i) - y,
+                  dz = mesh_detail::lanesLoad(az + i) - z;
+      close |= std::uint64_t(mesh_detail::laneMask((dx * dx + dy * dy) + dz * dz <= mergeTol2)) << i;
     }
-    for (int i = 0; close > 0 && i < n; ++i) {
-      if (d2[i] <= mergeTol2 && buf[i].normal.dot(p.normal) >= kContactFaceAngleCos) {
+    for (; close != 0; close &= close - 1) {
+      const int i = __builtin_ctzll(close);
+      if (buf[i].normal.dot(p.normal) >= kContactFaceAngleCos) {
         const MeshContactPoint& q = buf[i];
         if (p.separation < q.separation || (p.separation == q.separation && p.triangle < q.triangle)) set(i, p);
         return;
