@@ -322,7 +322,12 @@ struct Collector {
     for (int i = first; i < first + 8; ++i) ax[i] = ay[i] = az[i] = std::numeric_limits<Real>::infinity();
   }
 
+  /// The full buffer's shallowest point (the first among equals), -1 when not known (add()
+  /// finds it again after the point there changed).
+  int shallowest = -1;
+
   void set(int i, const MeshContactPoint& p) {
+    if (i == shallowest) shallowest = -1;
     buf[i] = p;
     ax[i] = p.pointA.x();
     ay[i] = p.pointA.y();
@@ -358,10 +363,15 @@ struct Collector {
       set(n++, p);
       return;
     }
-    int worst = 0;  // full: replace the shallowest when p is deeper
-    for (int i = 1; i < n; ++i)
-      if (buf[i].separation > buf[worst].separation) worst = i;
-    if (p.separation < buf[worst].separation) set(worst, p);
+    // Full: replace the shallowest point when p is deeper. A merge can only make the point it
+    // replaces deeper (or keep its depth), so the shallowest stays known until its own slot
+    // changes (set()).
+    if (shallowest < 0) {
+      shallowest = 0;
+      for (int i = 1; i < n; ++i)
+        if (buf[i].separation > buf[shallowest].separation) shallowest = i;
+    }
+    if (p.separation < buf[shallowest].separation) set(shallowest, p);
   }
 
   /// Whether `pa` lies within tol of edge i (corner i to corner i+1 mod 3) of tri.
