@@ -270,21 +270,31 @@ inline void powerOfTwoScale(double S, double& scale, double& unscale) {
 
 /// Edge axis a = e_I × e (box axis I, triangle edge e; C0, C1, C2 = e × t_0, t_1, t_2, whose
 /// I-th components are the triangle vertices' projections on a, as (e_I × e)·p = (e × p)_I): the
-/// separation numerator (separation = num / |a|), its side, |a|², whether the axis is usable
-/// (not parallel), and whether it separates beyond the margin m (m2 = m²). Compile-time I keeps
-/// every component in a register.
+/// separation numerators of its two sides, `pos` (the triangle beyond the box along +a) and `neg`
+/// (along −a). Compile-time I keeps every component in a register.
 template <int I>
-inline bool edgeAxis(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double minA2, double m2,
-                     double* num, double* sgn, double* a2, bool* valid) {
+inline void edgeAxisSides(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double& pos, double& neg) {
   constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
   const double lo = std::min(C0[I], std::min(C1[I], C2[I])), hi = std::max(C0[I], std::max(C1[I], C2[I]));
   const double r = h[u] * std::abs(e[v]) + h[v] * std::abs(e[u]);
-  const double pos = lo - r, neg = -r - hi;
+  pos = lo - r;
+  neg = -r - hi;
+}
+
+/// edgeAxisSides' axis: the separation numerator (separation = num / |a|, the larger side),
+/// |a|², whether the axis is usable (not parallel), and whether it separates beyond the margin m
+/// (m2 = m²). The side is found again for the winning axis only (edgeAxes).
+template <int I>
+inline bool edgeAxis(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double minA2, double m2,
+                     double* num, double* a2, bool* valid) {
+  constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
+  double pos, neg;
+  edgeAxisSides<I>(e, C0, C1, C2, h, pos, neg);
   const double nm = std::max(pos, neg), aa = e[v] * e[v] + e[u] * e[u];
   num[I] = nm;
-  sgn[I] = pos >= neg ? 1.0 : -1.0;
   a2[I] = aa;
-  const bool ok = (aa > minA2) & (aa > 0);  // parallel (or zero) edges drop out
+  // parallel (or zero) edges drop out (minA2 >= 0, so aa > 0 too; NaN fails)
+  const bool ok = aa > minA2;
   valid[I] = ok;
   return ok & (nm >= 0) & (nm * nm > m2 * aa);  // num / |a| > m: separating beyond the margin
 }
@@ -307,7 +317,7 @@ inline bool exceeds(double num, double a2, double bound) {
   // |a|² = E_u² + E_v² (u, v the two other axes). The edge's own two vertices project to the
   // same value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike
   // (a segment triangle's two copies of its edge tie, and the first wins).
-  double num[9], a2[9], sgn[9];
+  double num[9], a2[9];
   bool valid[9];
   bool separated = false;
   const double m2 = m * m;
@@ -316,9 +326,9 @@ inline bool exceeds(double num, double a2, double bound) {
     const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
     const double e2 = e.squaredNorm();
     const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
-    separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
-    separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
-    separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, sgn + 3 * j, a2 + 3 * j, valid + 3 * j);
+    separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
   }
   if (separated) return false;
   double bound = face.sep + bias;  // an edge axis must exceed this
@@ -339,7 +349,17 @@ inline bool exceeds(double num, double a2, double bound) {
     best.i = i;
     best.j = j;
     best.sep = sep;
-    best.n = a * (sgn[k] / len);
+    best.n = a * (1 / len);  // its side: below, for the winner only
+  }
+  if (best.kind == AxisKind::Edge) {
+    // the winner's side, as edgeAxis found its numerator (pos >= neg: +a)
+    const V& e = E[best.j];
+    const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
+    double pos = 0, neg = 0;
+    if (best.i == 0) edgeAxisSides<0>(e, C0, C1, C2, h, pos, neg);
+    if (best.i == 1) edgeAxisSides<1>(e, C0, C1, C2, h, pos, neg);
+    if (best.i == 2) edgeAxisSides<2>(e, C0, C1, C2, h, pos, neg);
+    if (!(pos >= neg)) best.n = -best.n;
   }
   return true;
 }
