@@ -7,8 +7,11 @@
 /// zero radii) are mapped to the lower-dimensional CGAL objects they are, since CGAL's
 /// predicates require non-degenerate arguments.
 ///
-/// An OBB is the parallelepiped {c + Σ s_i h_i u_i : |s_i| <= 1} spanned by its axes exactly as
-/// given (not re-orthonormalised).
+/// An OBB is the set {x : |u_i·(x − c)| <= h_i} of its axes u_i exactly as given (not
+/// re-orthonormalised): what crux's geometry layer tests (box coordinates axesᵀ(x − c)), the
+/// parallelepiped {c + Σ s_i h_i e_i : |s_i| <= 1} of the axes' dual basis e_i (u_i·e_j = δ_ij).
+/// For exactly orthonormal axes (integer-grid cases: signed permutations) e_i = u_i; for axes
+/// rounded to Real the two readings differ by ~1 ulp of the extents, and this one is native's.
 
 #include <crux/geometry/convex.hpp>
 #include <crux/geometry/shapes.hpp>

@@ -173,13 +173,15 @@ ExactCore coreOf(const ConvexShape& shape, const ExactRigid& pose) {
       for (int i = 0; i < 3; ++i) core.points.push_back(pose.apply(shape.p[i]));
       break;
     case ConvexKind::Box: {
-      // Corner k has local signs (bit0, bit1, bit2) of k, as ConvexShape::vertex; computed exactly.
+      // Corner k has local signs (bit0, bit1, bit2) of k, as ConvexShape::vertex; computed exactly
+      // along the box's edge vectors (exact_kernel.hpp: the OBB's semantics).
       const Point c = toPoint(shape.p[0]);
+      const std::array<Vector, 3> e = edgeVectors(shape.axes);
       for (int k = 0; k < 8; ++k) {
         Vector off = CGAL::NULL_VECTOR;
         for (int i = 0; i < 3; ++i) {
           const FT h(double(shape.p[1][i]));
-          off = off + toVector(Vec3(shape.axes.col(i))) * (((k >> i) & 1) ? h : -h);
+          off = off + e[i] * (((k >> i) & 1) ? h : -h);
         }
         core.points.push_back(pose.apply(c + off));
       }

@@ -68,15 +68,29 @@ std::optional<FT> rayParamSimplex(const Ray& r, const Simplex& s);
 /// World distance s·|dir| of a ray parameter, in double within a few ulps (exact_raycast.cpp).
 double rayDistance(const Ray& r, const FT& s);
 
-/// The 8 corners of an OBB computed exactly: corner k has s_i = ((k >> i) & 1) ? +1 : -1.
+/// The edge vectors e_i of the box whose axes are `axes` (columns u_i): the dual basis
+/// e_i = (u_j × u_k) / (u_i · (u_j × u_k)) ((i, j, k) cyclic), so u_i · e_j = δ_ij exactly. An OBB
+/// is {x : |u_i·(x − c)| <= h_i} (exact.hpp), the parallelepiped {c + Σ s_i h_i e_i : |s_i| <= 1};
+/// for exactly orthonormal axes e_i = u_i.
+inline std::array<Vector, 3> edgeVectors(const Mat3& axes) {
+  const Vector u[3] = {toVector(Vec3(axes.col(0))), toVector(Vec3(axes.col(1))), toVector(Vec3(axes.col(2)))};
+  const FT det = u[0] * CGAL::cross_product(u[1], u[2]);
+  std::array<Vector, 3> e;
+  for (int i = 0; i < 3; ++i) e[i] = CGAL::cross_product(u[(i + 1) % 3], u[(i + 2) % 3]) / det;
+  return e;
+}
+
+/// The 8 corners of an OBB computed exactly: corner k is c + Σ s_i h_i e_i with s_i = ((k >> i)
+/// & 1) ? +1 : -1 (edgeVectors).
 inline std::array<Point, 8> corners(const Obb& b) {
   std::array<Point, 8> out;
   const Point c = toPoint(b.center);
+  const std::array<Vector, 3> e = edgeVectors(b.axes);
   for (int k = 0; k < 8; ++k) {
     Vector off(0, 0, 0);
     for (int i = 0; i < 3; ++i) {
       const FT s = ((k >> i) & 1) ? FT(double(b.half[i])) : FT(-double(b.half[i]));
-      off = off + toVector(Vec3(b.axes.col(i))) * s;
+      off = off + e[i] * s;
     }
     out[k] = c + off;
   }

@@ -5,14 +5,15 @@
 /// solids crux means (CGAL's Sphere_3–Sphere_3 intersects the sphere *surfaces*, so balls are
 /// compared by distance instead).
 ///
-/// An OBB is the parallelepiped P = c + Σ_i [-1, 1]·g_i with generators g_i = h_i·u_i taken
-/// exactly as given (exact.hpp). Two methods decide the pairs that involve one, each exact for
+/// An OBB is the parallelepiped P = c + Σ_i [-1, 1]·g_i with generators g_i = h_i·e_i, e_i the
+/// dual basis of its axes u_i as given (u_i·e_j = δ_ij, so P = {x : |u_i·(x − c)| <= h_i};
+/// exact.hpp). Two methods decide the pairs that involve one, each exact for
 /// any parallelepiped, orthonormal or not, flat or not:
 ///  - box–box: P_A ∩ P_B ≠ ∅ iff the origin lies in the zonotope Z = (c_B - c_A) + Σ [-1,1]·g
 ///    over the generators of both boxes. A full-dimensional zonotope's facets are spanned by
 ///    pairs of its generators, so the separating axes to try are the cross products g × g':
-///    the boxes' true face normals u_j × u_k (not u_i, which differ from them when the axes are
-///    not exactly orthonormal) and the 9 mixed products u_i × v_j. When all generators lie in a
+///    the boxes' true face normals e_j × e_k (parallel to u_i) and the 9 mixed products e_i × f_j
+///    of the edge vectors. When all generators lie in a
 ///    plane or on a line (both boxes flat alike, or segments, or points) the zonotope is lower-
 ///    dimensional, and the in-plane edge normals n × g, the line's normal directions or the
 ///    coordinate axes are added. On an axis L the zonotope projects to t·L ± Σ|g·L| exactly.
@@ -102,17 +103,22 @@ V3<NT> toV3(const Vec3& v) {
 template <class NT>
 struct Zono {
   V3<NT> center;
-  std::array<V3<NT>, 3> gen;   ///< non-zero generators h_i·u_i
-  std::array<V3<NT>, 3> axis;  ///< all three axes u_i (for the face normals)
+  std::array<V3<NT>, 3> gen;   ///< non-zero generators h_i·e_i
+  std::array<V3<NT>, 3> axis;  ///< all three edge vectors e_i (their cross products: face normals)
   int count = 0;
 };
 
 template <class NT>
 Zono<NT> toZono(const Obb& b) {
+  // The box's edge vectors e_i, the dual basis of its axes u_i (exact_kernel.hpp's edgeVectors,
+  // in NT): e_i = (u_j × u_k) / det, so u_i·e_j = δ_ij.
   Zono<NT> z;
   z.center = toV3<NT>(b.center);
+  V3<NT> u[3];
+  for (int i = 0; i < 3; ++i) u[i] = toV3<NT>(Vec3(b.axes.col(i)));
+  const NT inverseDet = NT(1) / dot(u[0], cross(u[1], u[2]));
   for (int i = 0; i < 3; ++i) {
-    z.axis[i] = toV3<NT>(Vec3(b.axes.col(i)));
+    z.axis[i] = cross(u[(i + 1) % 3], u[(i + 2) % 3]) * inverseDet;
     if (b.half[i] != 0) z.gen[z.count++] = z.axis[i] * NT(double(b.half[i]));
   }
   return z;

@@ -716,6 +716,44 @@ TEST(TriangleObbProperty, GeneralPositionMatchesExactOracle) {
   report("tri-obb general", tally);
 }
 
+/// Axes that are not orthonormal (what rounding a rotation to Real gives, here magnified to
+/// ~2e-5, so the two readings of "an OBB with these axes" differ visibly): crux tests the box
+/// as {x : |u_i·(x − c)| <= h_i} (the axes as slab normals), and so must the exact oracle
+/// (exact.hpp); the parallelepiped the axes span differs from it by ~2e-5 × the extents. Small
+/// triangles are placed across the slab boundary, within ±3e-6 of it, where the readings part.
+/// Found by `crux diff` (session 15): two float-build `triangle_obb` cases, a flat box (a
+/// segment) lying in a triangle's plane 1e-8 off it, crux "hit", the oracle (then reading the
+/// span) "no" — both exact, for different sets.
+TEST(TriangleObbProperty, NonOrthonormalAxesNearTheBoundaryMatchExactOracle) {
+  Rng r(0x0BB3);
+  Tally tally;
+  for (int i = 0; i < kCases / 4; ++i) {
+    Obb box;
+    box.center = floatPoint(r, 1);
+    box.half = floatVector(r, 0.2, 1);
+    if (i % 5 == 0) box.half[r.integer(0, 2)] = 0;  // flat boxes too
+    Eigen::Matrix3d u = randomRotation(r).cast<double>();
+    for (int k = 0; k < 3; ++k) u.col(k) += 2e-5 * Eigen::Vector3d(r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1));
+    box.axes = u.cast<Real>();
+    // a point on the slab boundary: box coordinates s with |s_k| = 1 on one axis, through the
+    // axes' dual basis (u_i·e_j = δ_ij, in double), moved by ±3e-6 along that slab's normal
+    const Eigen::Matrix3d e = box.axes.cast<double>().inverse().transpose();
+    const int k = r.integer(0, 2);
+    Eigen::Vector3d sCoord(r.uniform(-1, 1), r.uniform(-1, 1), r.uniform(-1, 1));
+    sCoord[k] = r.percent(50) ? 1 : -1;
+    Eigen::Vector3d x = box.center.cast<double>();
+    for (int j = 0; j < 3; ++j) x += sCoord[j] * double(box.half[j]) * e.col(j);
+    x += sCoord[k] * r.uniform(-3e-6, 3e-6) * box.axes.col(k).cast<double>().normalized();
+    // a small triangle through x, tilted at random (a segment or a point now and then)
+    const Vec3 p = x.cast<Real>();
+    Triangle t{p, p + floatPoint(r, 1e-3), p + floatPoint(r, 1e-3)};
+    if (i % 7 == 0) t.c = t.b;
+    if (i % 11 == 0) t.b = t.c = t.a;
+    compare("tri-obb non-orthonormal", i, t, box, tally);
+  }
+  report("tri-obb non-orthonormal", tally);
+}
+
 TEST(TrianglePlaneProperty, IntegerGridMatchesExactOracle) {
   Rng r(0x9A7E);
   Tally tally;
