@@ -305,11 +305,12 @@ inline bool exceeds(double num, double a2, double bound) {
   return num >= 0 ? ((bound < 0) | (nn > bb)) : ((bound < 0) & (nn < bb));
 }
 
-/// The 9 edge axes (see the call): false when one separates beyond the margin, else `best`
-/// becomes the edge axis exceeding face.sep + bias the most, if any.
+/// The edge axes of the box axes in `groups` (bit i: the 3 axes e_i × E_j; see the call): false
+/// when one separates beyond the margin, else `best` becomes the edge axis exceeding face.sep +
+/// bias the most, if any.
 // (Always inlined: called from both instantiations below, GCC would otherwise call it, ~1 ns.)
 [[gnu::always_inline]] inline bool edgeAxes(const V* t, const V* E, const V& h, double m, double bias,
-                                            const Axis& face, Axis& best) {
+                                            unsigned groups, const Axis& face, Axis& best) {
   // The 9 edge axes a = e_i × E_j, all at once and without branches (RTCD §5.2.9 with the
   // triple-product form of Akenine-Möller's triangle–box test): a vertex p projects to
   // a·p = (E_j × p)_i, so the cross products E_j × t_k give the triangle's projection
@@ -326,16 +327,22 @@ inline bool exceeds(double num, double a2, double bound) {
     const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
     const double e2 = e.squaredNorm();
     const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
-    separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
-    separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
-    separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    // (a group left out is no candidate: not valid, never separating)
+    if (groups & 1u) separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    if (groups & 2u) separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    if (groups & 4u) separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
+    for (int i = 0; i < 3; ++i)
+      if (!(groups >> i & 1u)) num[3 * j + i] = 0, a2[3 * j + i] = 1, valid[3 * j + i] = false;
   }
   if (separated) return false;
   double bound = face.sep + bias;  // an edge axis must exceed this
-  bool any = false;                // some axis beats the initial bound (the bound only grows)
-  for (int k = 0; k < 9; ++k) any |= valid[k] & exceeds(num[k], a2[k], bound);
-  for (int k = 0; any && k < 9; ++k) {
-    if (!valid[k] || !exceeds(num[k], a2[k], bound)) continue;
+  // the axes beating the initial bound, bit k for axis k (the bound only grows, and exceeds()
+  // is monotone in it, so no other axis can beat a later one); then those in order
+  unsigned candidates = 0;
+  for (int k = 0; k < 9; ++k) candidates |= unsigned(valid[k] & exceeds(num[k], a2[k], bound)) << k;
+  for (; candidates != 0; candidates &= candidates - 1) {
+    const int k = __builtin_ctz(candidates);
+    if (!exceeds(num[k], a2[k], bound)) continue;
     const double len = std::sqrt(a2[k]);
     const double sep = num[k] / len;
     if (!(sep > bound)) continue;
@@ -464,24 +471,31 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     }
   }
   Axis best = face;
-  // The edge axes cannot win when a triangle vertex lies inside the box deeply enough: for any
-  // axis a and vertex v with clearance d = min_k (h_k − |v_k|) >= 0, both sides' separation
-  // numerators are at most Σ|a_k|(|v_k| − h_k) <= −d·Σ|a_k| <= −d·|a|, so every edge axis
-  // separates by at most −d. Skipped when −d stays below both the bound an edge axis must exceed
-  // (face.sep + bias) and the margin m by kEdgeBoundSlack, which covers the edge axes' rounding
-  // (their projections carry errors of a few ulps of |a|, the coordinates being <= 1 here): the
-  // full test would then keep `face` too, and no edge axis would separate beyond m (m = 0 needs
-  // d >= kEdgeBoundSlack), bit for bit (test_box_triangle_contact checks it against
-  // detail::boxTriangleContactsFullSat).
-  bool edgesMayWin = true;
+  // The edge axes of box axis I (a = e_I × E_j, so a_I = 0) cannot win when a triangle vertex
+  // lies deeply enough inside the box's two other slabs: for a vertex v with clearance d_I =
+  // min_{k≠I} (h_k − |v_k|) >= 0, both sides' separation numerators are at most
+  // Σ_{k≠I}|a_k|(|v_k| − h_k) <= −d_I·Σ|a_k| <= −d_I·|a|, so those axes separate by at most
+  // −d_I. A group is skipped when −d_I (d_I the best vertex's) stays below both the bound an edge
+  // axis must exceed (face.sep + bias) and the margin m by kEdgeBoundSlack, which covers the edge
+  // axes' rounding (their projections carry errors of a few ulps of |a|, the coordinates being
+  // <= 1 here): the full test would then keep `face` too, and no edge axis of the group would
+  // separate beyond m (m = 0 needs d_I >= kEdgeBoundSlack), bit for bit (test_box_triangle_contact
+  // checks it against detail::boxTriangleContactsFullSat).
+  unsigned groups = 7u;
   if (fast) {
-    double clearance = -std::numeric_limits<double>::infinity();
+    double clearance[3] = {-std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                           -std::numeric_limits<double>::infinity()};
+    for (int i = 0; i < 3; ++i) {
+      const double q0 = h[0] - std::abs(t[i][0]), q1 = h[1] - std::abs(t[i][1]), q2 = h[2] - std::abs(t[i][2]);
+      clearance[0] = std::max(clearance[0], std::min(q1, q2));
+      clearance[1] = std::max(clearance[1], std::min(q0, q2));
+      clearance[2] = std::max(clearance[2], std::min(q0, q1));
+    }
+    const double limit = std::min(face.sep + bias, m) - kEdgeBoundSlack;
     for (int i = 0; i < 3; ++i)
-      clearance = std::max(clearance,
-                           std::min({h[0] - std::abs(t[i][0]), h[1] - std::abs(t[i][1]), h[2] - std::abs(t[i][2])}));
-    edgesMayWin = !(clearance >= 0 && -clearance <= std::min(face.sep + bias, m) - kEdgeBoundSlack);
+      if (clearance[i] >= 0 && -clearance[i] <= limit) groups &= ~(1u << i);
   }
-  if (edgesMayWin && !edgeAxes(t, E, h, m, bias, face, best)) return false;
+  if (groups != 0 && !edgeAxes(t, E, h, m, bias, groups, face, best)) return false;
   // An edge axis within the feature angle of the best face axis gives way to that face, as
   // contact.cpp turns a normal within 2° of a face into that face's normal: a face contact (2–4
   // points) rather than one edge–edge point, at most 2° off the minimum-penetration direction.
@@ -513,7 +527,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
         const double* p = T[is];
         const double sep = s * p[k] - h[k];
         const int a1 = k + 1 >= 3 ? k - 2 : k + 1, a2 = k + 2 >= 3 ? k - 1 : k + 2;
-        const bool inside = !(p[a1] + h[a1] < 0 || h[a1] - p[a1] < 0 || p[a2] + h[a2] < 0 || h[a2] - p[a2] < 0);
+        const bool inside = !((p[a1] + h[a1] < 0) | (h[a1] - p[a1] < 0) | (p[a2] + h[a2] < 0) | (h[a2] - p[a2] < 0));
         if (!inside || !(sep <= m) || (best.sep > 0 && sep > best.sep + kRealiseTolerance))
           return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
         out.normal = n.cast<Real>();

@@ -314,7 +314,9 @@ struct Collector {
 
   Collector(const Mesh& mesh_, const LocalShape& ls_, const LocalShape& frame_, Real margin_,
             const MeshAdjacency* adjacency_, Real mergeTol2_)
-      : mesh(mesh_), ls(ls_), frame(frame_), margin(margin_), adjacency(adjacency_), mergeTol2(mergeTol2_) {}
+      : mesh(mesh_), ls(ls_), frame(frame_), margin(margin_), adjacency(adjacency_), mergeTol2(mergeTol2_) {
+    if (ls.shape.kind == ConvexKind::Box) boxReach = ls.half.cast<double>().array() + double(margin) + ls.boxSlack;
+  }
 
   /// Fills the block of 8 coordinate slots from `first` (a multiple of 8) with +∞ (no point:
   /// never within the merge tolerance).
@@ -603,9 +605,33 @@ struct Collector {
       dropped = raw, hasDropped = true;
   }
 
+  /// A box's reach in its own frame for the leaf triangles' face-axis reject: half extents +
+  /// margin + rounding slack (1000 ulps of Real × scale, LocalShape::boxSlack), in double.
+  Eigen::Vector3d boxReach = Eigen::Vector3d::Zero();
+
+  /// The box's contacts with triangle t: the triangle in the box's frame (double, rounded once),
+  /// the box's face axes first (cheap), then the SAT routine there; the points stay in the box
+  /// frame: corrected, merged and reduced there (frame-free rules), only the reduced ones mapped
+  /// back (toMeshFrame).
+  void boxTriangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
+    const Eigen::Matrix3d& Rt = ls.boxToLocal;
+    const Eigen::Vector3d a = Rt * (tri.a.cast<double>() - ls.boxCentre);
+    const Eigen::Vector3d b = Rt * (tri.b.cast<double>() - ls.boxCentre);
+    const Eigen::Vector3d cc = Rt * (tri.c.cast<double>() - ls.boxCentre);
+    // the triangle beyond a face of the box by more than the margin
+    const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(cc), hi = a.cwiseMax(b).cwiseMax(cc);
+    if ((lo.array() > boxReach.array()).any() || (hi.array() < -boxReach.array()).any()) return;
+    // (no planeSeparates here: the routine's SAT tests the triangle's normal itself; that
+    // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
+    const Triangle tb{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()};
+    ContactManifold m;
+    if (!boxTriangleContacts(ls.half, tb, margin, m)) return;
+    emit(t, slot, tri, tb, m);
+  }
+
   /// Contacts of triangle t (in BVH slot `slot`, or kNoSlot) with the shape.
   void triangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
-    ContactManifold m;
+    ContactManifold m;  // (the box path declares its own, after its reject)
     switch (ls.shape.kind) {
       case ConvexKind::Sphere:
         sphereTriangle(t, slot, tri);
@@ -613,26 +639,9 @@ struct Collector {
       case ConvexKind::Capsule:
         if (!capsuleTriangleContacts(tri, ls.p[0], ls.p[1], ls.radius, margin, m)) return;
         break;
-      case ConvexKind::Box: {
-        // The triangle in the box's frame (double, rounded once), the SAT routine there, the
-        // points and normal back to the mesh's frame.
-        const Eigen::Matrix3d& Rt = ls.boxToLocal;
-        const Eigen::Vector3d a = Rt * (tri.a.cast<double>() - ls.boxCentre);
-        const Eigen::Vector3d b = Rt * (tri.b.cast<double>() - ls.boxCentre);
-        const Eigen::Vector3d cc = Rt * (tri.c.cast<double>() - ls.boxCentre);
-        // box face axes first (cheap): the triangle beyond a face of the box by more than the margin
-        const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(cc), hi = a.cwiseMax(b).cwiseMax(cc);
-        const Eigen::Vector3d reach = ls.half.cast<double>().array() + double(margin) + ls.boxSlack;
-        if ((lo.array() > reach.array()).any() || (hi.array() < -reach.array()).any()) return;
-        // (no planeSeparates here: the routine's SAT tests the triangle's normal itself; that
-        // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
-        const Triangle tb{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()};
-        if (!boxTriangleContacts(ls.half, tb, margin, m)) return;
-        // The points stay in the box frame: corrected, merged and reduced there (frame-free
-        // rules), only the reduced ones mapped back (toMeshFrame).
-        emit(t, slot, tri, tb, m);
+      case ConvexKind::Box:
+        boxTriangle(t, slot, tri);
         return;
-      }
       default:
         if (planeSeparates(tri)) return;
         if (ls.aligned && ls.shape.kind == ConvexKind::Triangle) {
