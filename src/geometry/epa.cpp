@@ -117,6 +117,7 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
   EpaResult r;
   int best = 0;
   Face chosen = faces[0];
+  bool brokeDown = false;  // the nearest face's distance dropped: answer with `chosen` alone
   std::pair<int, int> edges[3 * kMaxFaces];
   for (r.iterations = 1;; ++r.iterations) {
     best = -1;
@@ -127,6 +128,15 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
       break;
     }
     if (best < 0) break;
+    // The polytope only grows inside A - B, so its nearest face's distance never decreases; a
+    // drop beyond the rounding tolerance means the last expansion broke it (a support point a
+    // few 1e-12 from a vertex, on a sliver triangle whose corners are that close, made faces
+    // with meaningless normals: `crux diff`, session 15, double build). Answer with the face of
+    // the last sound polytope, which `chosen` still holds.
+    if (r.iterations > 1 && faces[best].d < chosen.d - (kGjkRelativeTolerance * std::abs(chosen.d) + tolAbs)) {
+      brokeDown = true;
+      break;
+    }
     chosen = faces[best];
     const Face& fb = chosen;
     const SupportPoint w = supportOf(A, B, fb.n);
@@ -181,12 +191,15 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
     if (!(ar > 0)) return -std::numeric_limits<double>::infinity();
     return std::min({g.n.dot((b - q).cross(c - q)), g.n.dot((c - q).cross(a - q)), g.n.dot((a - q).cross(b - q))}) / ar;
   };
+  // (Only faces as far as `chosen` within the tolerance: after a degenerate step or a breakdown the
+  // array may hold nearer, broken faces; neither is searched after a breakdown.)
   Face f = chosen;
   double fMin = minBarycentric(f);
-  if (fMin < 0) {
+  if (fMin < 0 && !brokeDown) {
+    const double tieTolerance = kGjkRelativeTolerance * std::abs(chosen.d) + tolAbs;
     for (int k = 0; k < nf; ++k) {
       const Face& g = faces[k];
-      if (!g.alive || g.d > chosen.d + kGjkRelativeTolerance * std::abs(chosen.d) + tolAbs) continue;
+      if (!g.alive || std::abs(g.d - chosen.d) > tieTolerance) continue;
       const double m = minBarycentric(g);
       if (m > fMin) {
         fMin = m;

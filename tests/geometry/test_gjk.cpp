@@ -514,6 +514,54 @@ TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
   }
 }
 
+/// Sliver triangles (two corners ~1e-12 apart) against a flat box and a hull (`crux diff`,
+/// session 15, double build, family `sliver`): EPA's last expansion took a support point a few
+/// 1e-12 from a polytope vertex (the sliver's twin corner), the faces it made had meaningless
+/// normals and the nearest one lay *nearer* than the face before (0.102 -> -0.152: depth 0,
+/// "touching"; 0.359 -> 0.350: 2.5 % shallow). EPA's nearest-face distance never decreases in
+/// exact arithmetic, so a drop now stops it with the face before. Both builds showed it.
+TEST(GjkExact, EpaKeepsTheLastSoundFaceWhenAnExpansionBreaksThePolytope) {
+  struct Case {
+    const char* name;
+    ConvexShape a, b;
+  };
+  Obb flat;  // a rectangle (half extent 0 along its second axis)
+  flat.center = Vec3(-0.25, -1, 0.109375);
+  flat.half = Vec3(Real(1.04931640625), 0, 1);
+  Mat3 rows;
+  rows << Real(-0.2222191077851876), Real(0.9749735261985345), Real(-0.006729884631318045),
+      Real(-0.9402330316983497), Real(-0.21246400009333977), Real(0.266121954689326), Real(0.2580320023533622),
+      Real(0.06546504316299644), Real(0.9639158749004922);
+  flat.axes = rows.transpose();
+  const ConvexHull hull = ConvexHull::build({Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 1, Real(-1.25)), Vec3(0, 2, 0),
+                                             Vec3(1, Real(-0.75), Real(0.171875)), Vec3(0, 0, 0),
+                                             Vec3(-1, -1, Real(0.03515625)), Vec3(0, 2, 1)});
+  const std::vector<Case> cases = {
+      {"sliver triangle through a flat box",
+       Triangle{Vec3(0, Real(4.263256414560601e-13), Real(6.821210263296962e-13)),
+                Vec3(Real(6.394884621840902e-14), Real(-6.252776074688882e-13), Real(-9.094947017729282e-13)),
+                Vec3(-1, Real(-0.203125), -1)},
+       flat},
+      {"sliver triangle through a hull",
+       Triangle{Vec3(Real(2.5011104298755527e-12), Real(1.3642420526593924e-12), Real(-2.5011104298755527e-12)),
+                Vec3(0, Real(-1.8189894035458565e-12), 0), Vec3(0, -1, 0)},
+       hull},
+  };
+  for (const Case& c : cases) {
+    for (int order = 0; order < 2; ++order) {
+      const ConvexShape& a = order == 0 ? c.a : c.b;
+      const ConvexShape& b = order == 0 ? c.b : c.a;
+      const Transform id;
+      const DistanceResult r = distance(a, id, b, id);
+      const double S = pairScale(a, id, b, id);
+      const double want = satDepth(a, id, b, id);
+      EXPECT_GT(want, 0.1) << c.name;  // they do cross
+      EXPECT_NEAR(-double(r.distance), want, budget(S, want)) << c.name << ", order " << order << "\n"
+                                                               << describe(a, id, b, id);
+    }
+  }
+}
+
 #if CRUX_HAVE_CCD_ORACLE
 TEST(GjkVsLibccd, PenetrationDepth) {
   // libccd's GJK+EPA (ccdGJKPenetration) is compared on polytope pairs; where it disagrees with
