@@ -67,6 +67,10 @@ bool intersectsSimplex(const Segment& seg, const Simplex& s);
 std::optional<FT> rayParamSimplex(const Ray& r, const Simplex& s);
 /// World distance s·|dir| of a ray parameter, in double within a few ulps (exact_raycast.cpp).
 double rayDistance(const Ray& r, const FT& s);
+/// Whether a hit at ray parameter s >= 0 lies within the world distance maxDistance (closed:
+/// s·|dir| <= maxDistance), decided exactly (s²|dir|² <= maxDistance²), not on the rounded
+/// rayDistance, which can exceed a maxDistance the hit meets exactly (exact_raycast.cpp).
+bool withinRayDistance(const Ray& r, const FT& s, double maxDistance);
 
 /// The edge vectors e_i of the box whose axes are `axes` (columns u_i): the dual basis
 /// e_i = (u_j × u_k) / (u_i · (u_j × u_k)) ((i, j, k) cyclic), so u_i · e_j = δ_ij exactly. An OBB

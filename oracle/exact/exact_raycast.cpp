@@ -169,6 +169,13 @@ std::optional<FT> rayParamSimplex(const Ray& r, const Simplex& s) { return first
 
 double rayDistance(const Ray& r, const FT& s) { return toDouble(s) * std::sqrt(toDouble(toExactRay(r).dd)); }
 
+bool withinRayDistance(const Ray& r, const FT& s, double maxDistance) {
+  if (std::isnan(maxDistance) || maxDistance < 0) return false;
+  if (std::isinf(maxDistance)) return true;
+  const FT m(maxDistance);
+  return s * s * toExactRay(r).dd <= m * m;
+}
+
 bool intersectsSimplex(const Segment& seg, const Simplex& s) { return meets(toSegmentOrPoint(seg), s); }
 
 }  // namespace detail

@@ -233,8 +233,8 @@ class ExactWorld final : public CollisionWorld {
       const Triangle tri = mesh.triangle(i);
       const Vector n = faceNormal(tri);
       if (options.cullBackFaces && backFacing(n, r.dir)) continue;
-      const std::optional<double> t = exact::raycast(r, tri);
-      if (t && *t <= double(options.maxDistance)) hits.add(makeHit(r, n, *t, i));
+      const std::optional<FT> s = rayParamSimplex(r, toSimplex(tri));
+      if (s && withinRayDistance(r, *s, double(options.maxDistance))) hits.add(makeHit(r, n, rayDistance(r, *s), i));
     }
   }
   bool doIntersects(MeshHandle m, const Segment& s) override {
@@ -476,9 +476,8 @@ class ExactWorld final : public CollisionWorld {
       if (options.cullBackFaces && backFacing(n, r.dir)) continue;
       const std::optional<FT> s = rayParamSimplex(r, p.simplices[i]);
       if (!s) continue;
-      const double t = rayDistance(r, *s);
-      if (!(t <= double(options.maxDistance))) continue;
-      WorldRayHit hit = makeHit(r, n, t, i);
+      if (!withinRayDistance(r, *s, double(options.maxDistance))) continue;
+      WorldRayHit hit = makeHit(r, n, rayDistance(r, *s), i);
       hit.model = m;
       hits.add(hit);
     }

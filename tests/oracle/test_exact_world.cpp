@@ -98,6 +98,35 @@ TEST(ExactWorldModels, SupportsEveryModelAndSceneOp) {
     if (isContractOp(op)) EXPECT_TRUE(w->supports(op)) << opName(op);
 }
 
+TEST(ExactWorldRays, AHitExactlyAtTheMaximumDistanceIsAHit) {
+  // `crux diff` (session 15, double build, family mesh): the ray from (-5,0,0) along (6,3,6)
+  // meets the triangle's edge at (-1,2,4), parameter 2/3, distance exactly 2/3·9 = 6 = max. The
+  // oracle compared the rounded distance (6.000000000000001) with max and called it a miss;
+  // hits at t <= max count (raycast.hpp: "beyond maxT are misses"), decided exactly now.
+  const auto w = exact::makeExactWorld();
+  const auto native = makeWorld("native");
+  const auto tri = std::make_shared<const Mesh>(std::vector<Vec3>{v3(0, 0, 0), v3(1, 2, 2), v3(-2, 2, 5)},
+                                                std::vector<TriangleIndices>{{0, 1, 2}}, "tri");
+  const Ray ray{v3(-5, 0, 0), v3(6, 3, 6)};
+  for (CollisionWorld* world : {w.get(), native.get()}) {
+    const char* name = world == w.get() ? "exact" : "native";
+    const MeshHandle m = world->addMesh("tri", tri);
+    const ModelHandle model = world->addModel("t", m);
+    for (const Real max : {Real(6), std::nextafter(Real(6), Real(0))}) {
+      RayQueryOptions options;
+      options.maxDistance = max;
+      RayHitCollector meshHit(RayCollect::Closest), modelHit(RayCollect::Closest), sceneHit(RayCollect::Closest);
+      world->raycast(m, ray, meshHit, options);
+      world->raycast(model, ray, modelHit, options);
+      world->sceneRaycast(ray, sceneHit, options);
+      const bool want = max == Real(6);
+      EXPECT_EQ(meshHit.hit().has_value(), want) << name << " mesh, max " << max;
+      EXPECT_EQ(modelHit.hit().has_value(), want) << name << " model, max " << max;
+      EXPECT_EQ(sceneHit.hit().has_value(), want) << name << " scene, max " << max;
+    }
+  }
+}
+
 TEST(ExactWorldModels, QuarterTurnWithinSnapToleranceIsExact) {
   // The unit cube turned a quarter about z, its quaternion's components rounded differently
   // ((√½, 0, 0, √½) with z one ulp up: within crux's snapping tolerance) maps x ∈ [0,1] to
