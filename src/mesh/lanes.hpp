@@ -84,7 +84,4 @@ inline Lanes lanesLoad(const Real* p) {
   return r;
 }
 
-/// {v.x, v.y, v.z, w}.
-inline Lanes lanes(const Vec3& v, Real w) { return Lanes{v.x(), v.y(), v.z(), w}; }
-
 }  // namespace crux::mesh_detail

@@ -791,9 +791,14 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
     const bool isSphere = shape.kind == ConvexKind::Sphere;
     // (grow holds the margin and a rounding slack; the capsule test adds 1000 ulps more below)
     const Real reach = (ls.radius + grow) * (1 + kMeshFeatureRelativeTolerance);
-    // A box's pad: the margin and rounding slack (relative 1000 ulps on the box's scale).
-    const mesh_detail::ObbBoxTest obb(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
-    const mesh_detail::ObbBoxTest::Placed placed = obb.place(ls.p[0], ls.half);
+    // A box's node test, padded by the margin and a rounding slack (relative 1000 ulps on the
+    // box's scale); built for boxes only.
+    std::optional<mesh_detail::ObbBoxTest> obb;
+    mesh_detail::ObbBoxTest::Placed placed;
+    if (shape.kind == ConvexKind::Box) {
+      obb.emplace(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
+      placed = obb->place(ls.p[0], ls.half);
+    }
     struct Visitor {
       const Mesh& mesh;
       const Aabb& query;
@@ -801,7 +806,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
       bool isSphere, isCapsule, isBox;
       Vec3 centre, end;  // sphere centre; capsule ends
       Real reach2;
-      const mesh_detail::ObbBoxTest& obb;             // box: its node test (axes in the mesh frame)
+      const mesh_detail::ObbBoxTest* obb;             // box: its node test (axes in the mesh frame)
       const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
       bool enter(const BvhNode& node, Real& key) {
         key = 0;
@@ -810,7 +815,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
           return d.squaredNorm() <= reach2;
         }
         // a box: the OBB–AABB SAT's six face axes (its axis-aligned box is loose when it is rotated)
-        if (isBox) return obb.touches(placed, node.bounds);
+        if (isBox) return obb->touches(placed, node.bounds);
         if (!boxesOverlap(node.bounds, query)) return false;
         if (!isCapsule) return true;
         // A capsule also by the distance of its segment to the box's circumscribed sphere (its
@@ -846,7 +851,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
         ls.p[0],
         ls.p[1],
         reach * reach,
-        obb,
+        obb ? &*obb : nullptr,
         placed};
     traverseBvhSlots(mesh.bvh(), v);
   }

@@ -466,6 +466,30 @@ TEST(GjkExact, PenetrationDepthIsTheSatMinimum) {
   EXPECT_GT(compared, 800);
 }
 
+/// A pair of convex shapes that cross (at the identity pose), named for the failure message.
+struct CrossingPair {
+  const char* name;
+  ConvexShape a, b;
+};
+
+/// distance() of every pair, in both orders, against the exact SAT minimum depth (which must
+/// exceed minDepth: the pairs do cross), within the depth budget.
+void expectCrossingDepthsMatchSat(const std::vector<CrossingPair>& cases, double minDepth) {
+  for (const CrossingPair& c : cases) {
+    for (int order = 0; order < 2; ++order) {
+      const ConvexShape& a = order == 0 ? c.a : c.b;
+      const ConvexShape& b = order == 0 ? c.b : c.a;
+      const Transform id;
+      const DistanceResult r = distance(a, id, b, id);
+      const double S = pairScale(a, id, b, id);
+      const double want = satDepth(a, id, b, id);
+      EXPECT_GT(want, minDepth) << c.name;  // they do cross
+      EXPECT_NEAR(-double(r.distance), want, budget(S, want)) << c.name << ", order " << order << "\n"
+                                                               << describe(a, id, b, id);
+    }
+  }
+}
+
 // Found by `crux diff` (session 14, tests/regressions/*.14201-*, *.14202-*): integer-grid pairs
 // whose Minkowski difference holds the origin on the plane of GJK's final triangle. EPA grew it
 // to a tetrahedron with the origin on a face, and the support point of its first expansion lay on
@@ -475,10 +499,6 @@ TEST(GjkExact, PenetrationDepthIsTheSatMinimum) {
 // shallow. EPA now counts a face with the new point in its plane as seen. Depths against the
 // exact SAT minimum, in both precisions.
 TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
-  struct Case {
-    const char* name;
-    ConvexShape a, b;
-  };
   Obb flat;  // a rectangle: x in [0, 2], y = 1, z in [0, 2]
   flat.center = Vec3(1, 1, 1);
   flat.half = Vec3(1, 0, 1);
@@ -493,25 +513,13 @@ TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
   box.axes.col(2) = Vec3(0, 1, 0);
   const ConvexHull hull = ConvexHull::build({Vec3(-2, 1, 3), Vec3(0, 0, 3), Vec3(0, 0, 3), Vec3(-1, -2, 2), Vec3(0, 0, 4),
                                              Vec3(-2, 1, 4), Vec3(-1, -2, 4), Vec3(0, 0, 5)});
-  const std::vector<Case> cases = {
+  const std::vector<CrossingPair> cases = {
       {"triangle through a flat box", Triangle{Vec3(0, -1, 0), Vec3(1, -1, 0), Vec3(0, 2, 2)}, flat},
       {"box and triangle crossing by 1/3", box, Triangle{Vec3(-2, -1, -2), Vec3(-1, 0, -2), Vec3(0, 0, -4)}},
       {"hull with a repeated point through a triangle", hull,
        Triangle{Vec3(1, 3, 4), Vec3(1, 3, -3), Vec3(-4, -3, 4)}},
   };
-  for (const Case& c : cases) {
-    for (int order = 0; order < 2; ++order) {
-      const ConvexShape& a = order == 0 ? c.a : c.b;
-      const ConvexShape& b = order == 0 ? c.b : c.a;
-      const Transform id;
-      const DistanceResult r = distance(a, id, b, id);
-      const double S = pairScale(a, id, b, id);
-      const double want = satDepth(a, id, b, id);
-      EXPECT_GT(want, 0.3) << c.name;  // they do cross
-      EXPECT_NEAR(-double(r.distance), want, budget(S, want)) << c.name << ", order " << order << "\n"
-                                                               << describe(a, id, b, id);
-    }
-  }
+  expectCrossingDepthsMatchSat(cases, 0.3);
 }
 
 /// Sliver triangles (two corners ~1e-12 apart) against a flat box and a hull (`crux diff`,
@@ -521,10 +529,6 @@ TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
 /// "touching"; 0.359 -> 0.350: 2.5 % shallow). EPA's nearest-face distance never decreases in
 /// exact arithmetic, so a drop now stops it with the face before. Both builds showed it.
 TEST(GjkExact, EpaKeepsTheLastSoundFaceWhenAnExpansionBreaksThePolytope) {
-  struct Case {
-    const char* name;
-    ConvexShape a, b;
-  };
   Obb flat;  // a rectangle (half extent 0 along its second axis)
   flat.center = Vec3(-0.25, -1, 0.109375);
   flat.half = Vec3(Real(1.04931640625), 0, 1);
@@ -536,7 +540,7 @@ TEST(GjkExact, EpaKeepsTheLastSoundFaceWhenAnExpansionBreaksThePolytope) {
   const ConvexHull hull = ConvexHull::build({Vec3(0, 0, 0), Vec3(0, 0, 0), Vec3(0, 1, Real(-1.25)), Vec3(0, 2, 0),
                                              Vec3(1, Real(-0.75), Real(0.171875)), Vec3(0, 0, 0),
                                              Vec3(-1, -1, Real(0.03515625)), Vec3(0, 2, 1)});
-  const std::vector<Case> cases = {
+  const std::vector<CrossingPair> cases = {
       {"sliver triangle through a flat box",
        Triangle{Vec3(0, Real(4.263256414560601e-13), Real(6.821210263296962e-13)),
                 Vec3(Real(6.394884621840902e-14), Real(-6.252776074688882e-13), Real(-9.094947017729282e-13)),
@@ -547,19 +551,7 @@ TEST(GjkExact, EpaKeepsTheLastSoundFaceWhenAnExpansionBreaksThePolytope) {
                 Vec3(0, Real(-1.8189894035458565e-12), 0), Vec3(0, -1, 0)},
        hull},
   };
-  for (const Case& c : cases) {
-    for (int order = 0; order < 2; ++order) {
-      const ConvexShape& a = order == 0 ? c.a : c.b;
-      const ConvexShape& b = order == 0 ? c.b : c.a;
-      const Transform id;
-      const DistanceResult r = distance(a, id, b, id);
-      const double S = pairScale(a, id, b, id);
-      const double want = satDepth(a, id, b, id);
-      EXPECT_GT(want, 0.1) << c.name;  // they do cross
-      EXPECT_NEAR(-double(r.distance), want, budget(S, want)) << c.name << ", order " << order << "\n"
-                                                               << describe(a, id, b, id);
-    }
-  }
+  expectCrossingDepthsMatchSat(cases, 0.1);
 }
 
 #if CRUX_HAVE_CCD_ORACLE

@@ -72,9 +72,10 @@ struct Aabb {
 
 /// Closed oriented box {center + axes*s : |s_i| <= half_i}. The columns of `axes` are the world
 /// directions of the box's local x, y, z and are orthonormal; half >= 0. Axes rounded to Real
-/// are orthonormal only to a few ulps (validate accepts kObbOrthonormalityTolerance): the exact
-/// predicates (overlap, raycast, closest point) then take the box as {x : |axesᵀ(x − center)|_i
-/// <= half_i}, its axes as face normals, as the exact oracle does (docs/geometry.md).
+/// are orthonormal only to a few ulps (validate accepts kObbOrthonormalityTolerance): the
+/// overlap, ray and closest-point routines then take the box as {x : |axesᵀ(x − center)|_i <=
+/// half_i}, its axes as face normals, as the exact oracle does; the convex routines (GJK/EPA,
+/// ConvexShape's support) take the span above, ~1 ulp of the extents away (docs/geometry.md).
 struct Obb {
   Vec3 center = Vec3::Zero();
   Vec3 half = Vec3::Zero();
