@@ -214,11 +214,16 @@ int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   constexpr double kMinSine = 1e-7, kInsideSlackUlps = 64;
   const V v[3] = {a, b, c};
   const double len2[3] = {(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()};  // edge i: v[i] -> v[i+1]
-  // the nearest boundary point (RTCD 5.1.2 per edge), with its region
-  // (the nearest point of x on the three edges, its squared distance and region)
+  // Whether y is nearer to x than z: |y − x|² − |z − x|² = (y − z)·((y − x) + (z − x)) < 0. The
+  // difference's rounding error is relative to |y − z|·|x| rather than |x|², so two candidates
+  // nearly equidistant from a far point are told apart to a few ulps of their positions (crux
+  // diff: a sliver's two corners 5e-14 apart, 2.8 from the point, compared by their rounded
+  // squared distances ~8 picked the farther one, tests/regressions/native.crux-wrong.
+  // closest_point_triangle.15042-1882900).
+  auto nearer = [](const V& y, const V& z, const V& x) { return (y - z).dot((y - x) + (z - x)) < 0; };
+  // the nearest point of x on the three edges (RTCD 5.1.2 per edge), its squared distance and region
   auto boundary = [&](const V& x, V& nearest) {
-    double best = std::numeric_limits<double>::infinity();
-    int region = 3;
+    int region = -1;
     for (int i = 0; i < 3; ++i) {
       const V e = v[(i + 1) % 3] - v[i];
       const double t = (x - v[i]).dot(e);
@@ -227,12 +232,11 @@ int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
       if (t <= 0) y = v[i], r = 3 + i;
       else if (t >= len2[i]) y = v[(i + 1) % 3], r = 3 + (i + 1) % 3;
       else y = v[i] + e * (t / len2[i]);  // 0 < t < len2: len2 > 0
-      const double d2 = (y - x).squaredNorm();
-      if (d2 < best) best = d2, nearest = y, region = r;
+      if (region < 0 || nearer(y, nearest, x)) nearest = y, region = r;
     }
-    return std::make_pair(best, region);
+    return std::make_pair((nearest - x).squaredNorm(), region);
   };
-  const auto [best, region] = boundary(p, q);
+  const int region = boundary(p, q).second;
   const int longest = len2[0] >= len2[1] ? (len2[0] >= len2[2] ? 0 : 2) : (len2[1] >= len2[2] ? 1 : 2);
   const int o = (longest + 2) % 3;  // the corner opposite the longest edge
   // (v[o+1] − v[o]) × (v[o+2] − v[o]): the normal (b − a) × (c − a), cyclically; |n| = |e||e'|·sine
@@ -255,7 +259,7 @@ int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   V fNearest;
   const double halfHeight = 0.5 * std::sqrt(nn / len2[longest]) + slack;
   if (!(boundary(f, fNearest).first <= halfHeight * halfHeight)) return region;
-  if (!((f - p).squaredNorm() < best)) return region;
+  if (!nearer(f, q, p)) return region;
   q = f;
   return -1;
 }

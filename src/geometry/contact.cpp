@@ -348,6 +348,25 @@ bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, 
   });
 }
 
+/// The exact margin decision of two polytopes (boxes or hulls of more than 3 vertices): within
+/// rP + rQ + margin of each other. One holding a vertex of the other (containment; otherwise
+/// their boundaries meet), or a pair of boundary triangles within that distance (withinDistance;
+/// pairs whose boxes are beyond it, by a conservative box test with `slack`, skipped).
+bool polytopesWithin(const Placed& P, const Placed& Q, double rP, double rQ, double margin, double slack) {
+  if (polytopeHolds(P, Q.vertex(0)) || polytopeHolds(Q, P.vertex(0))) return true;
+  const double reach = rP + rQ + margin + slack;
+  V3 lo = Q.vertex(0), hi = lo;
+  for (int i = 1; i < Q.vertexCount(); ++i) lo = lo.cwiseMin(Q.vertex(i)), hi = hi.cwiseMax(Q.vertex(i));
+  lo.array() -= reach;
+  hi.array() += reach;
+  return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
+    const V3 tlo = a.cwiseMin(b).cwiseMin(c), thi = a.cwiseMax(b).cwiseMax(c);
+    if ((tlo.array() > hi.array()).any() || (thi.array() < lo.array()).any()) return false;
+    const V3 t[3] = {a, b, c};
+    return polytopeWithin(Q, t, 3, rQ, rP, margin, slack);
+  });
+}
+
 }  // namespace
 
 bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
@@ -357,11 +376,12 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);
   out.normal = dr.normal;
-  // The margin decision. Cores of 1-3 points (spheres, capsules, triangles, and hulls of at most
-  // 3 vertices) are decided exactly (withinDistance, overlap.hpp) when the distance is within its
-  // rounding of the margin, so that touching on integer grids is reported exactly (a capsule's
-  // foot on a triangle corner at an unrepresentable parameter puts the double distance an ulp
-  // off); a pair found within the margin but computed beyond it gets the margin as its separation.
+  // The margin decision. Every pair is decided exactly (withinDistance, overlap.hpp, on the cores'
+  // points or the polytopes' boundary triangles) when the distance is within its rounding of the
+  // margin, so that touching on integer grids is reported exactly (a capsule's foot on a triangle
+  // corner at an unrepresentable parameter, or GJK's distance between a hull and a box, puts the
+  // double distance an ulp off); a pair found within the margin but computed beyond it gets the
+  // margin as its separation.
   bool clampToMargin = false;
   {
     // the core's points (the placed vertices) and their count, 0 for larger cores
@@ -395,8 +415,10 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
               },
               clampToMargin))
         return false;
-    } else if (!(dr.distance <= margin)) {  // two polytopes: GJK's decision
-      return false;
+    } else if (!contact_detail::withinMargin(
+                   double(dr.distance), m, band,
+                   [&] { return polytopesWithin(A, B, A.radius, B.radius, m, band); }, clampToMargin)) {
+      return false;  // two polytopes: their boundary triangles (or containment) decide exactly
     }
   }
   V3 n = dr.normal.cast<double>();

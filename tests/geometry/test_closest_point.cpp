@@ -374,6 +374,45 @@ TEST(ClosestPointTriangleProperty, GeneralPositionMatchesExact) {
   EXPECT_LE(faceRegion, cases / 10 * 9);
 }
 
+// Needles whose two near corners b, c lie ~1e-14 apart near the origin, a point p ~3 away almost
+// on their bisecting plane (so the two corners are nearly equidistant from it), the third corner
+// a unit away on p's far side: the answer is b, c or a point between them, and must be the exact
+// one to a few ulps of the scale, with no allowance for the sliver's normal (the triangle is far
+// too thin for a face region: closestOnSliver takes its boundary). Found by `crux diff` (session
+// 15, seed 15042, double build: tests/regressions/native.crux-wrong.closest_point_triangle.
+// 15042-1882900): the edges' candidates were compared by their rounded squared distances (~8,
+// rounding ~1e-15 against a difference of ~1e-15) and the farther corner, 5e-14 off, won.
+TEST(ClosestPointTriangleProperty, NeedleCornersNearlyEquidistantFromAFarPointMatchExact) {
+  std::mt19937_64 rng(0x15042);
+  std::uniform_real_distribution<double> U(-1, 1);
+  auto dir = [&] {
+    Eigen::Vector3d v;
+    do v = Eigen::Vector3d(U(rng), U(rng), U(rng));
+    while (v.norm() < 0.1 || v.norm() > 1);
+    return v.normalized();
+  };
+  int failures = 0;
+  double worst = 0;
+  const int cases = test::scaledCases(20000);
+  for (int i = 0; i < cases && failures < 10; ++i) {
+    const Eigen::Vector3d b = 1e-13 * dir(), w = dir(), c = b + 5e-14 * w, u = w.cross(dir()).normalized();
+    // p: off the midpoint of b c along u (⟂ w) by ~3, then along w by up to ~1e-15 either way
+    const Eigen::Vector3d p = 0.5 * (b + c) + (2 + U(rng)) * u + 1e-15 * U(rng) * w;
+    const Triangle t{Vec3((-u).cast<Real>()), Vec3(b.cast<Real>()), Vec3(c.cast<Real>())};
+    const Vec3 pr = p.cast<Real>();
+    const Vec3 got = closestPoint(t, pr);
+    const Eigen::Vector3d want = exact::closestPoint(t, pr);
+    const double unit = kEps * scaleOf({t.a, t.b, t.c, pr});
+    const double err = (got.cast<double>() - want).norm();
+    worst = std::max(worst, err / unit);
+    if (!(err <= kAccuracyUnits * unit) && ++failures)
+      ADD_FAILURE() << str(t) << ", p = " << str(pr) << ": crux " << str(got) << ", exact "
+                    << str(Vec3(want.cast<Real>())) << " (" << err / unit << " units)";
+  }
+  EXPECT_EQ(failures, 0);
+  std::printf("needles: %d cases, worst error %.3g units\n", cases, worst);
+}
+
 // ---- other shapes: optimality of the projection ---------------------------------------------
 
 /// q is the closest point of a convex set C to p iff q ∈ C and (p - q)·(x - q) <= 0 for every

@@ -911,8 +911,7 @@ TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
   EXPECT_EQ(falseHits, 0);
 }
 
-// Two polytopes keep GJK's margin decision (contacts() decides exactly only against 1-3-point
-// cores): checked here on the integer grid where the closest features are not corners. Two hulls
+// Two polytopes on the integer grid where the closest features are not corners. Two hulls
 // (or an axis-aligned box and a hull) separated by a slab of integer-normed normal w (|w| = 3, 7,
 // 9, 11 or 5: Pythagorean quadruples and triples), touching its two planes at skew edges (edge–
 // edge: their projections along w cross at a rational, unrepresentable point), at a vertex and the
@@ -975,6 +974,44 @@ TEST(ContactsIssue6, TouchingPolytopesOnTheIntegerGridHaveAContact) {
     tally.check(B, A, Real(m * wn), what.str() + " (swapped)");
   }
   tally.expectEveryPairReported(cases);
+}
+
+// Two polytopes (a hull of more than 3 vertices and a box) decide the margin exactly too, on
+// their boundary triangles (contacts(), polytopesWithin): the two `crux diff` cases of session 15
+// (seed 15042, double build, tests/regressions/native.crux-wrong.contacts.15042-*): integer-grid
+// pairs exactly 1 apart along (0, −0.8, −0.6) and (6, 3, 2)/7, where GJK's double distance came out
+// a hair above 1 and the margin-1 contact was missed. Reported at margin 1 with separation 1 (the
+// margin, when the computed distance lies beyond it), in both operand orders; none at a margin
+// just below 1.
+TEST(ContactsIssue6, HullAndBoxExactlyAtTheMarginOnTheGridHaveAContact) {
+  struct Case {
+    std::vector<Vec3> hull;
+    Obb box;
+  };
+  Mat3 axes1, axes2;  // columns: the box's axes
+  axes1 << -1, 0, 0, 0, 0, 1, 0, -1, 0;
+  axes2 << 1, 0, 0, 0, 0, -1, 0, -1, 0;
+  const Case cases[] = {
+      {{Vec3(-1, -1, 2), Vec3(0, 0, 0), Vec3(0, -1, 1), Vec3(1, 2, -2)}, Obb{Vec3(-2, 2, 3), Vec3(2, 2, 1), axes1}},
+      {{Vec3(-2, -2, 1), Vec3(-2, 0, -2), Vec3(-4, 0, 0), Vec3(0, -4, -2), Vec3(-3, 0, 0)},
+       Obb{Vec3(1, 0, 1), Vec3(2, 1, 1), axes2}},
+  };
+  const Transform I = Transform::identity();
+  for (const Case& c : cases) {
+    const ConvexHull h = ConvexHull::build(c.hull);
+    ASSERT_GT(h.vertices().size(), 3u);
+    const ConvexShape A(h), B(c.box);
+    for (int order = 0; order < 2; ++order) {
+      const ConvexShape& P = order ? B : A;
+      const ConvexShape& Q = order ? A : B;
+      ContactManifold m;
+      ASSERT_TRUE(contacts(P, I, Q, I, 1, m)) << "order " << order << " hull " << c.hull[0].transpose();
+      ASSERT_GE(m.count, 1);
+      for (int i = 0; i < m.count; ++i) EXPECT_NEAR(m.points[i].separation, 1, 8 * kEps) << str(m);
+      EXPECT_FALSE(contacts(P, I, Q, I, 1 - Real(1) / 1024, m)) << str(m);
+      EXPECT_NEAR(distance(P, I, Q, I).distance, 1, 8 * kEps);
+    }
+  }
 }
 
 // A manifold is never shallower than the closest (deepest) pair beyond the face snapping's
