@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <memory>
 #include <string>
 
@@ -505,6 +506,65 @@ void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
     }
     node.bounds = b;
   }
+}
+
+
+WideBvh widenBvh(const Bvh& bvh) {
+  WideBvh wide;
+  if (bvh.nodes.empty()) return wide;
+  constexpr Real inf = std::numeric_limits<Real>::infinity();
+  // (binary node, wide node) pairs still to fill, in creation order: children after parents
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{0u, 0u}};
+  wide.nodes.reserve(bvh.nodes.size() / 2 + 1);
+  wide.nodes.emplace_back();
+  for (std::size_t next = 0; next < todo.size(); ++next) {
+    const auto [binary, index] = todo[next];
+    // the lanes: the binary node's children, an inner child replaced by its two children; a
+    // leaf root is its own single lane
+    std::uint32_t lanes[4];
+    int n = 0;
+    const BvhNode& b = bvh.nodes[binary];
+    if (b.isLeaf()) {
+      lanes[n++] = binary;
+    } else {
+      for (std::uint32_t c = b.first; c < b.first + 2; ++c) {
+        const BvhNode& child = bvh.nodes[c];
+        if (child.isLeaf()) {
+          lanes[n++] = c;
+        } else {
+          lanes[n++] = child.first;
+          lanes[n++] = child.first + 1;
+        }
+      }
+    }
+    WideBvhNode node;
+    for (int i = 0; i < 4; ++i) {
+      node.minX[i] = node.minY[i] = node.minZ[i] = inf;
+      node.maxX[i] = node.maxY[i] = node.maxZ[i] = -inf;
+      node.child[i] = WideBvhNode::kEmpty;
+      node.count[i] = 0;
+    }
+    for (int i = 0; i < n; ++i) {
+      const BvhNode& lane = bvh.nodes[lanes[i]];
+      node.minX[i] = lane.bounds.min.x();
+      node.minY[i] = lane.bounds.min.y();
+      node.minZ[i] = lane.bounds.min.z();
+      node.maxX[i] = lane.bounds.max.x();
+      node.maxY[i] = lane.bounds.max.y();
+      node.maxZ[i] = lane.bounds.max.z();
+      if (lane.isLeaf()) {
+        node.child[i] = lane.first;
+        node.count[i] = lane.count;
+      } else {
+        node.child[i] = static_cast<std::uint32_t>(wide.nodes.size());
+        todo.push_back({lanes[i], node.child[i]});
+        wide.nodes.emplace_back();
+      }
+    }
+    wide.nodes[index] = node;
+  }
+  wide.nodes.shrink_to_fit();
+  return wide;
 }
 
 }  // namespace crux

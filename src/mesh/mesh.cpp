@@ -1,6 +1,7 @@
 #include <crux/mesh/mesh.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstddef>
@@ -99,6 +100,12 @@ struct SortedTriangleHash {
   }
 };
 
+/// A process-wide counter for Mesh::geometryId (never 0).
+std::uint64_t nextGeometryId() {
+  static std::atomic<std::uint64_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
 }  // namespace
 
 Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, std::string name,
@@ -129,6 +136,7 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, s
   } catch (const InvalidInput& e) {  // bad build options
     throw InvalidInput(name_ + ": " + e.what());
   }
+  geometryId_ = nextGeometryId();
   slotTriangles_.resize(triangles_.size());
   for (std::size_t k = 0; k < triangles_.size(); ++k) slotTriangles_[k] = triangles_[bvh_.primIndices[k]];
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -141,6 +149,7 @@ void Mesh::setVertices(std::vector<Vec3> vertices) {
   requireFiniteVertices(vertices, name_);
   vertices_ = std::move(vertices);
   refitBvh(bvh_, triangleBounds());
+  geometryId_ = nextGeometryId();
 }
 
 std::vector<Aabb> Mesh::triangleBounds() const {

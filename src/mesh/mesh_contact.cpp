@@ -96,6 +96,13 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
   for (std::size_t k = 0; k < prims.size(); ++k)
     bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
+  wide_ = widenBvh(mesh.bvh());
+  geometryId_ = mesh.geometryId();
+}
+
+std::size_t MeshAdjacency::memoryBytes() const {
+  return neighbors_.capacity() * sizeof(std::uint32_t) + opposite_.capacity() * sizeof(std::uint32_t) +
+         activity_.capacity() + bySlot_.capacity() * sizeof(SlotData) + wide_.memoryBytes();
 }
 
 Real meshFeatureTolerance(const Triangle& tri) {
@@ -624,36 +631,44 @@ struct Collector {
     // (no planeSeparates here: the routine's SAT tests the triangle's normal itself; that
     // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
     const Triangle tb{a.cast<Real>(), b.cast<Real>(), cc.cast<Real>()};
-    ContactManifold m;
-    if (!boxTriangleContacts(ls.half, tb, margin, m)) return;
-    emit(t, slot, tri, tb, m);
+    // left uninitialised (boxTriangleContacts sets the normal, the count and the points it
+    // reports; emit reads no more): its default values were ~20 stores per call
+    union Uninitialised {
+      Uninitialised() {}
+      ContactManifold m;
+    } u;
+    if (!boxTriangleContacts(ls.half, tb, margin, u.m)) return;
+    emit(t, slot, tri, tb, u.m);
   }
 
   /// Contacts of triangle t (in BVH slot `slot`, or kNoSlot) with the shape.
   void triangle(std::uint32_t t, std::uint32_t slot, const Triangle& tri) {
-    ContactManifold m;  // (the box path declares its own, after its reject)
+    // (each path declares its manifold itself: the box path after its reject; a manifold built
+    // at entry cost ~20 stores for every leaf triangle, rejected ones included)
     switch (ls.shape.kind) {
       case ConvexKind::Sphere:
         sphereTriangle(t, slot, tri);
         return;
-      case ConvexKind::Capsule:
-        if (!capsuleTriangleContacts(tri, ls.p[0], ls.p[1], ls.radius, margin, m)) return;
-        break;
       case ConvexKind::Box:
         boxTriangle(t, slot, tri);
         return;
-      default:
+      case ConvexKind::Capsule: {
+        ContactManifold m;
+        if (capsuleTriangleContacts(tri, ls.p[0], ls.p[1], ls.radius, margin, m)) emit(t, slot, tri, tri, m);
+        return;
+      }
+      default: {
         if (planeSeparates(tri)) return;
-        if (ls.aligned && ls.shape.kind == ConvexKind::Triangle) {
-          if (!contacts(ConvexShape(tri), Transform::identity(), ConvexShape(ls.mappedTriangle), Transform::identity(),
-                        margin, m))
-            return;
-        } else if (!contacts(ConvexShape(tri), Transform::identity(), ls.shape, ls.rel, margin, m)) {
-          return;
-        }
-        break;
+        ContactManifold m;
+        const bool touching =
+            ls.aligned && ls.shape.kind == ConvexKind::Triangle
+                ? contacts(ConvexShape(tri), Transform::identity(), ConvexShape(ls.mappedTriangle),
+                           Transform::identity(), margin, m)
+                : contacts(ConvexShape(tri), Transform::identity(), ls.shape, ls.rel, margin, m);
+        if (touching) emit(t, slot, tri, tri, m);
+        return;
+      }
     }
-    emit(t, slot, tri, tri, m);
   }
 
   /// The points of one triangle's manifold m (in `frame`, where triangle t is ft: see correct()),
@@ -791,69 +806,77 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
     const bool isSphere = shape.kind == ConvexKind::Sphere;
     // (grow holds the margin and a rounding slack; the capsule test adds 1000 ulps more below)
     const Real reach = (ls.radius + grow) * (1 + kMeshFeatureRelativeTolerance);
-    // A box's node test, padded by the margin and a rounding slack (relative 1000 ulps on the
-    // box's scale); built for boxes only.
+    // A box's node test: the OBB–AABB SAT's six face axes (its axis-aligned box is loose when it
+    // is rotated), padded by the margin and a rounding slack (relative 1000 ulps on the box's
+    // scale). Its triangles meet the box's own faces first, in Collector::boxTriangle (the world
+    // box rejected ~2 % of the leaf triangles there, for more than it saved).
     std::optional<mesh_detail::ObbBoxTest> obb;
     mesh_detail::ObbBoxTest::Placed placed;
     if (shape.kind == ConvexKind::Box) {
       obb.emplace(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
       placed = obb->place(ls.p[0], ls.half);
     }
-    struct Visitor {
-      const Mesh& mesh;
-      const Aabb& query;
-      Collector& c;
-      bool isSphere, isCapsule, isBox;
-      Vec3 centre, end;  // sphere centre; capsule ends
-      Real reach2;
-      const mesh_detail::ObbBoxTest* obb;             // box: its node test (axes in the mesh frame)
-      const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
-      bool enter(const BvhNode& node, Real& key) {
-        key = 0;
-        if (isSphere) {
-          const Vec3 d = (node.bounds.min - centre).cwiseMax(centre - node.bounds.max).cwiseMax(Vec3::Zero());
-          return d.squaredNorm() <= reach2;
+    if (obb && adjacency && adjacency->currentFor(mesh)) {
+      // with the adjacency's 4-wide copy of the BVH: the node test on four boxes at once
+      // (touches4: per box the same answer as touches), the same leaves in the same order
+      struct WideVisitor {
+        const Mesh& mesh;
+        Collector& c;
+        const mesh_detail::ObbBoxTest& obb;
+        const mesh_detail::ObbBoxTest::Placed& placed;
+        unsigned enter(const WideBvhNode& node) const { return obb.touches4(placed, node); }
+        bool slot(std::uint32_t k) {
+          c.triangle(mesh.bvh().primIndices[k], k, mesh.slotTriangle(k));
+          return true;
         }
-        // a box: the OBB–AABB SAT's six face axes (its axis-aligned box is loose when it is rotated)
-        if (isBox) return obb->touches(placed, node.bounds);
-        if (!boxesOverlap(node.bounds, query)) return false;
-        if (!isCapsule) return true;
-        // A capsule also by the distance of its segment to the box's circumscribed sphere (its
-        // axis-aligned box is loose when it is tilted).
-        const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max);
-        const Real e = Real(0.5) * (node.bounds.max - node.bounds.min).norm() * (1 + 4 * std::numeric_limits<Real>::epsilon());
-        const Vec3 ab = end - centre;
-        const Real l2 = ab.squaredNorm();
-        const Real t = l2 > 0 ? std::clamp(ab.dot(c - centre) / l2, Real(0), Real(1)) : Real(0);
-        const Real lim = std::sqrt(reach2) + e;
-        return (centre + t * ab - c).squaredNorm() <= lim * lim;
-      }
-      bool keep(Real) { return true; }
-      bool slot(std::uint32_t k) {
-        const Triangle tri = mesh.slotTriangle(k);
-        if (isSphere) {
-          const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
-          const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
-          if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
-        } else if (isBox || boxesOverlap(bounds(tri), query)) {
-          // (a box tests the triangle against its own faces first, in Collector::triangle; the
-          // world box rejected ~2 % of the leaf triangles there, for more than it saved)
-          c.triangle(mesh.bvh().primIndices[k], k, tri);
+      } wv{mesh, c, *obb, placed};
+      traverseWideBvhSlots(adjacency->wideBvh(), wv);
+    } else {
+      struct Visitor {
+        const Mesh& mesh;
+        const Aabb& query;
+        Collector& c;
+        bool isSphere, isCapsule;
+        Vec3 centre, end;  // sphere centre; capsule ends
+        Real reach2;
+        const mesh_detail::ObbBoxTest* obb;             // a box: its node test (axes in the mesh frame)
+        const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
+        bool enter(const BvhNode& node, Real& key) {
+          key = 0;
+          if (isSphere) {
+            const Vec3 d = (node.bounds.min - centre).cwiseMax(centre - node.bounds.max).cwiseMax(Vec3::Zero());
+            return d.squaredNorm() <= reach2;
+          }
+          if (obb) return obb->touches(placed, node.bounds);
+          if (!boxesOverlap(node.bounds, query)) return false;
+          if (!isCapsule) return true;
+          // A capsule also by the distance of its segment to the box's circumscribed sphere (its
+          // axis-aligned box is loose when it is tilted).
+          const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max);
+          const Real e =
+              Real(0.5) * (node.bounds.max - node.bounds.min).norm() * (1 + 4 * std::numeric_limits<Real>::epsilon());
+          const Vec3 ab = end - centre;
+          const Real l2 = ab.squaredNorm();
+          const Real t = l2 > 0 ? std::clamp(ab.dot(c - centre) / l2, Real(0), Real(1)) : Real(0);
+          const Real lim = std::sqrt(reach2) + e;
+          return (centre + t * ab - c).squaredNorm() <= lim * lim;
         }
-        return true;
-      }
-    } v{mesh,
-        query,
-        c,
-        isSphere,
-        shape.kind == ConvexKind::Capsule,
-        shape.kind == ConvexKind::Box,
-        ls.p[0],
-        ls.p[1],
-        reach * reach,
-        obb ? &*obb : nullptr,
-        placed};
-    traverseBvhSlots(mesh.bvh(), v);
+        bool keep(Real) { return true; }
+        bool slot(std::uint32_t k) {
+          const Triangle tri = mesh.slotTriangle(k);
+          if (isSphere) {
+            const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
+            const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
+            if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
+          } else if (obb || boxesOverlap(bounds(tri), query)) {
+            c.triangle(mesh.bvh().primIndices[k], k, tri);
+          }
+          return true;
+        }
+      } v{mesh,   query,        c, isSphere, shape.kind == ConvexKind::Capsule, ls.p[0], ls.p[1], reach * reach,
+          obb ? &*obb : nullptr, placed};
+      traverseBvhSlots(mesh.bvh(), v);
+    }
   }
   c.keepDeepestDropped();
   c.reduce(out, mergeTol);

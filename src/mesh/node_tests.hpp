@@ -17,6 +17,7 @@
 ///    beats the best hit is never pruned away.
 
 #include <crux/geometry/shapes.hpp>
+#include <crux/mesh/bvh.hpp>
 
 #include "lanes.hpp"
 
@@ -182,6 +183,26 @@ class ObbBoxTest {
     const Lanes dot = (t2[0] * rows_[0] + t2[1] * rows_[1]) + t2[2] * rows_[2];
     const Lanes reach = (((h2[0] * absRows_[0] + h2[1] * absRows_[1]) + h2[2] * absRows_[2]) + lanesLoad(o.half2.data())) + pad2_;
     return !anyOf3(outside | (lanesAbs(dot) > reach));
+  }
+
+  /// touches() for the four lane boxes of a wide node at once (one lane per box, bit i of the
+  /// result: lane i's box touches), in the same order of operations per box, so each bit is
+  /// touches()' answer for that box. Unused lanes (empty boxes) are rejected.
+  unsigned touches4(const Placed& o, const WideBvhNode& node) const {
+    const Lanes mnX = lanesLoad(node.minX), mnY = lanesLoad(node.minY), mnZ = lanesLoad(node.minZ);
+    const Lanes mxX = lanesLoad(node.maxX), mxY = lanesLoad(node.maxY), mxZ = lanesLoad(node.maxZ);
+    // Box A's face axes: the OBB's world box against each box
+    LaneBits outside = (o.lo.x() > mxX) | (o.hi.x() < mnX);
+    outside |= (o.lo.y() > mxY) | (o.hi.y() < mnY);
+    outside |= (o.lo.z() > mxZ) | (o.hi.z() < mnZ);
+    const Lanes tx = o.center2.x() - (mnX + mxX), ty = o.center2.y() - (mnY + mxY), tz = o.center2.z() - (mnZ + mxZ);
+    const Lanes hx = mxX - mnX, hy = mxY - mnY, hz = mxZ - mnZ;
+    for (int j = 0; j < 3; ++j) {  // the OBB's face axis u_j
+      const Lanes dot = (tx * rows_[0][j] + ty * rows_[1][j]) + tz * rows_[2][j];
+      const Lanes reach = (((hx * absRows_[0][j] + hy * absRows_[1][j]) + hz * absRows_[2][j]) + o.half2[j]) + pad2_;
+      outside |= lanesAbs(dot) > reach;
+    }
+    return ~laneMask(outside) & 15u;
   }
 
  private:

@@ -296,6 +296,149 @@ TEST(Bvh, MeshRefitAfterSetVerticesIsFitted) {
   checkBvh(mesh.bvh(), prims, {});
 }
 
+/// The lanes of every wide node are binary nodes (the root's children, an inner child replaced by
+/// its two children) with their boxes, in order; leaves keep their slots. Checked by walking both
+/// trees together; returns the wide tree's depth.
+int checkWide(const Bvh& bvh, const WideBvh& wide) {
+  if (bvh.empty()) {
+    EXPECT_TRUE(wide.empty());
+    return 0;
+  }
+  EXPECT_FALSE(wide.empty());
+  std::vector<int> seen(wide.nodes.size(), 0);
+  struct Item {
+    std::uint32_t binary, wide;
+    int depth;
+  };
+  std::vector<Item> stack{{0, 0, 1}};
+  int depth = 0;
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    depth = std::max(depth, it.depth);
+    EXPECT_LT(it.wide, wide.nodes.size());
+    if (it.wide >= wide.nodes.size()) return depth;
+    ++seen[it.wide];
+    const WideBvhNode& w = wide.nodes[it.wide];
+    std::vector<std::uint32_t> lanes;
+    const BvhNode& b = bvh.nodes[it.binary];
+    if (b.isLeaf()) {
+      lanes.push_back(it.binary);
+    } else {
+      for (std::uint32_t c : {b.first, b.first + 1}) {
+        if (bvh.nodes[c].isLeaf()) lanes.push_back(c);
+        else lanes.insert(lanes.end(), {bvh.nodes[c].first, bvh.nodes[c].first + 1});
+      }
+    }
+    for (std::size_t i = 0; i < 4; ++i) {
+      const Aabb box{Vec3(w.minX[i], w.minY[i], w.minZ[i]), Vec3(w.maxX[i], w.maxY[i], w.maxZ[i])};
+      if (i >= lanes.size()) {
+        EXPECT_EQ(w.child[i], WideBvhNode::kEmpty);
+        EXPECT_EQ(w.count[i], 0u);
+        EXPECT_TRUE(sameBox(box, Aabb::empty()));
+        continue;
+      }
+      const BvhNode& lane = bvh.nodes[lanes[i]];
+      EXPECT_TRUE(sameBox(box, lane.bounds)) << "wide node " << it.wide << " lane " << i;
+      EXPECT_EQ(w.count[i], lane.count);
+      if (lane.isLeaf()) EXPECT_EQ(w.child[i], lane.first);
+      else stack.push_back({lanes[i], w.child[i], it.depth + 1});
+    }
+  }
+  for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "wide node " << i << " reachability";
+  return depth;
+}
+
+TEST(WideBvh, CollapsesTheBinaryTreeLaneForLane) {
+  std::mt19937_64 rng(0x3171DE);
+  for (std::size_t n : {0u, 1u, 2u, 5u, 7u, 1000u, 30000u}) {
+    SCOPED_TRACE(n);
+    const std::vector<Aabb> prims = randomBoxes(n, rng);
+    const Bvh bvh = buildBvh(prims, {});
+    const WideBvh wide = widenBvh(bvh);
+    const int depth = checkWide(bvh, wide);
+    const BvhShape shape = n ? checkBvh(bvh, prims, {}) : BvhShape{};
+    if (n) EXPECT_LE(depth, shape.maxDepth / 2 + 1);
+  }
+  // the deepest tree: the wide traversal's fixed stack holds (every leaf visited)
+  const std::vector<Aabb> prims = exponentialClusters(30000, 120);
+  BvhBuildOptions options;
+  options.bins = 2;
+  options.maxLeafSize = 1;
+  const Bvh bvh = buildBvh(prims, options);
+  const WideBvh wide = widenBvh(bvh);
+  checkWide(bvh, wide);
+  struct All {
+    std::vector<int> seen;
+    unsigned enter(const WideBvhNode& node) const {
+      unsigned m = 0;
+      for (int i = 0; i < 4; ++i) m |= unsigned(node.child[i] != WideBvhNode::kEmpty) << i;
+      return m;
+    }
+    bool slot(std::uint32_t k) { return ++seen[k], true; }
+  } v{std::vector<int>(prims.size(), 0)};
+  EXPECT_TRUE(traverseWideBvhSlots(wide, v));
+  for (std::size_t k = 0; k < prims.size(); ++k) ASSERT_EQ(v.seen[k], 1) << k;
+}
+
+TEST(WideBvh, VisitsTheSameSlotsInTheSameOrderAsTheBinaryTraversal) {
+  // an overlap query box against random boxes: the binary traversal (left child first, equal
+  // keys) and the wide one visit the same slots in the same order; also after a refit of the
+  // binary tree and a new collapse, and through a Mesh after setVertices
+  std::mt19937_64 rng(0x0D0E);
+  std::uniform_real_distribution<float> pos(-10, 10), size(0, 4);
+  for (std::size_t n : {1u, 3u, 100u, 20000u}) {
+    SCOPED_TRACE(n);
+    const std::vector<Aabb> prims = randomBoxes(n, rng);
+    const Bvh bvh = buildBvh(prims, {});
+    const WideBvh wide = widenBvh(bvh);
+    long visits = 0;
+    for (int q = 0; q < 200; ++q) {
+      const Vec3 c(pos(rng), pos(rng), pos(rng)), e(size(rng), size(rng), size(rng));
+      const Aabb query{c - e, c + e};
+      auto meets = [&](const Aabb& b) { return (query.min.array() <= b.max.array()).all() && (b.min.array() <= query.max.array()).all(); };
+      struct Binary {
+        decltype(meets)& m;
+        std::vector<std::uint32_t> slots;
+        bool enter(const BvhNode& node, Real& key) { return key = 0, m(node.bounds); }
+        bool keep(Real) { return true; }
+        bool slot(std::uint32_t k) { return slots.push_back(k), true; }
+      } bv{meets, {}};
+      struct Wide {
+        decltype(meets)& m;
+        std::vector<std::uint32_t> slots;
+        unsigned enter(const WideBvhNode& node) {
+          unsigned mask = 0;
+          for (int i = 0; i < 4; ++i)
+            mask |= unsigned(m({Vec3(node.minX[i], node.minY[i], node.minZ[i]), Vec3(node.maxX[i], node.maxY[i], node.maxZ[i])})) << i;
+          return mask;
+        }
+        bool slot(std::uint32_t k) { return slots.push_back(k), true; }
+      } wv{meets, {}};
+      traverseBvhSlots(bvh, bv);
+      traverseWideBvhSlots(wide, wv);
+      ASSERT_EQ(wv.slots, bv.slots) << "query " << q;
+      visits += long(bv.slots.size());
+    }
+    if (n >= 100) EXPECT_GT(visits, 200);  // not vacuous
+  }
+}
+
+TEST(Mesh, GeometryIdIsUniqueAndRenewedBySetVertices) {
+  std::vector<Vec3> v{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const std::vector<TriangleIndices> tris{{0, 1, 2}};
+  Mesh a(v, tris, "a");
+  const Mesh b(v, tris, "b");
+  EXPECT_NE(a.geometryId(), b.geometryId());
+  EXPECT_NE(a.geometryId(), 0u);
+  const Mesh copy = a;
+  EXPECT_EQ(copy.geometryId(), a.geometryId());
+  const std::uint64_t before = a.geometryId();
+  a.setVertices(v);  // the same positions: still a new id
+  EXPECT_NE(a.geometryId(), before);
+  EXPECT_NE(a.geometryId(), b.geometryId());
+}
+
 TEST(Bvh, RejectsBadInputAtTheEdge) {
   const std::vector<Aabb> prims{{Vec3(0, 0, 0), Vec3(1, 1, 1)}, {Vec3(2, 0, 0), Vec3(3, 1, 1)}};
   BvhBuildOptions zeroLeaf;

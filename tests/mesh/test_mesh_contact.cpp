@@ -562,6 +562,53 @@ TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
   EXPECT_GT(hits, 0);
 }
 
+// A box's query walks the adjacency's 4-wide copy of the BVH when the adjacency is current for
+// the mesh, the mesh's binary BVH otherwise: the same leaves in the same order, so the same
+// manifold bit for bit. A copy of bunny00 given its own vertices again (setVertices: a new
+// geometry id, the same positions) makes the adjacency stale for it, so the same query on the
+// two meshes takes the two paths with the same adjacency data.
+TEST(MeshContact, BoxQueryThroughTheWideBvhEqualsTheBinaryOneBitForBit) {
+  const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
+  const MeshAdjacency adjacency(bunny);
+  Mesh stale = bunny;
+  stale.setVertices(bunny.vertices());
+  ASSERT_TRUE(adjacency.currentFor(bunny));
+  ASSERT_FALSE(adjacency.currentFor(stale));
+  EXPECT_TRUE(MeshAdjacency(stale).currentFor(stale));
+  const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
+  std::mt19937 rng(16);
+  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(bunny.triangleCount() - 1));
+  std::uniform_real_distribution<double> lift(-0.03, 0.02), size(0.005, 0.08);
+  int hits = 0;
+  const int trials = test::scaledCases(400, 60);
+  for (int trial = 0; trial < trials; ++trial) {
+    const Triangle t = bunny.triangle(pick(rng));
+    const Vec3 n = (t.b - t.a).cross(t.c - t.a).normalized();
+    if (!n.allFinite()) continue;
+    const Vec3 half(Real(size(rng)) * diag, Real(size(rng)) * diag, Real(size(rng)) * diag);
+    const ConvexShape box = Obb{Vec3::Zero(), half, Mat3::Identity()};
+    Transform meshPose;
+    meshPose.rotation = randomRotation(rng);
+    const Transform shapePose{randomRotation(rng), meshPose.apply((t.a + t.b + t.c) / 3 + Real(lift(rng)) * diag * n)};
+    const Real margin = Real(0.002) * diag;
+    MeshContactManifold wide, binary;
+    contacts(bunny, meshPose, box, shapePose, margin, wide, &adjacency);
+    contacts(stale, meshPose, box, shapePose, margin, binary, &adjacency);
+    ASSERT_EQ(wide.count, binary.count) << "trial " << trial;
+    for (int i = 0; i < wide.count; ++i) {
+      const MeshContactPoint &p = wide.points[i], &q = binary.points[i];
+      ASSERT_EQ(p.pointA, q.pointA) << "trial " << trial << " point " << i;
+      ASSERT_EQ(p.pointB, q.pointB) << "trial " << trial << " point " << i;
+      ASSERT_EQ(p.normal, q.normal) << "trial " << trial << " point " << i;
+      ASSERT_EQ(p.separation, q.separation) << "trial " << trial << " point " << i;
+      ASSERT_EQ(p.triangle, q.triangle) << "trial " << trial << " point " << i;
+      ASSERT_EQ(p.featureB, q.featureB) << "trial " << trial << " point " << i;
+    }
+    hits += wide.count > 0;
+  }
+  EXPECT_GT(hits, trials / 2);
+}
+
 // The sphere's internal-edge correction takes the features a point lies on from the sphere
 // routine's Voronoi region (correctSphere); every other shape runs the generic per-edge tests.
 // A capsule whose segment is a point is that same sphere through the generic path: both

@@ -68,6 +68,53 @@ TEST(ObbBoxTest, SameAnswersAsTheScalarTest) {
   EXPECT_GT(no, 20000);
 }
 
+TEST(ObbBoxTest, FourLaneTestGivesEachBoxTheOneBoxAnswer) {
+  // touches4 on a wide node whose lanes hold four boxes (or fewer: the rest empty) answers, bit
+  // for bit, what touches answers for each box; the grid half gives exact ties
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<Real> u(-2, 2), size(0, 1.5);
+  std::uniform_int_distribution<int> grid(-3, 3), gridSize(0, 2), used(1, 4);
+  int yes = 0, no = 0;
+  for (int i = 0; i < 50000; ++i) {
+    const bool onGrid = i % 2 == 1;
+    const Mat3 axes = onGrid ? randomSignedPermutation(rng) : randomRotation(rng);
+    const Real pad = onGrid ? Real(0) : Real(i % 3) * Real(1e-3);
+    const Vec3 center = onGrid ? Vec3(Real(grid(rng)), Real(grid(rng)), Real(grid(rng))) : Vec3(u(rng), u(rng), u(rng));
+    const Vec3 half = onGrid ? Vec3(Real(gridSize(rng)), Real(gridSize(rng)), Real(gridSize(rng)))
+                             : Vec3(size(rng), size(rng), size(rng));
+    const ObbBoxTest test(axes, pad);
+    const ObbBoxTest::Placed placed = test.place(center, half);
+    WideBvhNode node;
+    const int n = used(rng);
+    Aabb boxes[4];
+    for (int l = 0; l < 4; ++l) {
+      Aabb& b = boxes[l];
+      if (l < n) {
+        for (int k = 0; k < 3; ++k) {
+          const Real a = onGrid ? Real(grid(rng)) : u(rng), c = onGrid ? Real(grid(rng)) : u(rng);
+          b.min[k] = std::min(a, c);
+          b.max[k] = std::max(a, c);
+        }
+      } else {
+        b = Aabb::empty();
+      }
+      node.minX[l] = b.min.x(), node.minY[l] = b.min.y(), node.minZ[l] = b.min.z();
+      node.maxX[l] = b.max.x(), node.maxY[l] = b.max.y(), node.maxZ[l] = b.max.z();
+      node.child[l] = l < n ? 0u : WideBvhNode::kEmpty;
+      node.count[l] = l < n ? 1u : 0u;
+    }
+    const unsigned mask = test.touches4(placed, node);
+    for (int l = 0; l < 4; ++l) {
+      const bool want = l < n && test.touches(placed, boxes[l]);
+      ASSERT_EQ(bool(mask >> l & 1u), want) << "case " << i << " lane " << l << " of " << n;
+      if (l < n) (want ? yes : no) += 1;
+    }
+    ASSERT_EQ(mask & ~15u, 0u);
+  }
+  EXPECT_GT(yes, 10000);
+  EXPECT_GT(no, 10000);
+}
+
 TEST(ObbBoxTest, NeverSaysNoForBoxesThatMeet) {
   // a point inside the OBB and a box around it (possibly just touching it at that point)
   std::mt19937_64 rng(16);

@@ -110,6 +110,69 @@ bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
   }
 }
 
+/// A 4-wide BVH collapsed from a binary one (Dammertz, Hanika & Keller, "Shallow Bounding Volume
+/// Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", EGSR 2008; Wald, Benthin & Boulos,
+/// "Getting Rid of Packets", RT 2008): a node's lanes are its binary node's children, each inner
+/// child replaced by its own two children, in order (2-4 lanes). The lanes' boxes are stored by
+/// coordinate, so one SIMD test checks all four. Leaves are the binary BVH's (slots [first,
+/// first + count) of its primIndices).
+struct WideBvhNode {
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+  /// Lane boxes by coordinate: minX[i] .. maxZ[i] is lane i's box; an unused lane holds the empty
+  /// box (min +inf, max -inf), which every overlap test rejects.
+  Real minX[4], minY[4], minZ[4], maxX[4], maxY[4], maxZ[4];
+  /// Lane i: a wide node's index (count[i] == 0), a leaf's first slot (count[i] > 0), or kEmpty.
+  std::uint32_t child[4];
+  std::uint32_t count[4];
+};
+
+/// A flat 4-wide BVH; node 0 is the root (absent for an empty BVH). Leaf slots are the binary
+/// BVH's, so slot-ordered data (Mesh::slotTriangle) serves both.
+struct WideBvh {
+  std::vector<WideBvhNode> nodes;
+  bool empty() const { return nodes.empty(); }
+  std::size_t memoryBytes() const { return nodes.capacity() * sizeof(WideBvhNode); }
+};
+
+/// Collapses a binary BVH into a WideBvh (O(nodes)); rebuild it after refitBvh.
+WideBvh widenBvh(const Bvh& bvh);
+
+/// Depth-first traversal of a WideBvh, visiting the leaves in the order traverseBvhSlots visits
+/// the binary BVH's with equal keys (lanes in order, each lane's subtree before the next lane).
+/// Visitor:
+///   `unsigned enter(const WideBvhNode& node)` — bit i set: enter lane i (unused lanes must be
+///       left out; their empty boxes make an overlap test reject them);
+///   `bool slot(std::uint32_t k)` — as traverseBvhSlots'; false stops the traversal.
+/// A lane is tested without its binary parent's box (the parent is skipped), so the test must be
+/// monotone (a box inside a rejected box is rejected), as separating-axis and distance tests are.
+/// Returns false when the visitor stopped it early.
+template <class Visitor>
+bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
+  if (bvh.nodes.empty()) return true;
+  struct Entry {
+    std::uint32_t child, count;
+  };
+  // each node pushes at most 4 entries and pops 1; the wide tree is at most
+  // (kBvhMaxDepth + 1) / 2 + 1 deep
+  Entry stack[4 * (kBvhMaxDepth / 2 + 2)];
+  int top = 0;
+  stack[top++] = {0, 0};
+  while (top > 0) {
+    const Entry e = stack[--top];
+    if (e.count > 0) {
+      for (std::uint32_t k = e.child, end = e.child + e.count; k < end; ++k)
+        if (!visitor.slot(k)) return false;
+      continue;
+    }
+    const WideBvhNode& node = bvh.nodes[e.child];
+    const unsigned hits = visitor.enter(node) & 15u;
+    // pushed last lane first, so lane 0 is popped first
+    for (int i = 3; i >= 0; --i)
+      if (hits >> i & 1u) stack[top++] = {node.child[i], node.count[i]};
+  }
+  return true;
+}
+
 /// traverseBvhSlots with a visitor that sees primitive indices instead of slots:
 /// `bool leaf(std::uint32_t prim)` in place of `slot`.
 template <class Visitor>

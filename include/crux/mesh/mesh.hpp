@@ -47,6 +47,9 @@ class Mesh {
   std::size_t vertexCount() const { return vertices_.size(); }
   const std::string& name() const { return name_; }
   const Bvh& bvh() const { return bvh_; }
+  /// Identifies the current vertex positions: unique to each constructed mesh and renewed by
+  /// every setVertices (copies share it). Caller-held accelerators record it and check it.
+  std::uint64_t geometryId() const { return geometryId_; }
   /// Bounds of all vertices (= the BVH root's bounds).
   const Aabb& bounds() const { return bvh_.nodes.front().bounds; }
   /// Corner positions of triangle i.
@@ -78,6 +81,7 @@ class Mesh {
   std::vector<TriangleIndices> slotTriangles_;  ///< triangles_ permuted by bvh_.primIndices
   std::string name_;
   Bvh bvh_;
+  std::uint64_t geometryId_ = 0;
   double buildSeconds_ = 0;
 };
 

@@ -107,6 +107,18 @@ class MeshAdjacency {
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
   /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
   std::size_t vertexCount() const { return vertexCount_; }
+  /// The mesh's BVH collapsed 4-wide (widenBvh), which a box's contact query walks instead of
+  /// the binary one (its node test checks four boxes at once; the same leaves in the same
+  /// order, so the same answers, ~5 % faster on bunny00, docs/narrowphase.md). Kept here, with
+  /// the rest of the contact query's per-mesh data, rather than in Mesh, whose mesh + BVH stay
+  /// within 64 bytes per triangle (docs/bench.md): it adds ~22 bytes per triangle.
+  const WideBvh& wideBvh() const { return wide_; }
+  /// Whether this adjacency's BVH copy (wideBvh) is that of `mesh`'s current geometry: the mesh
+  /// it was built from (or a copy), not changed since by setVertices. A query given a stale
+  /// adjacency walks the mesh's own BVH instead (same answers, slower).
+  bool currentFor(const Mesh& mesh) const { return mesh.geometryId() == geometryId_; }
+  /// Bytes held (neighbours, opposite vertices, activity, per-slot data, wideBvh).
+  std::size_t memoryBytes() const;
 
  private:
   std::vector<std::uint32_t> neighbors_;
@@ -120,6 +132,8 @@ class MeshAdjacency {
   };
   std::vector<SlotData> bySlot_;
   std::size_t vertexCount_ = 0;
+  WideBvh wide_;
+  std::uint64_t geometryId_ = 0;
 };
 
 /// Cosine of the face normal cone: a contact normal within acos(kMeshFaceConeCos) of the
