@@ -826,7 +826,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
         const mesh_detail::ObbBoxTest::Placed& placed;
         unsigned enter(const WideBvhNode& node) const { return obb.touches4(placed, node); }
         bool slot(std::uint32_t k) {
-          c.triangle(mesh.bvh().primIndices[k], k, mesh.slotTriangle(k));
+          c.boxTriangle(mesh.bvh().primIndices[k], k, mesh.slotTriangle(k));  // (Collector::triangle's box case)
           return true;
         }
       } wv{mesh, c, *obb, placed};

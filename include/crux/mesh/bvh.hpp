@@ -116,7 +116,7 @@ bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
 /// child replaced by its own two children, in order (2-4 lanes). The lanes' boxes are stored by
 /// coordinate, so one SIMD test checks all four. Leaves are the binary BVH's (slots [first,
 /// first + count) of its primIndices).
-struct WideBvhNode {
+struct alignas(64) WideBvhNode {
   static constexpr std::uint32_t kEmpty = 0xffffffffu;
   /// Lane boxes by coordinate: minX[i] .. maxZ[i] is lane i's box; an unused lane holds the empty
   /// box (min +inf, max -inf), which every overlap test rejects.
