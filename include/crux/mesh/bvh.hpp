@@ -154,7 +154,7 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
   };
   // each node pushes at most 4 entries and pops 1; the wide tree is at most
   // (kBvhMaxDepth + 1) / 2 + 1 deep
-  Entry stack[4 * (kBvhMaxDepth / 2 + 2)];
+  Entry stack[4 * (kBvhMaxDepth / 2 + 2) + 1];  // (+1: a lane not entered is written past the top)
   int top = 0;
   stack[top++] = {0, 0};
   while (top > 0) {
@@ -166,9 +166,12 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
     }
     const WideBvhNode& node = bvh.nodes[e.child];
     const unsigned hits = visitor.enter(node) & 15u;
-    // pushed last lane first, so lane 0 is popped first
-    for (int i = 3; i >= 0; --i)
-      if (hits >> i & 1u) stack[top++] = {node.child[i], node.count[i]};
+    // pushed last lane first, so lane 0 is popped first; without branches (every lane is
+    // written, the stack top moves past the entered ones: the branches were mispredicted)
+    for (int i = 3; i >= 0; --i) {
+      stack[top] = {node.child[i], node.count[i]};
+      top += int(hits >> i & 1u);
+    }
   }
   return true;
 }
