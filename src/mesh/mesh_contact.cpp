@@ -421,9 +421,9 @@ struct Collector {
                     const Vec3& normal) const {
     FaceRule r;
     Vec3 face = (ft.b - ft.a).cross(ft.c - ft.a);
-    const Real len = face.norm();
-    if (!(len > 0)) return r;  // degenerate triangle: no face cone
-    face /= len;
+    const Real len2 = face.squaredNorm();
+    if (!(len2 > 0)) return r;  // degenerate triangle: no face cone (decided before the root)
+    face /= std::sqrt(len2);    // (what face.norm() computes)
     const bool inCone = std::abs(face.dot(normal)) >= kMeshFaceConeCos;
     // The side of the (two-sided) triangle the shape is on: the one it reaches farther into
     // (the contact normal may be nearly parallel to the plane, so its sign says nothing).
