@@ -49,7 +49,10 @@
 /// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
-/// across those seams (loadMesh merges identical vertices).
+/// across those seams (loadMesh merges identical vertices). It also holds a 4-wide copy of the
+/// mesh's BVH that a box query walks (MeshAdjacency::wideBvh: same answers, faster); rebuild it
+/// after Mesh::setVertices (its activity bits and boxes describe the old positions; a stale one
+/// is detected by Mesh::geometryId and its wide BVH then left unused).
 ///
 /// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
 /// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×
