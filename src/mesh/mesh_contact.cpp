@@ -97,12 +97,18 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
     bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
   wide_ = widenBvh(mesh.bvh());
+  corners_.resize(3 * prims.size());
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    const Triangle t = mesh.slotTriangle(std::uint32_t(k));
+    corners_[3 * k] = t.a, corners_[3 * k + 1] = t.b, corners_[3 * k + 2] = t.c;
+  }
   geometryId_ = mesh.geometryId();
 }
 
 std::size_t MeshAdjacency::memoryBytes() const {
   return neighbors_.capacity() * sizeof(std::uint32_t) + opposite_.capacity() * sizeof(std::uint32_t) +
-         activity_.capacity() + bySlot_.capacity() * sizeof(SlotData) + wide_.memoryBytes();
+         activity_.capacity() + bySlot_.capacity() * sizeof(SlotData) + wide_.memoryBytes() +
+         corners_.capacity() * sizeof(Vec3);
 }
 
 Real meshFeatureTolerance(const Triangle& tri) {
@@ -827,12 +833,14 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
         Collector& c;
         const mesh_detail::ObbBoxTest& obb;
         const mesh_detail::ObbBoxTest::Placed& placed;
+        const Vec3* corners;  // the adjacency's leaf-ordered corners (= mesh.slotTriangle(k))
         unsigned enter(const WideBvhNode& node) const { return obb.touches4(placed, node); }
         bool slot(std::uint32_t k) {
-          c.boxTriangle(mesh.bvh().primIndices[k], k, mesh.slotTriangle(k));  // (Collector::triangle's box case)
+          const Vec3* t = corners + 3 * std::size_t(k);
+          c.boxTriangle(mesh.bvh().primIndices[k], k, Triangle{t[0], t[1], t[2]});  // (Collector::triangle's box case)
           return true;
         }
-      } wv{mesh, c, *obb, placed};
+      } wv{mesh, c, *obb, placed, adjacency->slotCorners().data()};
       traverseWideBvhSlots(adjacency->wideBvh(), wv);
     } else {
       struct Visitor {

@@ -575,6 +575,14 @@ TEST(MeshContact, BoxQueryThroughTheWideBvhEqualsTheBinaryOneBitForBit) {
   ASSERT_TRUE(adjacency.currentFor(bunny));
   ASSERT_FALSE(adjacency.currentFor(stale));
   EXPECT_TRUE(MeshAdjacency(stale).currentFor(stale));
+  // the adjacency's leaf-ordered corners, which the wide path reads, are the mesh's slot triangles
+  ASSERT_EQ(adjacency.slotCorners().size(), 3 * std::size_t(bunny.triangleCount()));
+  for (std::uint32_t k = 0; k < bunny.triangleCount(); ++k) {
+    const Triangle t = bunny.slotTriangle(k);
+    ASSERT_TRUE(adjacency.slotCorners()[3 * k] == t.a && adjacency.slotCorners()[3 * k + 1] == t.b &&
+                adjacency.slotCorners()[3 * k + 2] == t.c)
+        << "slot " << k;
+  }
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   std::mt19937 rng(16);
   std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(bunny.triangleCount() - 1));

@@ -50,7 +50,8 @@
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
 /// across those seams (loadMesh merges identical vertices). It also holds a 4-wide copy of the
-/// mesh's BVH that a box query walks (MeshAdjacency::wideBvh: same answers, faster); rebuild it
+/// mesh's BVH and the triangle corners in leaf order, which a box query reads
+/// (MeshAdjacency::wideBvh, slotCorners: same answers, faster); rebuild it
 /// after Mesh::setVertices (its activity bits and boxes describe the old positions; a stale one
 /// is detected by Mesh::geometryId and its wide BVH then left unused).
 ///
@@ -114,8 +115,12 @@ class MeshAdjacency {
   /// the binary one (its node test checks four boxes at once; the same leaves in the same
   /// order, so the same answers, ~5 % faster on bunny00, docs/narrowphase.md). Kept here, with
   /// the rest of the contact query's per-mesh data, rather than in Mesh, whose mesh + BVH stay
-  /// within 64 bytes per triangle (docs/bench.md): it adds ~22 bytes per triangle.
+  /// within 64 bytes per triangle (docs/bench.md): it adds ~23 bytes per triangle.
   const WideBvh& wideBvh() const { return wide_; }
+  /// The corners of the triangle in BVH slot k: slotCorners()[3k .. 3k + 2], a copy of
+  /// Mesh::slotTriangle(k) in leaf order (a leaf's triangles read contiguously, no index
+  /// gather), read by the box query with wideBvh. 36 bytes per triangle in float builds.
+  const std::vector<Vec3>& slotCorners() const { return corners_; }
   /// Whether this adjacency's BVH copy (wideBvh) is that of `mesh`'s current geometry: the mesh
   /// it was built from (or a copy), not changed since by setVertices. A query given a stale
   /// adjacency walks the mesh's own BVH instead (same answers, slower).
@@ -136,6 +141,7 @@ class MeshAdjacency {
   std::vector<SlotData> bySlot_;
   std::size_t vertexCount_ = 0;
   WideBvh wide_;
+  std::vector<Vec3> corners_;
   std::uint64_t geometryId_ = 0;
 };
 
