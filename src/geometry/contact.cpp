@@ -329,12 +329,10 @@ bool polytopeHolds(const Placed& s, const V3& x) {
   });
 }
 
-/// The exact margin decision of a polytope (box or hull) P against a core of 1-3 points q: within
-/// rP + rQ + margin of each other. q's first point inside P, or a boundary triangle of P within
-/// that distance of q (withinDistance; triangles whose box is beyond it, by a conservative box
-/// test with `slack`, skipped).
-bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, double margin, double slack) {
-  if (polytopeHolds(P, q[0])) return true;
+/// Whether a boundary triangle of the placed polytope P lies within rP + rQ + margin of the core
+/// q (1-3 points) by withinDistance; triangles whose box is beyond that reach (a conservative
+/// box test with `slack`) are skipped.
+bool boundaryWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, double margin, double slack) {
   V3 lo = q[0], hi = q[0];
   for (int i = 1; i < nq; ++i) lo = lo.cwiseMin(q[i]), hi = hi.cwiseMax(q[i]);
   const double reach = rP + rQ + margin + slack;
@@ -348,10 +346,17 @@ bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, 
   });
 }
 
+/// The exact margin decision of a polytope (box or hull) P against a core of 1-3 points q: within
+/// rP + rQ + margin of each other. q's first point inside P, or a boundary triangle of P within
+/// that distance of q (boundaryWithin).
+bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, double margin, double slack) {
+  return polytopeHolds(P, q[0]) || boundaryWithin(P, q, nq, rP, rQ, margin, slack);
+}
+
 /// The exact margin decision of two polytopes (boxes or hulls of more than 3 vertices): within
 /// rP + rQ + margin of each other. One holding a vertex of the other (containment; otherwise
-/// their boundaries meet), or a pair of boundary triangles within that distance (withinDistance;
-/// pairs whose boxes are beyond it, by a conservative box test with `slack`, skipped).
+/// their boundaries meet), or a boundary triangle of P and one of Q within that distance
+/// (boundaryWithin on each of P's triangles near Q's box).
 bool polytopesWithin(const Placed& P, const Placed& Q, double rP, double rQ, double margin, double slack) {
   if (polytopeHolds(P, Q.vertex(0)) || polytopeHolds(Q, P.vertex(0))) return true;
   const double reach = rP + rQ + margin + slack;
@@ -360,10 +365,10 @@ bool polytopesWithin(const Placed& P, const Placed& Q, double rP, double rQ, dou
   lo.array() -= reach;
   hi.array() += reach;
   return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
-    const V3 tlo = a.cwiseMin(b).cwiseMin(c), thi = a.cwiseMax(b).cwiseMax(c);
-    if ((tlo.array() > hi.array()).any() || (thi.array() < lo.array()).any()) return false;
+    if ((a.cwiseMin(b).cwiseMin(c).array() > hi.array()).any() || (a.cwiseMax(b).cwiseMax(c).array() < lo.array()).any())
+      return false;
     const V3 t[3] = {a, b, c};
-    return polytopeWithin(Q, t, 3, rQ, rP, margin, slack);
+    return boundaryWithin(Q, t, 3, rQ, rP, margin, slack);
   });
 }
 

@@ -152,6 +152,13 @@ void Mesh::setVertices(std::vector<Vec3> vertices) {
   geometryId_ = nextGeometryId();
 }
 
+std::vector<Vec3> Mesh::slotCorners() const {
+  std::vector<Vec3> out(3 * slotTriangles_.size());
+  for (std::size_t k = 0; k < slotTriangles_.size(); ++k)
+    for (int i = 0; i < 3; ++i) out[3 * k + i] = vertices_[slotTriangles_[k][i]];
+  return out;
+}
+
 std::vector<Aabb> Mesh::triangleBounds() const {
   std::vector<Aabb> out(triangles_.size());
   for (std::size_t i = 0; i < triangles_.size(); ++i) out[i] = crux::bounds(triangle(std::uint32_t(i)));

@@ -97,11 +97,7 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
     bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
   wide_ = widenBvh(mesh.bvh());
-  corners_.resize(3 * prims.size());
-  for (std::size_t k = 0; k < prims.size(); ++k) {
-    const Triangle t = mesh.slotTriangle(std::uint32_t(k));
-    corners_[3 * k] = t.a, corners_[3 * k + 1] = t.b, corners_[3 * k + 2] = t.c;
-  }
+  corners_ = mesh.slotCorners();
   geometryId_ = mesh.geometryId();
 }
 

@@ -721,11 +721,7 @@ void validateDistanceBound(Real value, const char* field) {
 MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
   const Bvh& bvh = mesh.bvh();
   nodes_.resize(bvh.nodes.size());
-  corners_.resize(3 * mesh.triangleCount());
-  for (std::uint32_t k = 0; k < mesh.triangleCount(); ++k) {
-    const Triangle t = mesh.slotTriangle(k);
-    corners_[3 * k] = t.a, corners_[3 * k + 1] = t.b, corners_[3 * k + 2] = t.c;
-  }
+  corners_ = mesh.slotCorners();
   std::vector<std::uint32_t> stack;
   // Calls f(corner) for every corner of every triangle under node n (in double).
   auto corners = [&](std::uint32_t n, auto&& f) {

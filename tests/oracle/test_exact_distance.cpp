@@ -729,5 +729,48 @@ TEST(ExactContacts, PolytopeAgainstACoreEqualsTheExactVerdictOnTheGrid) {
   EXPECT_GT(hulls, cases / 4);
 }
 
+// contacts() of two polytopes (boxes and hulls of 4-6 points, both kinds against each other)
+// against the exact backend's verdict, on the grid with the margin the exact distance rounded to
+// an integer (many pairs exactly at it): the two polytopes' exact margin decision (containment
+// and boundary-triangle pairs, contact.cpp's polytopesWithin) where GJK's distance is within
+// rounding, in both operand orders.
+TEST(ExactContacts, TwoPolytopesEqualTheExactVerdictOnTheGrid) {
+  test::GridDraws draws(0x9017e6u);
+  const int cases = test::scaledCases(400, 80);
+  int atTheMargin = 0, within = 0, hullPairs = 0;
+  auto polytope = [&](std::unique_ptr<ConvexHull>& keep, const Vec3& shift, bool hull) {
+    if (hull) {
+      std::vector<Vec3> pts;
+      for (int j = draws.integer(4, 6); j > 0; --j) pts.push_back(draws.point(3) + shift);
+      keep = std::make_unique<ConvexHull>(ConvexHull::build(pts));
+      if (keep->vertices().size() > 3) return ConvexShape(*keep);
+    }
+    return ConvexShape(Obb{draws.point(3) + shift,
+                           Vec3(Real(draws.integer(1, 3)), Real(draws.integer(0, 2)), Real(draws.integer(1, 2))),
+                           Mat3::Identity()});
+  };
+  for (int i = 0; i < cases; ++i) {
+    std::unique_ptr<ConvexHull> ha, hb;
+    const ConvexShape P = polytope(ha, Vec3::Zero(), i % 3 != 0);
+    const ConvexShape Q = polytope(hb, Vec3(Real(draws.integer(2, 7)), 0, 0), i % 3 != 2);
+    hullPairs += P.kind == ConvexKind::Hull && Q.kind == ConvexKind::Hull;
+    const Transform I = Transform::identity();
+    const double d = exact::distance(P, I, Q, I).distance;
+    const Real margin = Real(std::max(0.0, std::round(d)));
+    const bool exactWithin = !exact::contacts(P, I, Q, I, double(margin)).empty();
+    atTheMargin += d == double(margin);
+    within += exactWithin;
+    ContactManifold m;
+    const std::string what = "case " + std::to_string(i) + ", margin " + std::to_string(double(margin)) +
+                             ", exact distance " + str(d);
+    EXPECT_EQ(contacts(P, I, Q, I, margin, m), exactWithin) << what;
+    EXPECT_EQ(contacts(Q, I, P, I, margin, m), exactWithin) << "(swapped) " << what;
+  }
+  std::printf("%d polytope pairs (%d hull-hull), %d within the margin, %d exactly at it\n", cases, hullPairs, within,
+              atTheMargin);
+  EXPECT_GT(atTheMargin, cases / 20);
+  EXPECT_GT(hullPairs, cases / 5);
+}
+
 }  // namespace
 }  // namespace crux

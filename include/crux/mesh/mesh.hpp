@@ -64,6 +64,10 @@ class Mesh {
     const TriangleIndices& t = slotTriangles_[k];
     return {vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]};
   }
+  /// Every slot triangle's corners in BVH slot order: slotTriangle(k) at [3k, 3k + 3). The copy
+  /// caller-held accelerators keep (MeshDistanceAccel, MeshAdjacency) so that a leaf's
+  /// triangles are read contiguously, without the index gather.
+  std::vector<Vec3> slotCorners() const;
   /// Replaces the vertex positions (same count, finite) and refits the BVH.
   void setVertices(std::vector<Vec3> vertices);
   /// Counts triangles, vertices, degenerate and duplicate triangles and edge manifoldness.

@@ -52,8 +52,8 @@
 /// across those seams (loadMesh merges identical vertices). It also holds a 4-wide copy of the
 /// mesh's BVH and the triangle corners in leaf order, which a box query reads
 /// (MeshAdjacency::wideBvh, slotCorners: same answers, faster); rebuild it
-/// after Mesh::setVertices (its activity bits and boxes describe the old positions; a stale one
-/// is detected by Mesh::geometryId and its wide BVH then left unused).
+/// after Mesh::setVertices (its activity bits, boxes and corners describe the old positions; a
+/// stale one is detected by Mesh::geometryId and its wide BVH and corners then left unused).
 ///
 /// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
 /// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×
@@ -113,19 +113,20 @@ class MeshAdjacency {
   std::size_t vertexCount() const { return vertexCount_; }
   /// The mesh's BVH collapsed 4-wide (widenBvh), which a box's contact query walks instead of
   /// the binary one (its node test checks four boxes at once; the same leaves in the same
-  /// order, so the same answers, ~5 % faster on bunny00, docs/narrowphase.md). Kept here, with
+  /// order, so the same answers; ~5 % of the box query on bunny00, docs/narrowphase.md). Kept here, with
   /// the rest of the contact query's per-mesh data, rather than in Mesh, whose mesh + BVH stay
   /// within 64 bytes per triangle (docs/bench.md): it adds ~23 bytes per triangle.
   const WideBvh& wideBvh() const { return wide_; }
   /// The corners of the triangle in BVH slot k: slotCorners()[3k .. 3k + 2], a copy of
-  /// Mesh::slotTriangle(k) in leaf order (a leaf's triangles read contiguously, no index
-  /// gather), read by the box query with wideBvh. 36 bytes per triangle in float builds.
+  /// Mesh::slotTriangle(k) in leaf order (Mesh::slotCorners: a leaf's triangles read
+  /// contiguously, no index gather), read by the box query with wideBvh. 36 bytes per triangle
+  /// in float builds.
   const std::vector<Vec3>& slotCorners() const { return corners_; }
   /// Whether this adjacency's BVH copy (wideBvh) is that of `mesh`'s current geometry: the mesh
   /// it was built from (or a copy), not changed since by setVertices. A query given a stale
   /// adjacency walks the mesh's own BVH instead (same answers, slower).
   bool currentFor(const Mesh& mesh) const { return mesh.geometryId() == geometryId_; }
-  /// Bytes held (neighbours, opposite vertices, activity, per-slot data, wideBvh).
+  /// Bytes held (neighbours, opposite vertices, activity, per-slot data, wideBvh, slotCorners).
   std::size_t memoryBytes() const;
 
  private:
