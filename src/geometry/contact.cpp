@@ -329,6 +329,17 @@ bool polytopeHolds(const Placed& s, const V3& x) {
   });
 }
 
+/// Calls f(a, b, c) on the boundary triangles of the placed polytope P whose box meets [lo, hi]
+/// (anyBoundaryTriangle's order), until f returns true; returns whether it did.
+template <class F>
+bool anyBoundaryTriangleIn(const Placed& P, const V3& lo, const V3& hi, const F& f) {
+  return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
+    if ((a.cwiseMin(b).cwiseMin(c).array() > hi.array()).any() || (a.cwiseMax(b).cwiseMax(c).array() < lo.array()).any())
+      return false;
+    return f(a, b, c);
+  });
+}
+
 /// Whether a boundary triangle of the placed polytope P lies within rP + rQ + margin of the core
 /// q (1-3 points) by withinDistance; triangles whose box is beyond that reach (a conservative
 /// box test with `slack`) are skipped.
@@ -336,11 +347,7 @@ bool boundaryWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, 
   V3 lo = q[0], hi = q[0];
   for (int i = 1; i < nq; ++i) lo = lo.cwiseMin(q[i]), hi = hi.cwiseMax(q[i]);
   const double reach = rP + rQ + margin + slack;
-  lo.array() -= reach;
-  hi.array() += reach;
-  return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
-    if ((a.cwiseMin(b).cwiseMin(c).array() > hi.array()).any() || (a.cwiseMax(b).cwiseMax(c).array() < lo.array()).any())
-      return false;
+  return anyBoundaryTriangleIn(P, lo.array() - reach, hi.array() + reach, [&](const V3& a, const V3& b, const V3& c) {
     const V3 t[3] = {a, b, c};
     return withinDistance(t, 3, q, nq, rP, rQ, margin);
   });
@@ -359,14 +366,10 @@ bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, 
 /// (boundaryWithin on each of P's triangles near Q's box).
 bool polytopesWithin(const Placed& P, const Placed& Q, double rP, double rQ, double margin, double slack) {
   if (polytopeHolds(P, Q.vertex(0)) || polytopeHolds(Q, P.vertex(0))) return true;
-  const double reach = rP + rQ + margin + slack;
   V3 lo = Q.vertex(0), hi = lo;
   for (int i = 1; i < Q.vertexCount(); ++i) lo = lo.cwiseMin(Q.vertex(i)), hi = hi.cwiseMax(Q.vertex(i));
-  lo.array() -= reach;
-  hi.array() += reach;
-  return anyBoundaryTriangle(P, [&](const V3& a, const V3& b, const V3& c) {
-    if ((a.cwiseMin(b).cwiseMin(c).array() > hi.array()).any() || (a.cwiseMax(b).cwiseMax(c).array() < lo.array()).any())
-      return false;
+  const double reach = rP + rQ + margin + slack;
+  return anyBoundaryTriangleIn(P, lo.array() - reach, hi.array() + reach, [&](const V3& a, const V3& b, const V3& c) {
     const V3 t[3] = {a, b, c};
     return boundaryWithin(Q, t, 3, rQ, rP, margin, slack);
   });

@@ -687,6 +687,22 @@ TEST(WithinDistance, EqualsTheExactContactsVerdictOnTheGrid) {
   EXPECT_THROW(withinDistance(nullptr, 0, nullptr, 1, 0, 0, 0), InvalidInput);
 }
 
+/// contacts(P, Q) and contacts(Q, P) at the margin the exact distance rounds to (>= 0) against the
+/// exact backend's verdict there; counts the pairs within the margin and exactly at it.
+void expectContactsVerdictAtTheRoundedDistance(const ConvexShape& P, const ConvexShape& Q, const std::string& what,
+                                               int& within, int& atTheMargin) {
+  const Transform I = Transform::identity();
+  const double d = exact::distance(P, I, Q, I).distance;
+  const Real margin = Real(std::max(0.0, std::round(d)));
+  const bool exactWithin = !exact::contacts(P, I, Q, I, double(margin)).empty();
+  atTheMargin += d == double(margin);
+  within += exactWithin;
+  ContactManifold m;
+  const std::string where = what + ", margin " + std::to_string(double(margin)) + ", exact distance " + str(d);
+  EXPECT_EQ(contacts(P, I, Q, I, margin, m), exactWithin) << where;
+  EXPECT_EQ(contacts(Q, I, P, I, margin, m), exactWithin) << "(swapped) " << where;
+}
+
 // contacts() of a box or a hull of 4-6 points against a core of 1-3 points (sphere, capsule,
 // triangle) against the exact backend's verdict, on the grid with the margin the exact distance
 // rounded to an integer (many pairs exactly at it): the polytope's exact margin decision
@@ -710,18 +726,9 @@ TEST(ExactContacts, PolytopeAgainstACoreEqualsTheExactVerdictOnTheGrid) {
     const ConvexShape Q = nq == 1 ? ConvexShape(Sphere{q[0], r})
                           : nq == 2 ? ConvexShape(Capsule{q[0], q[1], r})
                                     : ConvexShape(Triangle{q[0], q[1], q[2]});
-    const Transform I = Transform::identity();
-    const double d = exact::distance(P, I, Q, I).distance;
-    const Real margin = Real(std::max(0.0, std::round(d)));
-    const bool exactWithin = !exact::contacts(P, I, Q, I, double(margin)).empty();
-    atTheMargin += d == double(margin);
-    within += exactWithin;
-    ContactManifold m;
-    const std::string what = "case " + std::to_string(i) + (useHull ? ": hull" : ": box") + " vs a core of " +
-                             std::to_string(nq) + " points, margin " + std::to_string(double(margin)) +
-                             ", exact distance " + str(d);
-    EXPECT_EQ(contacts(P, I, Q, I, margin, m), exactWithin) << what;
-    EXPECT_EQ(contacts(Q, I, P, I, margin, m), exactWithin) << "(swapped) " << what;
+    expectContactsVerdictAtTheRoundedDistance(
+        P, Q, "case " + std::to_string(i) + (useHull ? ": hull" : ": box") + " vs a core of " + std::to_string(nq) + " points",
+        within, atTheMargin);
   }
   std::printf("%d polytope-core pairs (%d hulls), %d within the margin, %d exactly at it\n", cases, hulls, within,
               atTheMargin);
@@ -754,17 +761,7 @@ TEST(ExactContacts, TwoPolytopesEqualTheExactVerdictOnTheGrid) {
     const ConvexShape P = polytope(ha, Vec3::Zero(), i % 3 != 0);
     const ConvexShape Q = polytope(hb, Vec3(Real(draws.integer(2, 7)), 0, 0), i % 3 != 2);
     hullPairs += P.kind == ConvexKind::Hull && Q.kind == ConvexKind::Hull;
-    const Transform I = Transform::identity();
-    const double d = exact::distance(P, I, Q, I).distance;
-    const Real margin = Real(std::max(0.0, std::round(d)));
-    const bool exactWithin = !exact::contacts(P, I, Q, I, double(margin)).empty();
-    atTheMargin += d == double(margin);
-    within += exactWithin;
-    ContactManifold m;
-    const std::string what = "case " + std::to_string(i) + ", margin " + std::to_string(double(margin)) +
-                             ", exact distance " + str(d);
-    EXPECT_EQ(contacts(P, I, Q, I, margin, m), exactWithin) << what;
-    EXPECT_EQ(contacts(Q, I, P, I, margin, m), exactWithin) << "(swapped) " << what;
+    expectContactsVerdictAtTheRoundedDistance(P, Q, "case " + std::to_string(i), within, atTheMargin);
   }
   std::printf("%d polytope pairs (%d hull-hull), %d within the margin, %d exactly at it\n", cases, hullPairs, within,
               atTheMargin);
