@@ -31,6 +31,10 @@ constexpr double kRealiseTolerance = 1e-9;
 /// its use): far above their rounding (tens of ulps), far below kBoxTriangleFaceBias.
 constexpr double kEdgeBoundSlack = 1e-12;
 
+/// (i + 1) mod 3 for i in [0, 4], by a table (the comparisons it replaces were branches,
+/// mispredicted about once per call).
+constexpr int kNextMod3[5] = {1, 2, 0, 1, 2};
+
 /// Clip buffers: a triangle clipped by 4 planes or a box face by 3 has at most 7 vertices.
 constexpr int kMaxClip = 12;
 
@@ -221,19 +225,16 @@ int triangleFeatureAlongAxis(const double (*T)[3], const double* L, const V& m, 
     return 3;
   }
   const double p0 = T[0][k] * dk, p1 = T[1][k] * dk, p2 = T[2][k] * dk;
-  is = 0;
-  double best = p0;
-  if (p1 > best) {
-    best = p1;
-    is = 1;
-  }
-  if (p2 > best) is = 2;
+  // the first of the largest (no branches: their outcomes are unpredictable)
+  const bool over0 = p1 > p0;
+  const bool over1 = p2 > std::max(p0, p1);  // (std::max: `p1 > p0 ? p1 : p0`)
+  is = int(over1) << 1 | (int(over0) & ~int(over1));
   int bestK = -1;
   double bestCos = kFeatureSin;
   for (int kk = 1; kk <= 2; ++kk) {
-    const int o = is + kk >= 3 ? is + kk - 3 : is + kk;
+    const int o = kNextMod3[is + kk - 1];
     // The edge is → o is ±E_j, j = is (kk = 1) or o (kk = 2): the same |e·d| and |e|² = L[j].
-    const int j = kk == 1 ? is : o, j1 = j == 2 ? 0 : j + 1;
+    const int j = kk == 1 ? is : o, j1 = kNextMod3[j];
     if (nearerPerpendicular((T[j1][k] - T[j][k]) * dk, L[j], bestCos)) bestK = o;
   }
   other = bestK;
@@ -438,15 +439,29 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
   const double normalLen = std::sqrt((nx * nx + ny * ny) + nz * nz);
   const bool hasFace = normalLen > kBoxTriangleDegenerateRelative * longest && normalLen > 0;
 
-  Axis face;  // best box face
-  for (int k = 0; k < 3; ++k) {
-    const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
-    const double pos = lo - h[k], neg = -h[k] - hi;
-    const double sep = std::max(pos, neg);
-    if (sep > face.sep) {
+  Axis face;  // best box face: the first of the largest separations (NaN never wins)
+  {
+    // selected without branches (which face wins is unpredictable: each branch here was
+    // mispredicted about once per call); the same choice as comparing in order with `>`
+    double sep[3];
+    bool positive[3];
+    for (int k = 0; k < 3; ++k) {
+      const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
+      const double pos = lo - h[k], neg = -h[k] - hi;
+      sep[k] = std::max(pos, neg);
+      positive[k] = pos >= neg;
+    }
+    // (std::max(a, b) is b when a < b, else a: `b > a ? b : a`, compiled to maxsd)
+    const bool w0 = sep[0] > face.sep;
+    const double s0 = std::max(face.sep, sep[0]);
+    const bool w1 = sep[1] > s0;
+    const double s1 = std::max(s0, sep[1]);
+    const bool w2 = sep[2] > s1;
+    const int k = int(w2) << 1 | (int(w1) & ~int(w2));  // w2 ? 2 : w1 ? 1 : 0
+    if (w0 | w1 | w2) {  // (false only when every separation is NaN)
       face.i = k;
-      face.sep = sep;
-      face.n = V::Unit(k) * (pos >= neg ? 1.0 : -1.0);
+      face.sep = std::max(s1, sep[2]);
+      face.n = V::Unit(k) * (positive[k] ? 1.0 : -1.0);
     }
   }
   out.normal = face.n.cast<Real>();
@@ -492,8 +507,8 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
       clearance[2] = std::max(clearance[2], std::min(q0, q1));
     }
     const double limit = std::min(face.sep + bias, m) - kEdgeBoundSlack;
-    for (int i = 0; i < 3; ++i)
-      if (clearance[i] >= 0 && -clearance[i] <= limit) groups &= ~(1u << i);
+    for (int i = 0; i < 3; ++i)  // (no branch: its outcome was mispredicted about once per call)
+      groups &= ~(unsigned((clearance[i] >= 0) & (-clearance[i] <= limit)) << i);
   }
   if (groups != 0 && !edgeAxes(t, E, h, m, bias, groups, face, best)) return false;
   // An edge axis within the feature angle of the best face axis gives way to that face, as
@@ -526,7 +541,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
         // makes them, the point and the output as below.
         const double* p = T[is];
         const double sep = s * p[k] - h[k];
-        const int a1 = k + 1 >= 3 ? k - 2 : k + 1, a2 = k + 2 >= 3 ? k - 1 : k + 2;
+        const int a1 = kNextMod3[k], a2 = kNextMod3[k + 1];
         const bool inside = !((p[a1] + h[a1] < 0) | (h[a1] - p[a1] < 0) | (p[a2] + h[a2] < 0) | (h[a2] - p[a2] < 0));
         if (!inside || !(sep <= m) || (best.sep > 0 && sep > best.sep + kRealiseTolerance))
           return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
