@@ -272,10 +272,10 @@ inline void powerOfTwoScale(double S, double& scale, double& unscale) {
 /// Edge axis a = e_I × e (box axis I, triangle edge e; C0, C1, C2 = e × t_0, t_1, t_2, whose
 /// I-th components are the triangle vertices' projections on a, as (e_I × e)·p = (e × p)_I): the
 /// separation numerators of its two sides, `pos` (the triangle beyond the box along +a) and `neg`
-/// (along −a). Compile-time I keeps every component in a register.
-template <int I>
-inline void edgeAxisSides(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double& pos, double& neg) {
-  constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
+/// (along −a). Inlined with a constant I (edgeAxis), every component stays in a register.
+[[gnu::always_inline]] inline void edgeAxisSides(int I, const V& e, const V& C0, const V& C1, const V& C2,
+                                                 const V& h, double& pos, double& neg) {
+  const int u = kNextMod3[I], v = kNextMod3[I + 1];
   const double lo = std::min(C0[I], std::min(C1[I], C2[I])), hi = std::max(C0[I], std::max(C1[I], C2[I]));
   const double r = h[u] * std::abs(e[v]) + h[v] * std::abs(e[u]);
   pos = lo - r;
@@ -290,7 +290,7 @@ inline bool edgeAxis(const V& e, const V& C0, const V& C1, const V& C2, const V&
                      double* num, double* a2, bool* valid) {
   constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
   double pos, neg;
-  edgeAxisSides<I>(e, C0, C1, C2, h, pos, neg);
+  edgeAxisSides(I, e, C0, C1, C2, h, pos, neg);
   const double nm = std::max(pos, neg), aa = e[v] * e[v] + e[u] * e[u];
   num[I] = nm;
   a2[I] = aa;
@@ -364,10 +364,9 @@ inline bool exceeds(double num, double a2, double bound) {
     const V& e = E[best.j];
     const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
     double pos = 0, neg = 0;
-    if (best.i == 0) edgeAxisSides<0>(e, C0, C1, C2, h, pos, neg);
-    if (best.i == 1) edgeAxisSides<1>(e, C0, C1, C2, h, pos, neg);
-    if (best.i == 2) edgeAxisSides<2>(e, C0, C1, C2, h, pos, neg);
-    if (!(pos >= neg)) best.n = -best.n;
+    edgeAxisSides(best.i, e, C0, C1, C2, h, pos, neg);
+    // −n when !(pos >= neg), as a product (x·−1 is −x exactly, signed zeros included): no branch
+    best.n *= double(2 * int(pos >= neg) - 1);
   }
   return true;
 }
