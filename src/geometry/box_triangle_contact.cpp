@@ -269,35 +269,18 @@ inline void powerOfTwoScale(double S, double& scale, double& unscale) {
   unscale = std::ldexp(1.0, exponent);
 }
 
-/// Edge axis a = e_I × e (box axis I, triangle edge e; C0, C1, C2 = e × t_0, t_1, t_2, whose
-/// I-th components are the triangle vertices' projections on a, as (e_I × e)·p = (e × p)_I): the
-/// separation numerators of its two sides, `pos` (the triangle beyond the box along +a) and `neg`
-/// (along −a). Inlined with a constant I (edgeAxis), every component stays in a register.
-[[gnu::always_inline]] inline void edgeAxisSides(int I, const V& e, const V& C0, const V& C1, const V& C2,
-                                                 const V& h, double& pos, double& neg) {
+/// Edge axis a = e_I × e (box axis I, triangle edge e): the separation numerators of its two
+/// sides, `pos` (the triangle beyond the box along +a) and `neg` (along −a). A vertex p projects
+/// to a·p = (e × p)_I = e_u p_v − e_v p_u (u, v the two other axes; Eigen's cross product's
+/// component I, operation for operation); the box's radius is h_u|e_v| + h_v|e_u|.
+inline void edgeAxisSides(int I, const V& e, const V* t, const V& h, double& pos, double& neg) {
   const int u = kNextMod3[I], v = kNextMod3[I + 1];
-  const double lo = std::min(C0[I], std::min(C1[I], C2[I])), hi = std::max(C0[I], std::max(C1[I], C2[I]));
+  const double p0 = e[u] * t[0][v] - e[v] * t[0][u], p1 = e[u] * t[1][v] - e[v] * t[1][u],
+               p2 = e[u] * t[2][v] - e[v] * t[2][u];
+  const double lo = std::min(p0, std::min(p1, p2)), hi = std::max(p0, std::max(p1, p2));
   const double r = h[u] * std::abs(e[v]) + h[v] * std::abs(e[u]);
   pos = lo - r;
   neg = -r - hi;
-}
-
-/// edgeAxisSides' axis: the separation numerator (separation = num / |a|, the larger side),
-/// |a|², whether the axis is usable (not parallel), and whether it separates beyond the margin m
-/// (m2 = m²). The side is found again for the winning axis only (edgeAxes).
-template <int I>
-inline bool edgeAxis(const V& e, const V& C0, const V& C1, const V& C2, const V& h, double minA2, double m2,
-                     double* num, double* a2, bool* valid) {
-  constexpr int u = (I + 1) % 3, v = (I + 2) % 3;
-  double pos, neg;
-  edgeAxisSides(I, e, C0, C1, C2, h, pos, neg);
-  const double nm = std::max(pos, neg), aa = e[v] * e[v] + e[u] * e[u];
-  num[I] = nm;
-  a2[I] = aa;
-  // parallel (or zero) edges drop out (minA2 >= 0, so aa > 0 too; NaN fails)
-  const bool ok = aa > minA2;
-  valid[I] = ok;
-  return ok & (nm >= 0) & (nm * nm > m2 * aa);  // num / |a| > m: separating beyond the margin
 }
 
 /// num / sqrt(a2) > bound, without the square root or the division (a2 > 0).
@@ -312,35 +295,43 @@ inline bool exceeds(double num, double a2, double bound) {
 // (Always inlined: called from both instantiations below, GCC would otherwise call it, ~1 ns.)
 [[gnu::always_inline]] inline bool edgeAxes(const V* t, const V* E, const V& h, double m, double bias,
                                             unsigned groups, const Axis& face, Axis& best) {
-  // The 9 edge axes a = e_i × E_j, all at once and without branches (RTCD §5.2.9 with the
-  // triple-product form of Akenine-Möller's triangle–box test): a vertex p projects to
-  // a·p = (E_j × p)_i, so the cross products E_j × t_k give the triangle's projection
-  // interval on the 3 axes of edge j at once; the box's radius is h_u|E_v| + h_v|E_u| and
-  // |a|² = E_u² + E_v² (u, v the two other axes). The edge's own two vertices project to the
-  // same value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike
-  // (a segment triangle's two copies of its edge tie, and the first wins).
+  // The edge axes a = e_i × E_j of the groups asked for (RTCD §5.2.9 with the triple-product
+  // form of Akenine-Möller's triangle–box test: edgeAxisSides), axis k = 3j + i: the separation
+  // numerator (the larger side; separation = num / |a|), |a|² = E_u² + E_v², whether it is
+  // usable (not parallel: |a|² > (kBoxTriangleParallelSin |E_j|)²; NaN fails) and whether it
+  // separates beyond the margin (num / |a| > m). The edge's own two vertices project to the same
+  // value in exact arithmetic; both are kept, so rounding treats the 3 vertices alike (a segment
+  // triangle's two copies of its edge tie, and the first wins). Only the groups' own projections
+  // are computed (a group is a third of the cross products E_j × t_k).
   double num[9], a2[9];
-  bool valid[9];
+  unsigned valid = 0;  // bit k: axis k is usable
   bool separated = false;
   const double m2 = m * m;
-  for (int j = 0; j < 3; ++j) {
-    const V& e = E[j];
-    const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
-    const double e2 = e.squaredNorm();
-    const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e2;
-    // (a group left out is no candidate: not valid, never separating)
-    if (groups & 1u) separated |= edgeAxis<0>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
-    if (groups & 2u) separated |= edgeAxis<1>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
-    if (groups & 4u) separated |= edgeAxis<2>(e, C0, C1, C2, h, minA2, m2, num + 3 * j, a2 + 3 * j, valid + 3 * j);
-    for (int i = 0; i < 3; ++i)
-      if (!(groups >> i & 1u)) num[3 * j + i] = 0, a2[3 * j + i] = 1, valid[3 * j + i] = false;
+  for (unsigned g = groups; g != 0; g &= g - 1) {
+    const int i = __builtin_ctz(g), u = kNextMod3[i], v = kNextMod3[i + 1];
+    for (int j = 0; j < 3; ++j) {
+      const V& e = E[j];
+      const double minA2 = kBoxTriangleParallelSin * kBoxTriangleParallelSin * e.squaredNorm();
+      double pos, neg;
+      edgeAxisSides(i, e, t, h, pos, neg);
+      const double nm = std::max(pos, neg), aa = e[v] * e[v] + e[u] * e[u];
+      const int k = 3 * j + i;
+      num[k] = nm;
+      a2[k] = aa;
+      const bool ok = aa > minA2;
+      valid |= unsigned(ok) << k;
+      separated |= ok & (nm >= 0) & (nm * nm > m2 * aa);
+    }
   }
   if (separated) return false;
   double bound = face.sep + bias;  // an edge axis must exceed this
   // the axes beating the initial bound, bit k for axis k (the bound only grows, and exceeds()
   // is monotone in it, so no other axis can beat a later one); then those in order
   unsigned candidates = 0;
-  for (int k = 0; k < 9; ++k) candidates |= unsigned(valid[k] & exceeds(num[k], a2[k], bound)) << k;
+  for (unsigned rest = valid; rest != 0; rest &= rest - 1) {
+    const int k = __builtin_ctz(rest);
+    candidates |= unsigned(exceeds(num[k], a2[k], bound)) << k;
+  }
   for (; candidates != 0; candidates &= candidates - 1) {
     const int k = __builtin_ctz(candidates);
     if (!exceeds(num[k], a2[k], bound)) continue;
@@ -361,10 +352,8 @@ inline bool exceeds(double num, double a2, double bound) {
   }
   if (best.kind == AxisKind::Edge) {
     // the winner's side, as edgeAxis found its numerator (pos >= neg: +a)
-    const V& e = E[best.j];
-    const V C0 = e.cross(t[0]), C1 = e.cross(t[1]), C2 = e.cross(t[2]);
     double pos = 0, neg = 0;
-    edgeAxisSides(best.i, e, C0, C1, C2, h, pos, neg);
+    edgeAxisSides(best.i, E[best.j], t, h, pos, neg);
     // −n when !(pos >= neg), as a product (x·−1 is −x exactly, signed zeros included): no branch
     best.n *= double(2 * int(pos >= neg) - 1);
   }

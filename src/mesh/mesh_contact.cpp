@@ -346,23 +346,27 @@ struct Collector {
   }
 
   void add(const MeshContactPoint& p) {
-    // The squared distances to every buffered point first, four at a time (lanes.hpp), into a
-    // mask of those within the merge tolerance; then, in slot order, the first of those with
-    // the same normal. The scan runs to n rounded up to a multiple of 8 (the slots beyond n hold
-    // +∞, never close), so its trip count changes every 8 points, not with every point added
-    // (its exit was often mispredicted).
+    // The x distances to every buffered point first, four at a time (lanes.hpp), into a mask of
+    // those within the merge tolerance along x (dx² > tol² implies (dx² + dy²) + dz² > tol²
+    // whatever the rounding: every term is >= 0 and rounding is monotone); then, in slot order,
+    // the first of those within the tolerance with the same normal: the full distance only for
+    // the few points near p's x (the tolerance is small against the points' spread). The scan
+    // runs to n rounded up to a multiple of 8 (the slots beyond n hold +∞, never close), so its
+    // trip count changes every 8 points, not with every point added (its exit was often
+    // mispredicted).
     static_assert(kMeshContactBuffer % 8 == 0 && kMeshContactBuffer <= 64, "add() scans whole blocks of 8 into 64 bits");
     using mesh_detail::Lanes;
     const Real x = p.pointA.x(), y = p.pointA.y(), z = p.pointA.z();
-    std::uint64_t close = 0;
+    std::uint64_t near = 0;
     const int scan = (n + 7) & ~7;
     for (int i = 0; i < scan; i += 4) {
-      const Lanes dx = mesh_detail::lanesLoad(ax + i) - x, dy = mesh_detail::lanesLoad(ay + i) - y,
-                  dz = mesh_detail::lanesLoad(az + i) - z;
-      close |= std::uint64_t(mesh_detail::laneMask((dx * dx + dy * dy) + dz * dz <= mergeTol2)) << i;
+      const Lanes dx = mesh_detail::lanesLoad(ax + i) - x;
+      near |= std::uint64_t(mesh_detail::laneMask(dx * dx <= mergeTol2)) << i;
     }
-    for (; close != 0; close &= close - 1) {
-      const int i = __builtin_ctzll(close);
+    for (; near != 0; near &= near - 1) {
+      const int i = __builtin_ctzll(near);
+      const Real dx = ax[i] - x, dy = ay[i] - y, dz = az[i] - z;
+      if (!((dx * dx + dy * dy) + dz * dz <= mergeTol2)) continue;  // (as the lanes computed it)
       if (buf[i].normal.dot(p.normal) >= kContactFaceAngleCos) {
         const MeshContactPoint& q = buf[i];
         if (p.separation < q.separation || (p.separation == q.separation && p.triangle < q.triangle)) set(i, p);
