@@ -214,17 +214,17 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
   return 2;
 }
 
-/// triangleFeature's choice for d = dk·unit(k) (dk = ±1, finite inputs), on the corners T (the
-/// rows of t, read as scalars): every dot product with d is then ±one component, exactly (the
-/// other terms are ±0), so the choice is the same. Returns 3 (the face; `front` whether
+/// triangleFeature's choice for d = dk·unit(k) (dk = ±1, finite inputs), on the corners t, read
+/// by component: every dot product with d is then ±one component, exactly (the other terms are
+/// ±0), so the choice is the same. Returns 3 (the face; `front` whether
 /// m·d > 0), 2 (the edge is–other) or 1 (the corner is).
-int triangleFeatureAlongAxis(const double (*T)[3], const double* L, const V& m, double mLen, int k, double dk,
+int triangleFeatureAlongAxis(const V* t, const double* L, const V& m, double mLen, int k, double dk,
                              int& is, int& other, bool& front) {
   if (mLen > 0 && std::abs(m[k]) >= kFeatureCos * mLen) {
     front = m[k] * dk > 0;
     return 3;
   }
-  const double p0 = T[0][k] * dk, p1 = T[1][k] * dk, p2 = T[2][k] * dk;
+  const double p0 = t[0][k] * dk, p1 = t[1][k] * dk, p2 = t[2][k] * dk;
   // the first of the largest (no branches: their outcomes are unpredictable)
   const bool over0 = p1 > p0;
   const bool over1 = p2 > std::max(p0, p1);  // (std::max: `p1 > p0 ? p1 : p0`)
@@ -235,7 +235,7 @@ int triangleFeatureAlongAxis(const double (*T)[3], const double* L, const V& m, 
     const int o = kNextMod3[is + kk - 1];
     // The edge is → o is ±E_j, j = is (kk = 1) or o (kk = 2): the same |e·d| and |e|² = L[j].
     const int j = kk == 1 ? is : o, j1 = kNextMod3[j];
-    if (nearerPerpendicular((T[j1][k] - T[j][k]) * dk, L[j], bestCos)) bestK = o;
+    if (nearerPerpendicular((t[j1][k] - t[j][k]) * dk, L[j], bestCos)) bestK = o;
   }
   other = bestK;
   return bestK < 0 ? 1 : 2;
@@ -409,7 +409,6 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
                hz = std::abs(double(half[2])) * scale;
   const V h(hx, hy, hz);
   const V t[3] = {V(ax, ay, az), V(bx, by, bz), V(cx, cy, cz)};
-  const double T[3][3] = {{ax, ay, az}, {bx, by, bz}, {cx, cy, cz}};  // t, read as scalars
   const double m = std::isfinite(double(margin)) ? double(margin) * scale : std::numeric_limits<double>::infinity();
 
   // ---- separating axes ----
@@ -523,11 +522,11 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     if (fast) {
       int is = 0, other = 0;
       bool front = false;
-      const int kind = triangleFeatureAlongAxis(T, L, normal, hasFace ? normalLen : 0.0, k, -s, is, other, front);
+      const int kind = triangleFeatureAlongAxis(t, L, normal, hasFace ? normalLen : 0.0, k, -s, is, other, front);
       if (kind == 1) {
         // A single corner (the usual case), in scalars: the four side planes' tests as clip()
         // makes them, the point and the output as below.
-        const double* p = T[is];
+        const V& p = t[is];
         const double sep = s * p[k] - h[k];
         const int a1 = kNextMod3[k], a2 = kNextMod3[k + 1];
         const bool inside = !((p[a1] + h[a1] < 0) | (h[a1] - p[a1] < 0) | (p[a2] + h[a2] < 0) | (h[a2] - p[a2] < 0));
