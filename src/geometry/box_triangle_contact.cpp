@@ -351,7 +351,7 @@ inline bool exceeds(double num, double a2, double bound) {
     best.n = a * (1 / len);  // its side: below, for the winner only
   }
   if (best.kind == AxisKind::Edge) {
-    // the winner's side, as edgeAxis found its numerator (pos >= neg: +a)
+    // the winner's side, as the loop above found its numerator (pos >= neg: +a)
     double pos = 0, neg = 0;
     edgeAxisSides(best.i, E[best.j], t, h, pos, neg);
     // −n when !(pos >= neg), as a product (x·−1 is −x exactly, signed zeros included): no branch
