@@ -562,6 +562,22 @@ TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
   EXPECT_GT(hits, 0);
 }
 
+// MeshAdjacency::memoryBytes (the figure docs/bench.md quotes per triangle) counts every array
+// it holds: at least the wide BVH, the corner copy and the per-triangle neighbours, opposite
+// vertices, activity and per-slot data; and no array twice (capacity slack only).
+TEST(MeshAdjacency, MemoryBytesCountsEveryArrayItHolds) {
+  const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
+  const MeshAdjacency adjacency(bunny);
+  const std::size_t n = bunny.triangleCount();
+  // neighbours and opposite vertices (3 × 4 bytes each per triangle), activity (1), per slot a
+  // tolerance and an activity byte (at least sizeof(Real) + 1)
+  const std::size_t perTriangle = 3 * 4 + 3 * 4 + 1 + sizeof(Real) + 1;
+  const std::size_t held = adjacency.wideBvh().memoryBytes() + adjacency.slotCorners().size() * sizeof(Vec3);
+  ASSERT_GT(adjacency.wideBvh().memoryBytes(), 0u);
+  EXPECT_GE(adjacency.memoryBytes(), held + perTriangle * n);
+  EXPECT_LE(adjacency.memoryBytes(), 2 * (held + (perTriangle + 8) * n));
+}
+
 // A box's query walks the adjacency's 4-wide copy of the BVH when the adjacency is current for
 // the mesh, the mesh's binary BVH otherwise: the same leaves in the same order, so the same
 // manifold bit for bit. A copy of bunny00 given its own vertices again (setVertices: a new

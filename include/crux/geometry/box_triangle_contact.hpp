@@ -59,10 +59,11 @@ inline constexpr double kBoxTriangleDegenerateRelative = 1e-10;
 /// inputs (no overflow or NaN for finite inputs).
 ///
 /// Shortcuts (same output bit for bit as the full test, checked against it by
-/// test_box_triangle_contact on random and integer-grid cases): the 9 edge axes are skipped when
-/// a triangle corner lies inside the box deeply enough that no edge axis can win or separate
-/// (clearance bound, see the source); along a box face the triangle's supporting feature is
-/// chosen on single components; a single-corner contact is written out directly.
+/// test_box_triangle_contact on random and integer-grid cases): the 3 edge axes of a box axis
+/// (e_i × each triangle edge) are skipped when a triangle corner lies deeply enough inside the
+/// box's two other slabs that none of them can win or separate (clearance bound, see the
+/// source); along a box face the triangle's supporting feature is chosen on single components; a
+/// single-corner contact is written out directly.
 bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out);
 
 namespace detail {

@@ -113,7 +113,7 @@ class MeshAdjacency {
   std::size_t vertexCount() const { return vertexCount_; }
   /// The mesh's BVH collapsed 4-wide (widenBvh), which a box's contact query walks instead of
   /// the binary one (its node test checks four boxes at once; the same leaves in the same
-  /// order, so the same answers; ~5 % of the box query on bunny00, docs/narrowphase.md). Kept here, with
+  /// order, so the same answers, faster: docs/narrowphase.md has the figures). Kept here, with
   /// the rest of the contact query's per-mesh data, rather than in Mesh, whose mesh + BVH stay
   /// within 64 bytes per triangle (docs/bench.md): it adds ~23 bytes per triangle.
   const WideBvh& wideBvh() const { return wide_; }
