@@ -152,6 +152,12 @@ void Mesh::setVertices(std::vector<Vec3> vertices) {
   geometryId_ = nextGeometryId();
 }
 
+void requireCurrentGeometry(const Mesh& mesh, std::uint64_t builtFrom, const char* object) {
+  if (builtFrom != mesh.geometryId())
+    throw InvalidInput(std::string(object) + " is stale for mesh \"" + mesh.name() +
+                       "\": it was built from another mesh, or from this one before its last setVertices; rebuild it");
+}
+
 std::vector<Vec3> Mesh::slotCorners() const {
   std::vector<Vec3> out(3 * slotTriangles_.size());
   for (std::size_t k = 0; k < slotTriangles_.size(); ++k)

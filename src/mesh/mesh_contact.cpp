@@ -791,6 +791,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
     throw InvalidInput("adjacency: built for a mesh of " + std::to_string(adjacency->triangleCount()) +
                        " triangles and " + std::to_string(adjacency->vertexCount()) + " vertices, this mesh has " +
                        std::to_string(mesh.triangleCount()) + " and " + std::to_string(mesh.vertices().size()));
+  if (adjacency) requireCurrentGeometry(mesh, adjacency->geometryId(), "adjacency");
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);
@@ -825,7 +826,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
       obb.emplace(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
       placed = obb->place(ls.p[0], ls.half);
     }
-    if (obb && adjacency && adjacency->currentFor(mesh)) {
+    if (obb && adjacency) {
       // with the adjacency's 4-wide copy of the BVH: the node test on four boxes at once
       // (touches4: per box the same answer as touches), the same leaves in the same order
       struct WideVisitor {

@@ -722,6 +722,7 @@ MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
   const Bvh& bvh = mesh.bvh();
   nodes_.resize(bvh.nodes.size());
   corners_ = mesh.slotCorners();
+  geometryId_ = mesh.geometryId();
   std::vector<std::uint32_t> stack;
   // Calls f(corner) for every corner of every triangle under node n (in double).
   auto corners = [&](std::uint32_t n, auto&& f) {
@@ -784,15 +785,17 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
   validateDistanceBound(options.maxDistance, "maxDistance");
   validateDistanceBound(options.stopDistance, "stopDistance");
   // A foreign accelerator (another node or triangle count) would be read out of range.
-  auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh) {
+  auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh,
+                       const char* label) {
     if (accel && (accel->nodes().size() != m.bvh().nodes.size() || accel->corners().size() != 3 * m.triangleCount()))
       throw InvalidInput(std::string("mesh distance options.") + field + " was not built from mesh " + mesh + " (" +
                          std::to_string(accel->nodes().size()) + " nodes and " +
                          std::to_string(accel->corners().size() / 3) + " triangles, mesh has " +
                          std::to_string(m.bvh().nodes.size()) + " and " + std::to_string(m.triangleCount()) + ")");
+    if (accel) requireCurrentGeometry(m, accel->geometryId(), label);
   };
-  checkAccel(options.accelA, a, "accelA", "a");
-  checkAccel(options.accelB, b, "accelB", "b");
+  checkAccel(options.accelA, a, "accelA", "a", "mesh distance options.accelA");
+  checkAccel(options.accelB, b, "accelB", "b", "mesh distance options.accelB");
   const Relative rel(ta, tb);
   Best best{options.maxDistance, options.stopDistance, {}, false};
   if (options.path == QueryPath::BruteForce) bruteForce(a, b, rel, best);

@@ -451,6 +451,51 @@ TEST(MeshDistance, InvalidOptionsThrowNamingTheField) {
   }
 }
 
+// A caller-held accelerator records the mesh's geometry id: after setVertices (same counts, new
+// positions) the query refuses it, naming the field and the mesh, instead of reading the old
+// corners (it answered 2, the distance of the old positions, where the truth is sqrt(85)). A copy
+// of the mesh shares the id, and an accelerator rebuilt after the move gives the brute-force answer.
+TEST(MeshDistance, AcceleratorBuiltBeforeSetVerticesIsRefusedNamingTheFieldAndMesh) {
+  const std::vector<Vec3> v{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  const std::vector<TriangleIndices> t{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  Mesh a(v, t, "a");
+  const Mesh b(v, t, "b");
+  const MeshDistanceAccel accA(a), accB(b);
+  Transform ta, tb;
+  tb.translation = Vec3(3, 0, 0);
+  MeshDistanceOptions o;
+  o.accelA = &accA, o.accelB = &accB;
+  EXPECT_EQ(distance(a, ta, b, tb, o).distance, 2);
+  const Mesh copy = a;  // shares the geometry id: the accelerator serves it
+  EXPECT_EQ(distance(copy, ta, b, tb, o).distance, 2);
+  std::vector<Vec3> moved = v;
+  for (Vec3& p : moved) p += Vec3(0, 0, 10);
+  a.setVertices(moved);
+  MeshDistanceOptions brute;
+  brute.path = QueryPath::BruteForce;
+  const Real truth = distance(a, ta, b, tb, brute).distance;
+  EXPECT_NEAR(truth, std::sqrt(Real(85)), 1e-4);  // a's corner (1,0,10) to b's (3,0,1)
+  try {
+    distance(a, ta, b, tb, o);
+    FAIL() << "a stale accelerator was accepted";
+  } catch (const InvalidInput& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("accelA"), std::string::npos) << m;
+    EXPECT_NE(m.find("stale"), std::string::npos) << m;
+    EXPECT_NE(m.find("\"a\""), std::string::npos) << m;
+  }
+  // as mesh b of the query (the other field)
+  MeshDistanceOptions swapped;
+  swapped.accelB = &accA;
+  EXPECT_THROW(distance(b, tb, a, ta, swapped), InvalidInput);
+  // the old accelerator still serves the unmoved copy; a rebuilt one serves the moved mesh
+  EXPECT_EQ(distance(copy, ta, b, tb, o).distance, 2);
+  const MeshDistanceAccel rebuilt(a);
+  o.accelA = &rebuilt;
+  EXPECT_EQ(distance(a, ta, b, tb, o).distance, truth);
+  EXPECT_EQ(distance(a, ta, b, tb).distance, truth);
+}
+
 TEST(MeshDistance, IdenticalPosesGiveZeroAndFarMeshesNotFound) {
   const auto a = test::bumpySphere(6, 8);
   EXPECT_EQ(distance(*a, Transform::identity(), *a, Transform::identity()).distance, 0);

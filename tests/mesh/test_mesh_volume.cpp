@@ -410,6 +410,27 @@ TEST(MeshVolumePointInside, RayThroughAVertexOrEdgeRetriesAnotherDirection) {
   EXPECT_TRUE(MeshVolume(far).contains(Vec3(0, 0, 0)));               // on a vertex
 }
 
+// A MeshVolume keeps no copy of the positions (closedness depends on the indices only, which
+// setVertices cannot change): after the mesh's vertices move, the same volume answers for the new
+// positions, never the old ones.
+TEST(MeshVolumePointInside, AnswersForTheCurrentVerticesAfterSetVertices) {
+  Mesh box = boxMesh({0, 0, 0}, {2, 2, 2});
+  const MeshVolume vol(box);
+  const Vec3 oldCentre(1, 1, 1), newCentre(1, 1, 11);
+  EXPECT_TRUE(vol.contains(oldCentre));
+  EXPECT_FALSE(vol.contains(newCentre));
+  EXPECT_TRUE(vol.overlaps(Sphere{oldCentre, Real(0.25)}));
+  std::vector<Vec3> moved = box.vertices();
+  for (Vec3& p : moved) p += Vec3(0, 0, 10);
+  box.setVertices(moved);
+  EXPECT_FALSE(vol.contains(oldCentre));
+  EXPECT_TRUE(vol.contains(newCentre));
+  EXPECT_TRUE(vol.onSurface(Vec3(1, 1, 10)));
+  EXPECT_FALSE(vol.onSurface(Vec3(1, 1, 0)));
+  EXPECT_FALSE(vol.overlaps(Sphere{oldCentre, Real(0.25)}));
+  EXPECT_TRUE(vol.overlaps(Sphere{newCentre, Real(0.25)}));
+}
+
 TEST(MeshVolumePointInside, NoHeapAllocation) {
   VoxelSet v(4);
   for (int x = 0; x < 3; ++x)

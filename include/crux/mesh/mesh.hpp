@@ -96,4 +96,11 @@ class Mesh {
 /// vertices).
 Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
 
+/// The one check of every caller-held object derived from a mesh's geometry (MeshDistanceAccel,
+/// MeshAdjacency): throws InvalidInput unless `builtFrom`, the Mesh::geometryId the object
+/// recorded when it was built, is `mesh`'s current one, i.e. the object was built from this mesh
+/// (or a copy) and no setVertices has moved its vertices since. `object` names the object in the
+/// message, which also names the mesh and says to rebuild it. No allocation unless it throws.
+void requireCurrentGeometry(const Mesh& mesh, std::uint64_t builtFrom, const char* object);
+
 }  // namespace crux

@@ -51,9 +51,10 @@
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
 /// across those seams (loadMesh merges identical vertices). It also holds a 4-wide copy of the
 /// mesh's BVH and the triangle corners in leaf order, which a box query reads
-/// (MeshAdjacency::wideBvh, slotCorners: same answers, faster); rebuild it
-/// after Mesh::setVertices (its activity bits, boxes and corners describe the old positions; a
-/// stale one is detected by Mesh::geometryId and its wide BVH and corners then left unused).
+/// (MeshAdjacency::wideBvh, slotCorners: same answers, faster). It records the mesh's
+/// geometryId: after Mesh::setVertices its activity bits, tolerances, boxes and corners describe
+/// the old positions, and a query given it throws InvalidInput (requireCurrentGeometry) instead
+/// of reading them; rebuild it then.
 ///
 /// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
 /// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×
@@ -122,10 +123,9 @@ class MeshAdjacency {
   /// contiguously, no index gather), read by the box query with wideBvh. 36 bytes per triangle
   /// in float builds.
   const std::vector<Vec3>& slotCorners() const { return corners_; }
-  /// Whether this adjacency's BVH copy (wideBvh) is that of `mesh`'s current geometry: the mesh
-  /// it was built from (or a copy), not changed since by setVertices. A query given a stale
-  /// adjacency walks the mesh's own BVH instead (same answers, slower).
-  bool currentFor(const Mesh& mesh) const { return mesh.geometryId() == geometryId_; }
+  /// Mesh::geometryId of the mesh (and vertex positions) it was built from; contacts() refuses
+  /// the adjacency for any other (requireCurrentGeometry).
+  std::uint64_t geometryId() const { return geometryId_; }
   /// Bytes held (neighbours, opposite vertices, activity, per-slot data, wideBvh, slotCorners).
   std::size_t memoryBytes() const;
 
@@ -184,7 +184,8 @@ struct MeshContactManifold {
 /// Contact points between `mesh` (A, placed by meshPose) and `shape` (B, placed by shapePose)
 /// with separation <= margin (>= 0): BVH query of the shape's AABB in the mesh frame grown by
 /// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when
-/// `adjacency` (built from this mesh; one with another triangle or vertex count throws InvalidInput) is given,
+/// `adjacency` (built from this mesh in its current geometry; any other, or one built before
+/// the mesh's last setVertices, throws InvalidInput) is given,
 /// reduction to 4. `path` BruteForce tests every
 /// triangle (reference). Returns out.count > 0. Throws InvalidInput for a margin that is negative
 /// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws and does

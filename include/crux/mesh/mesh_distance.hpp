@@ -31,7 +31,9 @@ namespace crux {
 /// are bounded almost as tightly as FCL's RSS volumes do, where the BVH's axis-aligned boxes are
 /// as thick as the patch is wide. Built once per mesh (O(n log n) time, 64 bytes per node and
 /// 36 per triangle in float builds) and kept by the caller next to the mesh, like
-/// MeshAdjacency: a Mesh holds no lazily built cache. Must be rebuilt after Mesh::setVertices.
+/// MeshAdjacency: a Mesh holds no lazily built cache. It records the mesh's geometryId: after
+/// Mesh::setVertices (or given with another mesh) the distance query refuses it with
+/// InvalidInput (requireCurrentGeometry), never reading the old corners; rebuild it then.
 class MeshDistanceAccel {
  public:
   /// One node's box: centre, unit axes (columns), half extents along them; `child` is the
@@ -57,11 +59,14 @@ class MeshDistanceAccel {
     std::uint32_t first = 0, count = 0;
   };
   const std::vector<Range>& leafRanges() const { return ranges_; }
+  /// Mesh::geometryId of the mesh (and vertex positions) it was built from.
+  std::uint64_t geometryId() const { return geometryId_; }
 
  private:
   std::vector<Node> nodes_;
   std::vector<Vec3> corners_;
   std::vector<Range> ranges_;
+  std::uint64_t geometryId_ = 0;
 };
 
 namespace mesh_detail {
@@ -103,8 +108,9 @@ struct MeshDistanceOptions {
   /// minimum, except that a pair at distance exactly 0 ends the search.
   Real stopDistance = 0;
   QueryPath path = QueryPath::Bvh;  ///< BruteForce: every triangle pair (the reference)
-  /// Optional accelerators built from mesh a / mesh b (a foreign one, with another node count,
-  /// throws InvalidInput). Same answer, fewer node pairs visited near contact.
+  /// Optional accelerators built from mesh a / mesh b in their current geometry (a foreign one,
+  /// or one built before the mesh's last setVertices, throws InvalidInput naming the field). Same
+  /// answer, fewer node pairs visited near contact.
   const MeshDistanceAccel* accelA = nullptr;
   const MeshDistanceAccel* accelB = nullptr;
 };
