@@ -13,6 +13,8 @@
 #include <cmath>
 #include <crux/geometry/predicates.hpp>
 #include <crux/geometry/raycast.hpp>
+
+#include "geometry/ray_triangle.hpp"
 #include <limits>
 #include <type_traits>
 
@@ -322,7 +324,10 @@ bool imprecise(const Frac<robust::Bounded>& f, Wide s, const WVec3& normal, cons
 
 }  // namespace
 
-std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
+
+namespace geometry_detail {
+
+std::optional<RayCrossing> rayTriangleCrossing(const Ray& ray, const Triangle& t) {
   const predicates::TriangleShape shape = predicates::classify(t);
   Wide s = 0;
   WVec3 normal;
@@ -349,8 +354,48 @@ std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
     return true;
   });
   if (!hit) return std::nullopt;
-  return makeHit(wide(ray.origin), wide(ray.dir), s, normal, maxT);
+  return RayCrossing{s, normal};
 }
+
+int properRayTriangleCrossing(const Ray& ray, const Triangle& t, int det, RayCrossing& out) {
+  using T = robust::Bounded;
+  robust::FilterJudge judge;
+  // firstHit's expressions for a crossing of the plane (the same values, so the same bits)
+  const V3<T> o = lift<T>(ray.origin), d = lift<T>(ray.dir);
+  const V3<T> A = lift<T>(t.a), B = lift<T>(t.b), C = lift<T>(t.c);
+  const V3<T> a = A - o;
+  const V3<T> n = (B - A).cross(C - A);
+  // n·a = a·(b × c) exactly (b, c the other corners relative to o): the origin's side
+  const T na = n.dot(a);
+  const int side = judge(na);
+  if (judge.uncertain || side == 0) return -1;  // near or in the plane: raycast's own path
+  if ((side > 0) != (det > 0)) return 0;        // the plane is behind the origin
+  const T nd = n.dot(d);
+  if (judge(nd) != det) return -1;
+  const Frac<T> f = det > 0 ? Frac<T>{na, nd} : Frac<T>{-na, -nd};
+  const WVec3 nApprox = robust::approx(n);
+  if (!nApprox.allFinite() || !std::isfinite(na.v) || !std::isfinite(nd.v)) return -1;
+  const Wide value = f.value();
+  if (imprecise(f, value, nApprox, ray, t)) return -1;
+  out.s = value;
+  out.normal = det > 0 ? WVec3(-nApprox) : nApprox;
+  return 1;
+}
+
+Wide rayLength(const Vec3& dir) { return scaledNorm(wide(dir)); }
+
+std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT) {
+  return makeHit(wide(ray.origin), wide(ray.dir), c.s, c.normal, maxT);
+}
+
+}  // namespace geometry_detail
+
+std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
+  const std::optional<geometry_detail::RayCrossing> c = geometry_detail::rayTriangleCrossing(ray, t);
+  if (!c) return std::nullopt;
+  return geometry_detail::rayHitAt(ray, *c, maxT);
+}
+
 
 std::optional<RayHit> raycast(const Ray& ray, const Sphere& sp, Real maxT) {
   const WVec3 o = wide(ray.origin), d = wide(ray.dir), c = wide(sp.center);
