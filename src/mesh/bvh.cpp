@@ -490,16 +490,17 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options
   return bvh;
 }
 
-void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
-  if (primBounds.size() != bvh.primIndices.size())
-    throw InvalidInput("refitBvh: expected " + std::to_string(bvh.primIndices.size()) + " primitive bounds, got " +
-                       std::to_string(primBounds.size()));
+namespace {
+
+/// The one bottom-up refit of a binary BVH: slotBox(k) is the box of the primitive in slot k.
+template <class SlotBox>
+void refitBinary(Bvh& bvh, const SlotBox& slotBox) {
   // Children always follow their parent in the array, so a reverse sweep sees them first.
   for (std::size_t i = bvh.nodes.size(); i-- > 0;) {
     BvhNode& node = bvh.nodes[i];
     Aabb b = Aabb::empty();
     if (node.isLeaf()) {
-      for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k) b.grow(primBounds[bvh.primIndices[k]]);
+      for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k) b.grow(slotBox(k));
     } else {
       b = bvh.nodes[node.first].bounds;
       b.grow(bvh.nodes[node.first + 1].bounds);
@@ -508,6 +509,23 @@ void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
   }
 }
 
+void checkRefitCount(const Bvh& bvh, std::size_t count) {
+  if (count != bvh.primIndices.size())
+    throw InvalidInput("refitBvh: expected " + std::to_string(bvh.primIndices.size()) + " primitive bounds, got " +
+                       std::to_string(count));
+}
+
+}  // namespace
+
+void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
+  checkRefitCount(bvh, primBounds.size());
+  refitBinary(bvh, [&](std::uint32_t k) -> const Aabb& { return primBounds[bvh.primIndices[k]]; });
+}
+
+void refitBvhSlots(Bvh& bvh, const std::vector<Aabb>& slotBounds) {
+  checkRefitCount(bvh, slotBounds.size());
+  refitBinary(bvh, [&](std::uint32_t k) -> const Aabb& { return slotBounds[k]; });
+}
 
 WideBvh widenBvh(const Bvh& bvh) {
   WideBvh wide;
@@ -519,22 +537,31 @@ WideBvh widenBvh(const Bvh& bvh) {
   wide.nodes.emplace_back();
   for (std::size_t next = 0; next < todo.size(); ++next) {
     const auto [binary, index] = todo[next];
-    // the lanes: the binary node's children, an inner child replaced by its two children; a
-    // leaf root is its own single lane
+    // the lanes: the binary node's children, then, while fewer than four, the inner lane of
+    // largest surface area replaced in place by its two children (the SAH's measure of how
+    // often a ray enters it; in place keeps the leaves in the binary tree's left-to-right
+    // order); a leaf root is its own single lane
     std::uint32_t lanes[4];
     int n = 0;
     const BvhNode& b = bvh.nodes[binary];
     if (b.isLeaf()) {
       lanes[n++] = binary;
     } else {
-      for (std::uint32_t c = b.first; c < b.first + 2; ++c) {
-        const BvhNode& child = bvh.nodes[c];
-        if (child.isLeaf()) {
-          lanes[n++] = c;
-        } else {
-          lanes[n++] = child.first;
-          lanes[n++] = child.first + 1;
+      lanes[n++] = b.first;
+      lanes[n++] = b.first + 1;
+      while (n < 4) {
+        int open = -1;
+        Real openArea = -1;
+        for (int i = 0; i < n; ++i) {
+          const BvhNode& lane = bvh.nodes[lanes[i]];
+          if (!lane.isLeaf() && lane.bounds.area() > openArea) open = i, openArea = lane.bounds.area();
         }
+        if (open < 0) break;
+        const std::uint32_t first = bvh.nodes[lanes[open]].first;
+        for (int i = n; i > open + 1; --i) lanes[i] = lanes[i - 1];
+        lanes[open] = first;
+        lanes[open + 1] = first + 1;
+        ++n;
       }
     }
     WideBvhNode node;
@@ -565,6 +592,27 @@ WideBvh widenBvh(const Bvh& bvh) {
   }
   wide.nodes.shrink_to_fit();
   return wide;
+}
+
+void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds) {
+  for (std::size_t n = bvh.nodes.size(); n-- > 0;) {
+    WideBvhNode& node = bvh.nodes[n];
+    for (int i = 0; i < 4; ++i) {
+      if (node.child[i] == WideBvhNode::kEmpty) continue;
+      Aabb box = Aabb::empty();
+      if (node.count[i] > 0) {
+        for (std::uint32_t k = node.child[i], e = node.child[i] + node.count[i]; k < e; ++k) box.grow(slotBounds[k]);
+      } else {
+        const WideBvhNode& c = bvh.nodes[node.child[i]];
+        for (int j = 0; j < 4; ++j) {
+          if (c.child[j] == WideBvhNode::kEmpty) continue;
+          box.grow(Aabb{Vec3(c.minX[j], c.minY[j], c.minZ[j]), Vec3(c.maxX[j], c.maxY[j], c.maxZ[j])});
+        }
+      }
+      node.minX[i] = box.min.x(), node.minY[i] = box.min.y(), node.minZ[i] = box.min.z();
+      node.maxX[i] = box.max.x(), node.maxY[i] = box.max.y(), node.maxZ[i] = box.max.z();
+    }
+  }
 }
 
 }  // namespace crux

@@ -59,6 +59,40 @@ inline Lanes lanesSelect(const LaneBits& mask, const Lanes& x, const Lanes& y) {
   return (Lanes)((mask & (LaneBits)x) | (~mask & (LaneBits)y));
 }
 
+/// a > b ? a : b per lane (so a NaN in a gives b: SSE's max operand order).
+inline Lanes lanesMax(const Lanes& a, const Lanes& b) {
+#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
+  return (Lanes)_mm_max_ps((__m128)a, (__m128)b);
+#elif defined(__SSE2__)
+  __m128d x[2], y[2];
+  std::memcpy(x, &a, sizeof x);
+  std::memcpy(y, &b, sizeof y);
+  x[0] = _mm_max_pd(x[0], y[0]), x[1] = _mm_max_pd(x[1], y[1]);
+  Lanes r;
+  std::memcpy(&r, x, sizeof x);
+  return r;
+#else
+  return lanesSelect(a > b, a, b);
+#endif
+}
+
+/// a < b ? a : b per lane (a NaN in a gives b).
+inline Lanes lanesMin(const Lanes& a, const Lanes& b) {
+#if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED
+  return (Lanes)_mm_min_ps((__m128)a, (__m128)b);
+#elif defined(__SSE2__)
+  __m128d x[2], y[2];
+  std::memcpy(x, &a, sizeof x);
+  std::memcpy(y, &b, sizeof y);
+  x[0] = _mm_min_pd(x[0], y[0]), x[1] = _mm_min_pd(x[1], y[1]);
+  Lanes r;
+  std::memcpy(&r, x, sizeof x);
+  return r;
+#else
+  return lanesSelect(a < b, a, b);
+#endif
+}
+
 /// The sign bits of a comparison result's four lanes, lane i as bit i.
 inline unsigned laneMask(const LaneBits& m) {
 #if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED

@@ -139,6 +139,7 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, s
   geometryId_ = nextGeometryId();
   slotTriangles_.resize(triangles_.size());
   for (std::size_t k = 0; k < triangles_.size(); ++k) slotTriangles_[k] = triangles_[bvh_.primIndices[k]];
+  if (options.wide) wide_ = widenBvh(bvh_);
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -148,7 +149,11 @@ void Mesh::setVertices(std::vector<Vec3> vertices) {
                        std::to_string(vertices_.size()));
   requireFiniteVertices(vertices, name_);
   vertices_ = std::move(vertices);
-  refitBvh(bvh_, triangleBounds());
+  // the triangles' boxes in slot order (no index gather), then both trees from them
+  std::vector<Aabb> slotBounds(slotTriangles_.size());
+  for (std::size_t k = 0; k < slotBounds.size(); ++k) slotBounds[k] = crux::bounds(slotTriangle(std::uint32_t(k)));
+  refitBvhSlots(bvh_, slotBounds);
+  if (!wide_.empty()) refitWideBvh(wide_, slotBounds);
   geometryId_ = nextGeometryId();
 }
 
@@ -205,7 +210,7 @@ MeshStats Mesh::stats() const {
 
 std::size_t Mesh::memoryBytes() const {
   return vertices_.capacity() * sizeof(Vec3) + (triangles_.capacity() + slotTriangles_.capacity()) * sizeof(TriangleIndices) +
-         bvh_.memoryBytes();
+         bvh_.memoryBytes() + wide_.memoryBytes();
 }
 
 }  // namespace crux

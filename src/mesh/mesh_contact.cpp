@@ -9,6 +9,7 @@
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/error.hpp>
 
+#include "mesh_walk.hpp"
 #include "node_tests.hpp"
 
 #include <algorithm>
@@ -96,15 +97,12 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
   for (std::size_t k = 0; k < prims.size(); ++k)
     bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
   vertexCount_ = mesh.vertices().size();
-  wide_ = widenBvh(mesh.bvh());
-  corners_ = mesh.slotCorners();
   geometryId_ = mesh.geometryId();
 }
 
 std::size_t MeshAdjacency::memoryBytes() const {
   return neighbors_.capacity() * sizeof(std::uint32_t) + opposite_.capacity() * sizeof(std::uint32_t) +
-         activity_.capacity() + bySlot_.capacity() * sizeof(SlotData) + wide_.memoryBytes() +
-         corners_.capacity() * sizeof(Vec3);
+         activity_.capacity() + bySlot_.capacity() * sizeof(SlotData);
 }
 
 Real meshFeatureTolerance(const Triangle& tri) {
@@ -826,69 +824,54 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
       obb.emplace(ls.axes, grow + kMeshFeatureRelativeTolerance * (ls.p[0].norm() + ls.half.norm()));
       placed = obb->place(ls.p[0], ls.half);
     }
-    if (obb && adjacency) {
-      // with the adjacency's 4-wide copy of the BVH: the node test on four boxes at once
-      // (touches4: per box the same answer as touches), the same leaves in the same order
-      struct WideVisitor {
-        const Mesh& mesh;
-        Collector& c;
-        const mesh_detail::ObbBoxTest& obb;
-        const mesh_detail::ObbBoxTest::Placed& placed;
-        const Vec3* corners;  // the adjacency's leaf-ordered corners (= mesh.slotTriangle(k))
-        unsigned enter(const WideBvhNode& node) const { return obb.touches4(placed, node); }
-        bool slot(std::uint32_t k) {
-          const Vec3* t = corners + 3 * std::size_t(k);
-          c.boxTriangle(mesh.bvh().primIndices[k], k, Triangle{t[0], t[1], t[2]});  // (Collector::triangle's box case)
-          return true;
+    struct Visitor {
+      const Mesh& mesh;
+      const Aabb& query;
+      Collector& c;
+      bool isSphere, isCapsule;
+      Vec3 centre, end;  // sphere centre; capsule ends
+      Real reach2;
+      const mesh_detail::ObbBoxTest* obb;             // a box: its node test (axes in the mesh frame)
+      const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
+      unsigned touches4(const WideBvhNode& node) const {
+        // a box's test on four boxes at once (touches4: per box the same answer as touches)
+        if (obb) return obb->touches4(placed, node);
+        return mesh_detail::eachLane(node, [&](const Aabb& b) { return touches(b); });
+      }
+      bool touches(const Aabb& bounds) const {
+        if (isSphere) {
+          const Vec3 d = (bounds.min - centre).cwiseMax(centre - bounds.max).cwiseMax(Vec3::Zero());
+          return d.squaredNorm() <= reach2;
         }
-      } wv{mesh, c, *obb, placed, adjacency->slotCorners().data()};
-      traverseWideBvhSlots(adjacency->wideBvh(), wv);
-    } else {
-      struct Visitor {
-        const Mesh& mesh;
-        const Aabb& query;
-        Collector& c;
-        bool isSphere, isCapsule;
-        Vec3 centre, end;  // sphere centre; capsule ends
-        Real reach2;
-        const mesh_detail::ObbBoxTest* obb;             // a box: its node test (axes in the mesh frame)
-        const mesh_detail::ObbBoxTest::Placed& placed;  // and placement
-        bool enter(const BvhNode& node, Real& key) {
-          key = 0;
-          if (isSphere) {
-            const Vec3 d = (node.bounds.min - centre).cwiseMax(centre - node.bounds.max).cwiseMax(Vec3::Zero());
-            return d.squaredNorm() <= reach2;
-          }
-          if (obb) return obb->touches(placed, node.bounds);
-          if (!boxesOverlap(node.bounds, query)) return false;
-          if (!isCapsule) return true;
-          // A capsule also by the distance of its segment to the box's circumscribed sphere (its
-          // axis-aligned box is loose when it is tilted).
-          const Vec3 c = Real(0.5) * (node.bounds.min + node.bounds.max);
-          const Real e =
-              Real(0.5) * (node.bounds.max - node.bounds.min).norm() * (1 + 4 * std::numeric_limits<Real>::epsilon());
-          const Vec3 ab = end - centre;
-          const Real l2 = ab.squaredNorm();
-          const Real t = l2 > 0 ? std::clamp(ab.dot(c - centre) / l2, Real(0), Real(1)) : Real(0);
-          const Real lim = std::sqrt(reach2) + e;
-          return (centre + t * ab - c).squaredNorm() <= lim * lim;
+        if (obb) return obb->touches(placed, bounds);
+        if (!boxesOverlap(bounds, query)) return false;
+        if (!isCapsule) return true;
+        // A capsule also by the distance of its segment to the box's circumscribed sphere (its
+        // axis-aligned box is loose when it is tilted).
+        const Vec3 c = Real(0.5) * (bounds.min + bounds.max);
+        const Real e = Real(0.5) * (bounds.max - bounds.min).norm() * (1 + 4 * std::numeric_limits<Real>::epsilon());
+        const Vec3 ab = end - centre;
+        const Real l2 = ab.squaredNorm();
+        const Real t = l2 > 0 ? std::clamp(ab.dot(c - centre) / l2, Real(0), Real(1)) : Real(0);
+        const Real lim = std::sqrt(reach2) + e;
+        return (centre + t * ab - c).squaredNorm() <= lim * lim;
+      }
+      bool slot(std::uint32_t k) {
+        const Triangle tri = mesh.slotTriangle(k);
+        if (obb) {
+          c.boxTriangle(mesh.bvh().primIndices[k], k, tri);  // (Collector::triangle's box case)
+        } else if (isSphere) {
+          const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
+          const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
+          if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
+        } else if (boxesOverlap(bounds(tri), query)) {
+          c.triangle(mesh.bvh().primIndices[k], k, tri);
         }
-        bool keep(Real) { return true; }
-        bool slot(std::uint32_t k) {
-          const Triangle tri = mesh.slotTriangle(k);
-          if (isSphere) {
-            const Aabb tb = bounds(tri);  // the sphere's distance to the triangle's box, as for the nodes
-            const Vec3 d = (tb.min - centre).cwiseMax(centre - tb.max).cwiseMax(Vec3::Zero());
-            if (d.squaredNorm() <= reach2) c.triangle(mesh.bvh().primIndices[k], k, tri);
-          } else if (obb || boxesOverlap(bounds(tri), query)) {
-            c.triangle(mesh.bvh().primIndices[k], k, tri);
-          }
-          return true;
-        }
-      } v{mesh,   query,        c, isSphere, shape.kind == ConvexKind::Capsule, ls.p[0], ls.p[1], reach * reach,
-          obb ? &*obb : nullptr, placed};
-      traverseBvhSlots(mesh.bvh(), v);
-    }
+        return true;
+      }
+    } v{mesh, query, c, isSphere, shape.kind == ConvexKind::Capsule, ls.p[0], ls.p[1], reach * reach,
+        obb ? &*obb : nullptr, placed};
+    mesh_detail::walkSlots(mesh, v);
   }
   c.keepDeepestDropped();
   c.reduce(out, mergeTol);
@@ -977,19 +960,21 @@ MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const C
       const Real gap = boxDistance(b, sb);
       return gap > 0 ? gap : -kNoLimit;
     }
-    bool enter(const BvhNode& node, Real& key) {
-      key = lowerBound(node.bounds);
+    bool entry(const Aabb& b, Real& key) const {
+      key = lowerBound(b);
       return key <= best;
     }
-    bool keep(Real key) { return key <= best; }
-    bool slot(std::uint32_t k) {
-      const Triangle tri = mesh.slotTriangle(k);
-      if (lowerBound(bounds(tri)) <= best && !(axisLowerBound(tri) - pruneSlack > best))
-        f(mesh.bvh().primIndices[k], tri);
+    bool keep(Real key) const { return key <= best; }
+    bool leaf(std::uint32_t first, std::uint32_t count) {
+      for (std::uint32_t k = first; k < first + count; ++k) {
+        const Triangle tri = mesh.slotTriangle(k);
+        if (lowerBound(bounds(tri)) <= best && !(axisLowerBound(tri) - pruneSlack > best))
+          f(mesh.bvh().primIndices[k], tri);
+      }
       return true;
     }
   } v{mesh, sb, best, consider, ls, pruneSlack};
-  traverseBvhSlots(mesh.bvh(), v);
+  mesh_detail::walkOrdered(mesh, v);
   return r;
 }
 

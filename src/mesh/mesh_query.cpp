@@ -12,6 +12,8 @@
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
 
+#include "geometry/ray_triangle.hpp"
+#include "mesh_walk.hpp"
 #include "node_tests.hpp"
 #include "ray_kernel.hpp"
 #include "relative_frame.hpp"
@@ -36,29 +38,90 @@ bool backFacing(const Triangle& t, const Vec3& dir) {
   return (wide(t.b) - a).cross(wide(t.c) - a).dot(wide(dir)) > 0;
 }
 
-/// The one per-triangle ray decision of every ray query (BVH and brute force).
+using geometry_detail::RayCrossing;
+
+/// The one per-triangle ray decision of every ray query (BVH and brute force): the float
+/// filter (ray_kernel.hpp) rejects most misses and proves most hits a proper crossing, whose
+/// side and parameter the filter-stage arithmetic then settles (properRayTriangleCrossing);
+/// anything else takes raycast's own path (rayTriangleCrossing: exact decision, the exact
+/// stage for slivers). A candidate keeps its crossing; only the hit a query reports is formed
+/// (hit()), so point, unit normal and square roots are computed for the winner alone.
 class TriangleRayTest {
  public:
-  TriangleRayTest(const Ray& ray, const RayQueryOptions& options) : ray_(ray), options_(options), filter_(ray) {}
+  /// A triangle the ray hits within maxDistance: its world distance t and its crossing.
+  struct Candidate {
+    Real t;
+    RayCrossing crossing;
+  };
 
-  std::optional<RayHit> operator()(const Triangle& t) const {
-    if (filter_.certainlyMisses(t)) return std::nullopt;
-    if (options_.cullBackFaces && backFacing(t, ray_.dir)) return std::nullopt;
-    return raycast(ray_, t, options_.maxDistance);
+  TriangleRayTest(const Ray& ray, const RayQueryOptions& options)
+      : ray_(ray), options_(options), filter_(ray), length_(geometry_detail::rayLength(ray.dir)) {}
+
+  /// Whether the ray hits triangle t within maxDistance (then `out` is set).
+  bool operator()(const Triangle& t, Candidate& out) const { return test(t, filter_.classify(t), out); }
+
+  /// Tests the triangles of slots [first, first + count) of mesh's BVH, four at a time through
+  /// the filter (the same verdict per triangle as one at a time), calling f(slot, candidate)
+  /// for each hit; false when f stopped it.
+  template <class F>
+  bool slots(const Mesh& mesh, std::uint32_t first, std::uint32_t count, F&& f) const {
+    for (std::uint32_t k0 = first, end = first + count; k0 < end; k0 += 4) {
+      const int n = int(std::min<std::uint32_t>(4, end - k0));
+      Triangle tris[4];
+      for (int j = 0; j < n; ++j) tris[j] = mesh.slotTriangle(k0 + std::uint32_t(j));
+      mesh_detail::RayTriangleFilter::Verdict verdicts[4];
+      filter_.classify(tris, n, verdicts);
+      for (int j = 0; j < n; ++j) {
+        if (verdicts[j] == mesh_detail::RayTriangleFilter::kMisses) continue;
+        Candidate c;
+        if (test(tris[j], verdicts[j], c) && !f(k0 + std::uint32_t(j), c)) return false;
+      }
+    }
+    return true;
   }
+
+  bool test(const Triangle& t, mesh_detail::RayTriangleFilter::Verdict v, Candidate& out) const {
+    if (v == mesh_detail::RayTriangleFilter::kMisses) return false;
+    if (options_.cullBackFaces && backFacing(t, ray_.dir)) return false;
+    int decided = -1;
+    if (v != mesh_detail::RayTriangleFilter::kUnknown) {
+      const int det = v == mesh_detail::RayTriangleFilter::kCrossesBack ? 1 : -1;
+      decided = geometry_detail::properRayTriangleCrossing(ray_, t, det, out.crossing);
+      if (counters_) ++counters_->certified;
+      if (decided == 0) return false;
+    }
+    if (decided < 0) {
+      if (counters_) ++counters_->exactPath;
+      const std::optional<RayCrossing> c = geometry_detail::rayTriangleCrossing(ray_, t);
+      if (!c) return false;
+      out.crossing = *c;
+    }
+    // the distance rayHitAt (makeHit) reports; beyond maxDistance or not finite: no hit
+    out.t = Real(out.crossing.s * length_);
+    return out.t <= options_.maxDistance && std::isfinite(out.t);
+  }
+
+  /// The reported hit of a candidate (the same as raycast(ray, triangle) but for a parameter
+  /// certified by the filter stage alone).
+  MeshRayHit hit(const Candidate& c, std::uint32_t tri) const {
+    const std::optional<RayHit> h = geometry_detail::rayHitAt(ray_, c.crossing, options_.maxDistance);
+    return {h->t, h->point, h->normal, tri};
+  }
+
+  void count(RayQueryCounters* counters) { counters_ = counters; }
 
  private:
   const Ray& ray_;
   const RayQueryOptions& options_;
   mesh_detail::RayTriangleFilter filter_;
+  Wide length_;
+  RayQueryCounters* counters_ = nullptr;
 };
 
 /// Orders hits by t, then by triangle index.
-bool before(Real t, std::uint32_t tri, const MeshRayHit& best) {
-  return t < best.t || (t == best.t && tri < best.triangle);
+bool before(Real t, std::uint32_t tri, Real bestT, std::uint32_t bestTri) {
+  return t < bestT || (t == bestT && tri < bestTri);
 }
-
-MeshRayHit meshHit(const RayHit& h, std::uint32_t tri) { return {h.t, h.point, h.normal, tri}; }
 
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
   const Real scale = std::max(meshScale(mesh), ray.origin.cwiseAbs().maxCoeff());
@@ -72,19 +135,37 @@ struct RayVisitor {
   const TriangleRayTest& test;
   bool stopAtFirst;
   Real sLimit;  // parameter limit: max distance, lowered to the best hit's t
-  MeshRayHit best{};
+  RayQueryCounters* counters;
+  TriangleRayTest::Candidate best{};
+  std::uint32_t bestTriangle = 0;
   bool found = false;
 
-  bool enter(const BvhNode& node, Real& key) const { return box.enter(node.bounds, sLimit, key); }
+  bool entry(const Aabb& b, Real& key) const {
+    if (counters) ++counters->nodes;
+    return box.enter(b, sLimit, key);
+  }
+  unsigned entry4(const WideBvhNode& node, Real (&keys)[4]) const {
+    if (counters) ++counters->nodes;
+    return box.enter4(node, sLimit, keys);
+  }
   bool keep(Real key) const { return box.keep(key, sLimit); }
-  bool slot(std::uint32_t k) { return hit(mesh.slotTriangle(k), mesh.bvh().primIndices[k]); }
-  bool hit(const Triangle& t, std::uint32_t tri) {
-    const std::optional<RayHit> h = test(t);
-    if (!h) return true;
-    if (!found || before(h->t, tri, best)) {
-      best = meshHit(*h, tri);
+  bool leaf(std::uint32_t first, std::uint32_t count) {
+    if (counters) counters->triangles += count;
+    return test.slots(mesh, first, count,
+                      [&](std::uint32_t k, const TriangleRayTest::Candidate& c) { return offer(c, mesh.bvh().primIndices[k]); });
+  }
+  /// The brute-force path's visit of triangle i.
+  bool triangle(std::uint32_t i) {
+    if (counters) ++counters->triangles;
+    TriangleRayTest::Candidate c;
+    return !test(mesh.triangle(i), c) || offer(c, i);
+  }
+  bool offer(const TriangleRayTest::Candidate& c, std::uint32_t tri) {
+    if (!found || before(c.t, tri, best.t, bestTriangle)) {
+      best = c;
+      bestTriangle = tri;
       found = true;
-      sLimit = std::min(sLimit, box.parameterLimit(h->t));
+      sLimit = std::min(sLimit, box.parameterLimit(c.t));
     }
     return !stopAtFirst;
   }
@@ -98,38 +179,42 @@ struct RayAllVisitor {
   Real sLimit;
   std::vector<MeshRayHit>& hits;
 
-  bool enter(const BvhNode& node, Real& key) const { return box.enter(node.bounds, sLimit, key); }
+  bool entry(const Aabb& b, Real& key) const { return box.enter(b, sLimit, key); }
+  unsigned entry4(const WideBvhNode& node, Real (&keys)[4]) const { return box.enter4(node, sLimit, keys); }
   bool keep(Real) const { return true; }
-  bool slot(std::uint32_t k) {
-    if (const std::optional<RayHit> h = test(mesh.slotTriangle(k))) hits.push_back(meshHit(*h, mesh.bvh().primIndices[k]));
-    return true;
+  bool leaf(std::uint32_t first, std::uint32_t count) {
+    return test.slots(mesh, first, count, [&](std::uint32_t k, const TriangleRayTest::Candidate& c) {
+      hits.push_back(test.hit(c, mesh.bvh().primIndices[k]));
+      return true;
+    });
   }
 };
 
 std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                       QueryPath path, bool stopAtFirst) {
-  const TriangleRayTest test(ray, options);
+  TriangleRayTest test(ray, options);
+  test.count(options.counters);
   const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
-  RayVisitor v{mesh, box, test, stopAtFirst, box.parameterLimit(options.maxDistance)};
+  RayVisitor v{mesh, box, test, stopAtFirst, box.parameterLimit(options.maxDistance), options.counters};
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
-      if (!v.hit(mesh.triangle(i), i)) break;
+      if (!v.triangle(i)) break;
   } else {
-    traverseBvhSlots(mesh.bvh(), v);
+    mesh_detail::walkOrdered(mesh, v);
   }
   if (!v.found) return std::nullopt;
-  return v.best;
+  return test.hit(v.best, v.bestTriangle);
 }
 
 // ---- shapes ----------------------------------------------------------------------------------
 
-/// Runs a shape query: `nodeTest(bounds)` culls subtrees conservatively, `triTest(triangle)` is
-/// the exact per-triangle decision. With `out == nullptr` it stops at the first touching
-/// triangle and reports whether there was one; otherwise it appends every touching index
-/// (ascending).
-template <class NodeTest, class TriTest>
+/// Runs a shape query: `nodeTest(box)` culls subtrees conservatively (mesh_walk.hpp: over the
+/// mesh's wide or binary BVH), `triTest(triangle)` is the exact per-triangle decision.
+/// With `out == nullptr` it stops at the first touching triangle and reports whether there was
+/// one; otherwise it appends every touching index (ascending).
+template <class NodeTest, class TriTest, class LaneTest = std::nullptr_t>
 bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, const TriTest& triTest,
-                std::vector<std::uint32_t>* out) {
+                std::vector<std::uint32_t>* out, const LaneTest& laneTest = nullptr) {
   if (path == QueryPath::BruteForce) {
     bool any = false;
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i) {
@@ -146,8 +231,12 @@ bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, cons
     const TriTest& triTest;
     std::vector<std::uint32_t>* out;
     bool any = false;
-    bool enter(const BvhNode& node, Real&) const { return nodeTest(node.bounds); }
-    bool keep(Real) const { return true; }
+    const LaneTest& laneTest;
+    bool touches(const Aabb& b) const { return nodeTest(b); }
+    unsigned touches4(const WideBvhNode& n) const {
+      if constexpr (std::is_same_v<LaneTest, std::nullptr_t>) return mesh_detail::eachLane(n, nodeTest);
+      else return laneTest(n);
+    }
     bool slot(std::uint32_t k) {
       if (!triTest(mesh.slotTriangle(k))) return true;
       any = true;
@@ -155,8 +244,8 @@ bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, cons
       out->push_back(mesh.bvh().primIndices[k]);
       return true;
     }
-  } v{mesh, nodeTest, triTest, out};
-  traverseBvhSlots(mesh.bvh(), v);
+  } v{mesh, nodeTest, triTest, out, false, laneTest};
+  mesh_detail::walkSlots(mesh, v);
   if (out) std::sort(out->begin(), out->end());
   return v.any;
 }
@@ -181,8 +270,20 @@ bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vecto
     Real key;
     return box.enter(b, sLimit, key);
   };
-  auto tri = [&](const Triangle& t) { return intersects(s, t); };
-  return shapeQuery(mesh, path, node, tri, out);
+  auto lanes = [&](const WideBvhNode& n) {
+    Real keys[4];
+    return box.enter4(n, sLimit, keys);
+  };
+  // The float filter of the segment's line in front of the exact test. Its direction end −
+  // start is rounded in Real, which moves each edge product by at most 2ε·|ℓ|₁·|d|∞·|u|∞, far
+  // inside the filter's margin (64ε on the same terms). A zero-length segment gives zero
+  // products, which it never rejects; a direction that overflows Real is not filtered.
+  const mesh_detail::RayTriangleFilter filter(Ray{s.start, d});
+  const bool filtered = d.allFinite();
+  auto tri = [&](const Triangle& t) {
+    return !(filtered && filter.classify(t) == mesh_detail::RayTriangleFilter::kMisses) && intersects(s, t);
+  };
+  return shapeQuery(mesh, path, node, tri, out, lanes);
 }
 
 bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<std::uint32_t>* out) {
@@ -204,8 +305,9 @@ bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::u
   const mesh_detail::ObbBoxTest box(q.axes, pad);
   const mesh_detail::ObbBoxTest::Placed placed = box.place(q.center, q.half);
   auto node = [&](const Aabb& b) { return box.touches(placed, b); };
+  auto lanes = [&](const WideBvhNode& n) { return box.touches4(placed, n); };
   auto tri = [&](const Triangle& t) { return overlaps(t, q); };
-  return shapeQuery(mesh, path, node, tri, out);
+  return shapeQuery(mesh, path, node, tri, out, lanes);
 }
 
 bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<std::uint32_t>* out) {
@@ -372,12 +474,13 @@ std::vector<MeshRayHit> raycastAll(const Mesh& mesh, const Ray& ray, const RayQu
   std::vector<MeshRayHit> hits;
   const TriangleRayTest test(ray, options);
   if (path == QueryPath::BruteForce) {
+    TriangleRayTest::Candidate c;
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
-      if (const std::optional<RayHit> h = test(mesh.triangle(i))) hits.push_back(meshHit(*h, i));
+      if (test(mesh.triangle(i), c)) hits.push_back(test.hit(c, i));
   } else {
     const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
     RayAllVisitor v{mesh, box, test, box.parameterLimit(options.maxDistance), hits};
-    traverseBvhSlots(mesh.bvh(), v);
+    mesh_detail::walkOrdered(mesh, v);
   }
   std::sort(hits.begin(), hits.end(), [](const MeshRayHit& x, const MeshRayHit& y) {
     return x.t < y.t || (x.t == y.t && x.triangle < y.triangle);

@@ -23,7 +23,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace crux::mesh_detail {
 
@@ -41,6 +44,24 @@ inline constexpr Real kAxisPad = 16 * kEps;
 /// Largest coordinate magnitude of a box.
 inline Real maxAbs(const Aabb& b) { return std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()); }
 
+/// 2^-⌊log2 m⌋ for a normal m > 0 whose result is normal too (read off the exponent bits; the
+/// same value as ldexp(1, -ilogb(m))); 0 for any other m (zero, subnormal, inf, NaN, or a
+/// result out of range), which the caller handles with ilogb and ldexp.
+inline Real reciprocalPowerOfTwo(Real m) {
+  using Bits = std::conditional_t<sizeof(Real) == 4, std::uint32_t, std::uint64_t>;
+  constexpr int kMantissa = std::numeric_limits<Real>::digits - 1;
+  constexpr Bits kExponentMask = (Bits(1) << (8 * sizeof(Real) - 1 - kMantissa)) - 1;
+  constexpr Bits kBias = kExponentMask / 2;  // 127 or 1023
+  Bits bits;
+  std::memcpy(&bits, &m, sizeof bits);
+  const Bits e = bits >> kMantissa;  // m > 0: no sign bit
+  if (!(m > 0) || e < 1 || e > 2 * kBias - 1) return 0;
+  const Bits r = (2 * kBias - e) << kMantissa;  // exponent bias − (e − bias)
+  Real out;
+  std::memcpy(&out, &r, sizeof out);
+  return out;
+}
+
 /// A ray (or a segment as a ray with a distance limit) prepared for slab tests against boxes.
 ///
 /// The direction is scaled by a power of two (exact) so its largest component lies in [1, 2):
@@ -55,10 +76,15 @@ class RayBoxTest {
  public:
   RayBoxTest(const Vec3& origin, const Vec3& dir, Real scale) {
     const Real m = dir.cwiseAbs().maxCoeff();
-    const int k = (m > 0 && std::isfinite(m)) ? -std::ilogb(m) : 0;
     // Scaling by 2^k is exact (unless a component underflows); one multiplier when 2^k is finite.
-    const bool oneFactor = k < std::numeric_limits<Real>::max_exponent;
-    const Real f = oneFactor ? std::ldexp(Real(1), k) : Real(1);
+    Real f = reciprocalPowerOfTwo(m);  // the usual case, from the exponent bits
+    int k = 0;
+    bool oneFactor = true;
+    if (f == 0) {
+      k = (m > 0 && std::isfinite(m)) ? -std::ilogb(m) : 0;
+      oneFactor = k < std::numeric_limits<Real>::max_exponent;
+      f = oneFactor ? std::ldexp(Real(1), k) : Real(1);
+    }
     const Real pad = kNodeBoxPad * scale;
     Vec3 scaled;
     for (int i = 0; i < 3; ++i) {
@@ -69,6 +95,8 @@ class RayBoxTest {
       if (dir[i] != 0 && std::fabs(d) < std::numeric_limits<Real>::min()) inv = std::numeric_limits<Real>::quiet_NaN();
       invNear_[i] = inv * (1 - kSlabRoundingPad);
       invFar_[i] = inv * (1 + kSlabRoundingPad);
+      nearLane_[i] = negative ? 3 + i : i;  // WideBvhNode's coordinate arrays: minX..minZ, maxX..maxZ
+      farLane_[i] = negative ? i : 3 + i;
       originNear_[i] = negative ? origin[i] - pad : origin[i] + pad;
       originFar_[i] = negative ? origin[i] + pad : origin[i] - pad;
       scaled[i] = d;
@@ -101,15 +129,44 @@ class RayBoxTest {
     return lo <= hi && lo <= sLimit;
   }
 
+  /// enter() for the four lane boxes of a wide node at once: bit i of the result is enter()'s
+  /// answer for lane i's box (the same operations per lane), keys[i] its key. Unused lanes
+  /// (empty boxes) are never entered.
+  unsigned enter4(const WideBvhNode& node, Real sLimit, Real (&keys)[4]) const {
+    static_assert(sizeof(WideBvhNode::minX) == sizeof(Lanes), "a coordinate array is one Lanes");
+    const Real* coords = node.minX;  // minX, minY, minZ, maxX, maxY, maxZ: 4 Reals each
+    constexpr Real kMax = std::numeric_limits<Real>::max();
+    Lanes lo = {0, 0, 0, 0}, hi = {kMax, kMax, kMax, kMax};
+    for (int i = 0; i < 3; ++i) {
+      const Lanes t0 = (lanesLoad(coords + 4 * nearLane_[i]) - originNear_[i]) * invNear_[i];
+      const Lanes t1 = (lanesLoad(coords + 4 * farLane_[i]) - originFar_[i]) * invFar_[i];
+      lo = lanesMax(t0, lo);  // NaN (0·inf) is dropped
+      hi = lanesMin(t1, hi);
+    }
+    std::memcpy(keys, &lo, sizeof keys);
+    return laneMask((lo <= hi) & (lo <= sLimit));
+  }
+
   /// Whether a subtree entered at parameter `key` can still matter under sLimit.
   static bool keep(Real key, Real sLimit) { return key <= sLimit; }
 
  private:
   Vec3 originNear_, originFar_, invNear_, invFar_;
+  int nearLane_[3], farLane_[3];
   bool nearIsMax_[3];
   Real length_ = 1;
   Real absSlack_ = 0;
 };
+
+/// A node test on one box applied to each used lane of a wide node: bit i set when lane i's box
+/// passes `test` (for the node tests that have no four-lane form).
+template <class BoxTest>
+unsigned eachLane(const WideBvhNode& node, const BoxTest& test) {
+  unsigned bits = 0;
+  for (int i = 0; i < 4; ++i)
+    if (node.used(i) && test(node.laneBounds(i))) bits |= 1u << i;
+  return bits;
+}
 
 /// Sphere vs box grown by pad: squared distance from the centre <= (r + pad)², with a relative
 /// pad on the rounded sum of squares.

@@ -10,11 +10,17 @@
 /// "certainly misses" only when the opposite signs exceed a forward error bound that covers
 /// both its own rounding and the double-precision rounding of the geometry layer's evaluation.
 /// So every ray that crux::raycast(Ray, Triangle) would hit still reaches it: the mesh queries
-/// make exactly its decisions, only most misses are cheaper.
+/// make exactly its decisions, only most misses are cheaper. Symmetrically, three products of
+/// one strict sign beyond the bound prove that the line crosses the interior of a proper
+/// triangle, and the mesh kernel then skips the exact edge tests (properRayTriangleCrossing,
+/// geometry/ray_triangle.hpp). Four triangles are classified at once, one per SIMD lane.
 
 #include <crux/geometry/shapes.hpp>
 
+#include "lanes.hpp"
+
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 
 namespace crux::mesh_detail {
@@ -26,32 +32,78 @@ inline constexpr Real kRayFilterMargin = 64 * std::numeric_limits<Real>::epsilon
 /// roundings of Wide, relative to 2·M²·|d|₁ with M the largest |coordinate of v - o|).
 inline constexpr Wide kWideFilterMargin = 64 * std::numeric_limits<Wide>::epsilon();
 
+/// The filter for one ray, four triangles at a time (one lane each, independent: a triangle's
+/// verdict does not depend on its lane or its neighbours).
 class RayTriangleFilter {
  public:
   explicit RayTriangleFilter(const Ray& ray)
-      : o_(ray.origin), d_(ray.dir), dNorm1_(ray.dir.cwiseAbs().sum()), dNormInf_(ray.dir.cwiseAbs().maxCoeff()) {}
+      : ox_(ray.origin.x()), oy_(ray.origin.y()), oz_(ray.origin.z()), dx_(ray.dir.x()), dy_(ray.dir.y()),
+        dz_(ray.dir.z()), dNorm1_(ray.dir.cwiseAbs().sum()), dNormInf_(ray.dir.cwiseAbs().maxCoeff()) {}
 
-  /// True only if the ray certainly misses the closed triangle t.
-  bool certainlyMisses(const Triangle& t) const {
-    const Vec3 a = t.a - o_, b = t.b - o_, c = t.c - o_;
-    const Vec3 ab = t.b - t.a, bc = t.c - t.b, ca = t.a - t.c;
-    const Real eab = ab.dot(d_.cross(a));
-    const Real ebc = bc.dot(d_.cross(b));
-    const Real eca = ca.dot(d_.cross(c));
-    const Real lo = std::min(eab, std::min(ebc, eca));
-    const Real hi = std::max(eab, std::max(ebc, eca));
-    if (!(lo < 0 && hi > 0)) return false;
-    // |error of ℓ·(d×u)| <= c·ε·|ℓ|₁·2·|d|∞·|u|∞ for each edge ℓ; bound all three at once.
-    const Real m = std::max(a.cwiseAbs().maxCoeff(), std::max(b.cwiseAbs().maxCoeff(), c.cwiseAbs().maxCoeff()));
-    const Real edges = std::max(ab.cwiseAbs().sum(), std::max(bc.cwiseAbs().sum(), ca.cwiseAbs().sum()));
-    const Real own = kRayFilterMargin * 2 * edges * dNormInf_ * m;
-    const Real geometry = Real(kWideFilterMargin * 2 * Wide(m) * Wide(m) * Wide(dNorm1_));
-    const Real bound = std::max(own, geometry) * (1 + kRayFilterMargin);
-    return lo < -bound && hi > bound;
+  /// What the signs of the three edge products prove about the ray's line and a closed
+  /// triangle: kMisses (two of opposite signs beyond the bound), kCrossesFront / kCrossesBack
+  /// (all three of one strict sign beyond the bound: the line crosses the interior of a proper
+  /// triangle, with d·n > 0 for kCrossesBack, n = (b − a) × (c − a), since d·n is their sum),
+  /// or kUnknown.
+  enum Verdict : std::uint8_t { kMisses, kCrossesFront, kCrossesBack, kUnknown };
+
+  /// The verdicts of triangles t[0..n) (n <= 4) in out[0..n).
+  void classify(const Triangle* t, int n, Verdict (&out)[4]) const {
+    Lanes ax, ay, az, bx, by, bz, cx, cy, cz;
+    for (int j = 0; j < 4; ++j) {
+      const Triangle& tj = t[j < n ? j : 0];  // unused lanes repeat the first triangle
+      ax[j] = tj.a.x(), ay[j] = tj.a.y(), az[j] = tj.a.z();
+      bx[j] = tj.b.x(), by[j] = tj.b.y(), bz[j] = tj.b.z();
+      cx[j] = tj.c.x(), cy[j] = tj.c.y(), cz[j] = tj.c.z();
+    }
+    // e_ab = (b − a)·(d × (a − o)), and cyclically (the corners relative to the origin)
+    const Lanes eab = edgeProduct(ax, ay, az, bx, by, bz);
+    const Lanes ebc = edgeProduct(bx, by, bz, cx, cy, cz);
+    const Lanes eca = edgeProduct(cx, cy, cz, ax, ay, az);
+    const Lanes lo = lanesMin(eab, lanesMin(ebc, eca)), hi = lanesMax(eab, lanesMax(ebc, eca));
+    // |error of ℓ·(d × u)| <= c·ε·|ℓ|₁·2·|d|∞·|u|∞ for each edge ℓ (bounded for all three at
+    // once), and the same products' evaluation in Wide by the geometry layer, relative to
+    // 2·M²·|d|₁ (M the largest |coordinate of v − o|); plus the smallest normal number, so that
+    // an underflowed bound still covers the products' own underflow.
+    const Lanes m = lanesMax(lanesMax(maxAbs3(ax - ox_, ay - oy_, az - oz_), maxAbs3(bx - ox_, by - oy_, bz - oz_)),
+                             maxAbs3(cx - ox_, cy - oy_, cz - oz_));
+    const Lanes edges = lanesMax(lanesMax(sumAbs3(bx - ax, by - ay, bz - az), sumAbs3(cx - bx, cy - by, cz - bz)),
+                                 sumAbs3(ax - cx, ay - cy, az - cz));
+    const Lanes own = kRayFilterMargin * 2 * edges * dNormInf_ * m;
+    const Lanes geometry = Real(kWideFilterMargin * 2) * m * m * dNorm1_;
+    const Lanes bound = lanesMax(own, geometry) * (1 + kRayFilterMargin) + std::numeric_limits<Real>::min();
+    const unsigned misses = laneMask((lo < -bound) & (hi > bound));
+    const unsigned back = laneMask(lo > bound), front = laneMask(hi < -bound);
+    for (int j = 0; j < n; ++j)
+      out[j] = (misses >> j & 1u) ? kMisses
+               : (back >> j & 1u)  ? kCrossesBack
+               : (front >> j & 1u) ? kCrossesFront
+                                   : kUnknown;
+  }
+
+  /// The verdict of one triangle (classify with one lane used).
+  Verdict classify(const Triangle& t) const {
+    Verdict v[4];
+    classify(&t, 1, v);
+    return v[0];
   }
 
  private:
-  Vec3 o_, d_;
+  /// (q − p)·(d × (p − o)) per lane, p and q two corners.
+  Lanes edgeProduct(const Lanes& px, const Lanes& py, const Lanes& pz, const Lanes& qx, const Lanes& qy,
+                    const Lanes& qz) const {
+    const Lanes ux = px - ox_, uy = py - oy_, uz = pz - oz_;
+    const Lanes cx = dy_ * uz - dz_ * uy, cy = dz_ * ux - dx_ * uz, cz = dx_ * uy - dy_ * ux;
+    return ((qx - px) * cx + (qy - py) * cy) + (qz - pz) * cz;
+  }
+  static Lanes maxAbs3(const Lanes& x, const Lanes& y, const Lanes& z) {
+    return lanesMax(lanesAbs(x), lanesMax(lanesAbs(y), lanesAbs(z)));
+  }
+  static Lanes sumAbs3(const Lanes& x, const Lanes& y, const Lanes& z) {
+    return (lanesAbs(x) + lanesAbs(y)) + lanesAbs(z);
+  }
+
+  Real ox_, oy_, oz_, dx_, dy_, dz_;
   Real dNorm1_, dNormInf_;
 };
 

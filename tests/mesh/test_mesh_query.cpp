@@ -985,11 +985,11 @@ TEST(MeshQuery, ClosestAnyAndBooleanQueriesDoNotAllocate) {
 // ---------------------------------------------------------------------------------------------
 // Real meshes.
 
-std::optional<Mesh> loadIfPresent(const std::string& path) {
+std::optional<Mesh> loadIfPresent(const std::string& path, const BvhBuildOptions& options = {}) {
   std::FILE* f = std::fopen(path.c_str(), "r");
   if (!f) return std::nullopt;
   std::fclose(f);
-  return loadMesh(path);
+  return loadMesh(path, options);
 }
 
 /// Rays from a sphere around the mesh towards random points in its bounds (the bench's rays),
@@ -1069,6 +1069,55 @@ TEST(MeshQueryRealMesh, Bunny00MatchesBruteForce) {
   if (!m) GTEST_SKIP() << "missing " << path << " (run scripts/setup)";
   // Each brute-force query tests all 75k triangles: CRUX_TEST_SCALE trims the counts under ASan.
   checkRealMesh(*m, test::scaledCases(300, 30), test::scaledCases(60, 10), 0xB077);
+}
+
+/// The same mesh in the wide layout (BvhBuildOptions::wide) and the binary one: every ray
+/// answer equal bit for bit (closest, any, all), and the wide layout's queries equal its brute
+/// force; again after setVertices (both trees refitted).
+void checkWideLayout(const std::string& path, int rays, int shapes, std::uint64_t seed) {
+  BvhBuildOptions wideOptions;
+  wideOptions.wide = true;
+  std::optional<Mesh> binary = loadIfPresent(path), wide = loadIfPresent(path, wideOptions);
+  if (!binary) GTEST_SKIP() << "missing " << path;
+  ASSERT_TRUE(binary->wideBvh().empty());
+  ASSERT_FALSE(wide->wideBvh().empty());
+  EXPECT_GT(wide->memoryBytes(), binary->memoryBytes());
+  for (int pass = 0; pass < 2; ++pass) {
+    SCOPED_TRACE(pass == 0 ? "as built" : "after setVertices");
+    checkRealMesh(*wide, rays, shapes, seed + pass);
+    std::mt19937_64 rng(seed + 7 + pass);
+    std::uniform_real_distribution<Real> u(0, 1);
+    const Aabb b = wide->bounds();
+    const Vec3 e = b.max - b.min;
+    int hits = 0;
+    for (int i = 0; i < rays; ++i) {
+      const Vec3 from = b.min - e + 3 * Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+      const Vec3 to = b.min + Vec3(u(rng) * e.x(), u(rng) * e.y(), u(rng) * e.z());
+      const Ray r{from, to - from};
+      const std::optional<MeshRayHit> h = raycastClosest(*wide, r);
+      ASSERT_TRUE(sameHit(h, raycastClosest(*binary, r))) << str(r);
+      ASSERT_EQ(raycastAny(*wide, r), h.has_value());
+      const std::vector<MeshRayHit> all = raycastAll(*wide, r), allBinary = raycastAll(*binary, r);
+      ASSERT_EQ(all.size(), allBinary.size());
+      for (std::size_t k = 0; k < all.size(); ++k) ASSERT_TRUE(sameHit(all[k], allBinary[k])) << k;
+      hits += h.has_value();
+    }
+    EXPECT_GT(hits, 0);
+    // a smooth displacement of every vertex: both trees are refitted, not rebuilt
+    std::vector<Vec3> moved = wide->vertices();
+    for (Vec3& v : moved) v += Real(0.03) * e.norm() * Vec3(std::sin(v.y() * 7), std::cos(v.z() * 5), std::sin(v.x() * 3));
+    wide->setVertices(moved);
+    binary->setVertices(moved);
+  }
+}
+
+TEST(MeshQueryRealMesh, Bunny00InTheWideLayoutAnswersAsTheBinaryLayout) {
+  checkWideLayout(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off", test::scaledCases(300, 30),
+                  test::scaledCases(60, 10), 0x3B1D);
+}
+
+TEST(MeshQueryRealMesh, AssimpSpiderObjInTheWideLayoutAnswersAsTheBinaryLayout) {
+  checkWideLayout("/usr/share/assimp/models/OBJ/spider.obj", 1000, 60, 0x3D1E);
 }
 
 TEST(MeshQueryRealMesh, AssimpSpiderObjMatchesBruteForce) {

@@ -8,6 +8,8 @@
 #include <crux/geometry/shapes.hpp>
 
 #include <cstdint>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace crux {
@@ -27,6 +29,11 @@ struct BvhBuildOptions {
   std::uint32_t maxLeafSize = 4;  ///< leaf size cap (a leaf never holds more)
   std::uint32_t bins = 16;        ///< SAH bins per axis
   Real traversalCost = 2;         ///< SAH cost of visiting a node, relative to one primitive test
+  /// A Mesh also keeps its BVH collapsed 4-wide (Mesh::wideBvh, widenBvh), which rays,
+  /// segments, shape overlaps, shape–mesh contacts and distances then walk with four-lane node
+  /// tests: faster rays for ~22 more bytes per triangle (docs/bench.md has both figures). Off by
+  /// default, which keeps mesh + BVH within 64 bytes per triangle. (buildBvh ignores it.)
+  bool wide = false;
 };
 
 /// A flat BVH: node 0 is the root (absent for zero primitives); each primitive is referenced
@@ -51,6 +58,9 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options
 /// Refits every node's bounds bottom-up to new primitive bounds (same primitive count and
 /// topology), e.g. after a deforming mesh moved its vertices. O(nodes), no rebuild.
 void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds);
+/// refitBvh with the bounds given in slot order (slotBounds[k]: the primitive in leaf slot k,
+/// primIndices[k]), as refitWideBvh takes them: one array serves both trees.
+void refitBvhSlots(Bvh& bvh, const std::vector<Aabb>& slotBounds);
 
 /// Deepest tree buildBvh makes (it falls back to balanced median splits below this depth),
 /// so traversal stacks of kBvhMaxDepth + 1 entries never overflow.
@@ -64,8 +74,20 @@ inline constexpr int kBvhMaxDepth = 96;
 ///       key <= best hit so far); return true for plain overlap queries;
 ///   `bool slot(std::uint32_t k)` — visits the primitive in slot k of a leaf (the primitive
 ///       bvh.primIndices[k]; slots let callers read data stored in leaf order); false stops
-///       the traversal.
+///       the traversal;
+///   or, instead of slot, `bool leaf(std::uint32_t first, std::uint32_t count)` — visits a
+///       leaf's slots [first, first + count) together (e.g. tested in SIMD lanes).
 /// Returns false when the visitor stopped it early.
+template <class Visitor>
+bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor);
+
+namespace bvh_detail {
+template <class V, class = void>
+struct HasLeaf : std::false_type {};
+template <class V>
+struct HasLeaf<V, std::void_t<decltype(std::declval<V&>().leaf(std::uint32_t(), std::uint32_t()))>> : std::true_type {};
+}  // namespace bvh_detail
+
 template <class Visitor>
 bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
   if (bvh.nodes.empty()) return true;
@@ -81,8 +103,12 @@ bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
   for (;;) {
     const BvhNode& node = bvh.nodes[current];
     if (node.isLeaf()) {
-      for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k)
-        if (!visitor.slot(k)) return false;
+      if constexpr (bvh_detail::HasLeaf<Visitor>::value) {
+        if (!visitor.leaf(node.first, node.count)) return false;
+      } else {
+        for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k)
+          if (!visitor.slot(k)) return false;
+      }
     } else {
       const std::uint32_t l = node.first, r = node.first + 1;
       Real kl = 0, kr = 0;
@@ -112,8 +138,9 @@ bool traverseBvhSlots(const Bvh& bvh, Visitor& visitor) {
 
 /// A 4-wide BVH collapsed from a binary one (Dammertz, Hanika & Keller, "Shallow Bounding Volume
 /// Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays", EGSR 2008; Wald, Benthin & Boulos,
-/// "Getting Rid of Packets", RT 2008): a node's lanes are its binary node's children, each inner
-/// child replaced by its own two children, in order (2-4 lanes). The lanes' boxes are stored by
+/// "Getting Rid of Packets", RT 2008): a node's lanes are its binary node's children, then,
+/// while fewer than four, the inner lane of largest surface area replaced in place by its two
+/// children (2-4 lanes; the leaves keep the binary tree's left-to-right order). The lanes' boxes are stored by
 /// coordinate, so one SIMD test checks all four. Leaves are the binary BVH's (slots [first,
 /// first + count) of its primIndices).
 struct alignas(64) WideBvhNode {
@@ -124,6 +151,10 @@ struct alignas(64) WideBvhNode {
   /// Lane i: a wide node's index (count[i] == 0), a leaf's first slot (count[i] > 0), or kEmpty.
   std::uint32_t child[4];
   std::uint32_t count[4];
+  /// Lane i's box.
+  Aabb laneBounds(int i) const { return {Vec3(minX[i], minY[i], minZ[i]), Vec3(maxX[i], maxY[i], maxZ[i])}; }
+  /// Whether lane i is used.
+  bool used(int i) const { return child[i] != kEmpty; }
 };
 
 /// A flat 4-wide BVH; node 0 is the root (absent for an empty BVH). Leaf slots are the binary
@@ -134,8 +165,19 @@ struct WideBvh {
   std::size_t memoryBytes() const { return nodes.capacity() * sizeof(WideBvhNode); }
 };
 
-/// Collapses a binary BVH into a WideBvh (O(nodes)); rebuild it after refitBvh.
+/// Entries of a wide traversal's fixed stack: the wide tree is at most kBvhMaxDepth + 1 deep
+/// (each level descends at least one binary level), each node pops one entry and pushes at most
+/// four, and a branch-free push writes all four lanes past the top.
+inline constexpr int kWideBvhStackSize = 3 * (kBvhMaxDepth + 2) + 4;
+
+/// Collapses a binary BVH into a WideBvh (O(nodes)).
 WideBvh widenBvh(const Bvh& bvh);
+
+/// Refits a WideBvh in place to new primitive bounds given in slot order (slotBounds[k]: the
+/// primitive in leaf slot k), same topology: one reverse sweep (children follow their parents in
+/// widenBvh's order), a leaf lane the union of its slots' boxes, an inner lane the union of its
+/// node's lanes. No allocation.
+void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds);
 
 /// Depth-first traversal of a WideBvh, visiting the leaves in the order traverseBvhSlots visits
 /// the binary BVH's with equal keys (lanes in order, each lane's subtree before the next lane).
@@ -152,9 +194,7 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
   struct Entry {
     std::uint32_t child, count;
   };
-  // each node pushes at most 4 entries and pops 1; the wide tree is at most
-  // (kBvhMaxDepth + 1) / 2 + 1 deep
-  Entry stack[4 * (kBvhMaxDepth / 2 + 2) + 1];  // (+1: a lane not entered is written past the top)
+  Entry stack[kWideBvhStackSize];
   int top = 0;
   stack[top++] = {0, 0};
   while (top > 0) {
@@ -172,6 +212,52 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
       stack[top] = {node.child[i], node.count[i]};
       top += int(hits >> i & 1u);
     }
+  }
+  return true;
+}
+
+/// Nearest-first traversal of a WideBvh for queries with a distance order (rays, segments): the
+/// lanes a node's test enters are visited in increasing key, deferred lanes are dropped when
+/// popped with a key the visitor no longer keeps (the best hit so far moved closer). Visitor:
+///   `unsigned enter(const WideBvhNode& node, Real (&keys)[4])` — bit i set: enter lane i,
+///       whose key (e.g. the ray's entry parameter) is keys[i] (unused lanes must be left out);
+///   `bool keep(Real key)` — whether a deferred lane with this key still matters;
+///   `bool leaf(std::uint32_t first, std::uint32_t count)` — visits the slots [first, first +
+///       count) of a leaf together (so their triangles can be tested in SIMD lanes); false
+///       stops the traversal.
+/// Lanes with equal keys are visited in lane order. The same monotonicity rule as
+/// traverseWideBvhSlots holds. Returns false when the visitor stopped it early.
+template <class Visitor>
+bool traverseWideBvhOrdered(const WideBvh& bvh, Visitor& visitor) {
+  if (bvh.nodes.empty()) return true;
+  struct Entry {
+    std::uint32_t child, count;
+    Real key;
+  };
+  Entry stack[kWideBvhStackSize];
+  int top = 0;
+  stack[top++] = {0, 0, Real(0)};
+  while (top > 0) {
+    const Entry e = stack[--top];
+    if (!visitor.keep(e.key)) continue;
+    if (e.count > 0) {
+      if (!visitor.leaf(e.child, e.count)) return false;
+      continue;
+    }
+    const WideBvhNode& node = bvh.nodes[e.child];
+    Real keys[4];
+    unsigned hits = visitor.enter(node, keys) & 15u;
+    // Entered lanes sorted by key (insertion sort of at most four, stable: equal keys keep lane
+    // order), then pushed farthest first so that the nearest is popped next.
+    int order[4], n = 0;
+    while (hits) {
+      const int i = __builtin_ctz(hits);
+      hits &= hits - 1;
+      int j = n++;
+      for (; j > 0 && keys[order[j - 1]] > keys[i]; --j) order[j] = order[j - 1];
+      order[j] = i;
+    }
+    for (int j = n - 1; j >= 0; --j) stack[top++] = {node.child[order[j]], node.count[order[j]], keys[order[j]]};
   }
   return true;
 }

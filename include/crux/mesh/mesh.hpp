@@ -47,6 +47,11 @@ class Mesh {
   std::size_t vertexCount() const { return vertices_.size(); }
   const std::string& name() const { return name_; }
   const Bvh& bvh() const { return bvh_; }
+  /// The BVH collapsed 4-wide (widenBvh: the same leaves, lane boxes stored by coordinate for
+  /// one SIMD test of four) when built with BvhBuildOptions::wide, else empty; refitted with the
+  /// binary one by setVertices. When present, rays, segments, shape overlaps, shape–mesh contacts
+  /// and distances walk it instead of bvh(), with the same answers (docs/bvh.md).
+  const WideBvh& wideBvh() const { return wide_; }
   /// Identifies the current vertex positions: unique to each constructed mesh and renewed by
   /// every setVertices (copies share it). Caller-held accelerators record it and check it.
   std::uint64_t geometryId() const { return geometryId_; }
@@ -65,14 +70,14 @@ class Mesh {
     return {vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]};
   }
   /// Every slot triangle's corners in BVH slot order: slotTriangle(k) at [3k, 3k + 3). The copy
-  /// caller-held accelerators keep (MeshDistanceAccel, MeshAdjacency) so that a leaf's
-  /// triangles are read contiguously, without the index gather.
+  /// MeshDistanceAccel keeps so that a leaf's triangles are read contiguously, without the
+  /// index gather.
   std::vector<Vec3> slotCorners() const;
   /// Replaces the vertex positions (same count, finite) and refits the BVH.
   void setVertices(std::vector<Vec3> vertices);
   /// Counts triangles, vertices, degenerate and duplicate triangles and edge manifoldness.
   MeshStats stats() const;
-  /// Bytes held by the vertex, index and BVH arrays.
+  /// Bytes held by the vertex and index arrays and both BVHs.
   std::size_t memoryBytes() const;
   /// Seconds the last BVH build took (for `crux info`).
   double buildSeconds() const { return buildSeconds_; }
@@ -85,6 +90,7 @@ class Mesh {
   std::vector<TriangleIndices> slotTriangles_;  ///< triangles_ permuted by bvh_.primIndices
   std::string name_;
   Bvh bvh_;
+  WideBvh wide_;
   std::uint64_t geometryId_ = 0;
   double buildSeconds_ = 0;
 };

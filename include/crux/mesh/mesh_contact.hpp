@@ -49,9 +49,9 @@
 /// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
-/// across those seams (loadMesh merges identical vertices). It also holds a 4-wide copy of the
-/// mesh's BVH and the triangle corners in leaf order, which a box query reads
-/// (MeshAdjacency::wideBvh, slotCorners: same answers, faster). It records the mesh's
+/// across those seams (loadMesh merges identical vertices). Queries walk the mesh's 4-wide BVH
+/// when it keeps one (BvhBuildOptions::wide; a box tests four lanes at once), else its binary
+/// BVH: the same leaves in the same order, so the same manifold. The adjacency records the mesh's
 /// geometryId: after Mesh::setVertices its activity bits, tolerances, boxes and corners describe
 /// the old positions, and a query given it throws InvalidInput (requireCurrentGeometry) instead
 /// of reading them; rebuild it then.
@@ -112,21 +112,10 @@ class MeshAdjacency {
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
   /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
   std::size_t vertexCount() const { return vertexCount_; }
-  /// The mesh's BVH collapsed 4-wide (widenBvh), which a box's contact query walks instead of
-  /// the binary one (its node test checks four boxes at once; the same leaves in the same
-  /// order, so the same answers, faster: docs/narrowphase.md has the figures). Kept here, with
-  /// the rest of the contact query's per-mesh data, rather than in Mesh, whose mesh + BVH stay
-  /// within 64 bytes per triangle (docs/bench.md): it adds ~23 bytes per triangle.
-  const WideBvh& wideBvh() const { return wide_; }
-  /// The corners of the triangle in BVH slot k: slotCorners()[3k .. 3k + 2], a copy of
-  /// Mesh::slotTriangle(k) in leaf order (Mesh::slotCorners: a leaf's triangles read
-  /// contiguously, no index gather), read by the box query with wideBvh. 36 bytes per triangle
-  /// in float builds.
-  const std::vector<Vec3>& slotCorners() const { return corners_; }
   /// Mesh::geometryId of the mesh (and vertex positions) it was built from; contacts() refuses
   /// the adjacency for any other (requireCurrentGeometry).
   std::uint64_t geometryId() const { return geometryId_; }
-  /// Bytes held (neighbours, opposite vertices, activity, per-slot data, wideBvh, slotCorners).
+  /// Bytes held (neighbours, opposite vertices, activity, per-slot data).
   std::size_t memoryBytes() const;
 
  private:
@@ -141,8 +130,6 @@ class MeshAdjacency {
   };
   std::vector<SlotData> bySlot_;
   std::size_t vertexCount_ = 0;
-  WideBvh wide_;
-  std::vector<Vec3> corners_;
   std::uint64_t geometryId_ = 0;
 };
 

@@ -29,12 +29,24 @@ struct MeshRayHit {
   std::uint32_t triangle = 0;
 };
 
+/// Work counters of ray queries (bench_mesh's instrumentation): what the traversal and the ray
+/// kernel did, summed over the queries given them.
+struct RayQueryCounters {
+  std::uint64_t nodes = 0;      ///< wide BVH nodes whose four lanes were tested
+  std::uint64_t triangles = 0;  ///< triangles given to the per-triangle test
+  std::uint64_t certified = 0;  ///< of those, proved a proper crossing by the float filter
+  std::uint64_t exactPath = 0;  ///< of those, decided by raycast's own (filter, then exact) path
+};
+
 /// Ray query options.
 struct RayQueryOptions {
   Real maxDistance = kNoLimit;  ///< hits with t > maxDistance are ignored
   /// Skip triangles whose front face (counter-clockwise a, b, c: normal (b-a)×(c-a)) looks away
   /// from the ray (normal·dir > 0). Degenerate and edge-on triangles are never culled.
   bool cullBackFaces = false;
+  /// When set, closest and any-hit queries add their work to it (not thread-safe: one per
+  /// thread). Does not change any answer.
+  RayQueryCounters* counters = nullptr;
 };
 
 /// Closest hit: front-to-back BVH traversal pruning nodes beyond the best hit.
