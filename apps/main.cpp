@@ -35,6 +35,13 @@ std::string joinedBackendNames(const char* separator) {
   return s;
 }
 
+/// This executable's path (/proc/self/exe), for the worker processes of `crux batch` and `crux diff`.
+std::string selfExecutable() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  return n > 0 ? std::string(self, std::size_t(n)) : std::string();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,6 +75,19 @@ int main(int argc, char** argv) {
                    "is identical for every N.")
       ->capture_default_str()
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
+  double batchTimeout = 30;
+  bool batchWorker = false, batchInProcess = false;
+  batch
+      ->add_option("--timeout", batchTimeout,
+                   "Time limit per line, in seconds, of the worker process that answers fcl and bullet: a "
+                   "line that takes longer gets \"<backend> failed on <op>: timeout ...\" and the worker is "
+                   "restarted")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  batch->add_flag("--in-process", batchInProcess,
+                  "Answer fcl and bullet in this process (no worker): faster to start, but a peer library "
+                  "that aborts or hangs takes the whole run down");
+  batch->add_flag("--worker", batchWorker, "Internal: the worker side of an isolated peer backend")->group("");
 
   CLI::App* info = app.add_subcommand(
       "info",
@@ -103,6 +123,10 @@ int main(int argc, char** argv) {
   diff->add_option("--meshes", diffOptions.meshDir, "Directory of the real meshes (bunny00.off, cow.off, ...)")
       ->capture_default_str();
   diff->add_flag("--quiet", diffOptions.quiet, "No text summary");
+  diff->add_option("--peer-timeout", diffOptions.peerTimeoutSeconds,
+                   "Time limit per line, in seconds, of the worker processes answering fcl and bullet")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   // ---- crux report (the main job, docs/report.md) ----
   CLI::App* report = app.add_subcommand(
@@ -141,11 +165,14 @@ int main(int argc, char** argv) {
     crux::cli::BatchOptions options;
     options.backend = *crux::cli::parseBackend(backend);
     options.threads = threads;
+    options.timeoutSeconds = batchTimeout;
+    if (!batchInProcess) options.workerExecutable = selfExecutable();
     try {
+      if (batchWorker) return crux::cli::runWorker(std::cin, std::cout, options);
       const int status = crux::cli::runBatch(std::cin, std::cout, options);
       if (status != 0) std::cerr << "crux batch: reading standard input or writing standard output failed\n";
       return status;
-    } catch (const crux::InvalidInput& e) {
+    } catch (const std::exception& e) {  // invalid options; a worker that cannot be started
       std::cerr << "crux batch: " << e.what() << '\n';
       return 2;
     }
@@ -168,9 +195,10 @@ int main(int argc, char** argv) {
     diffOptions.ops = split(diffOps);
     diffOptions.backends = split(diffBackends);
     diffOptions.progress = !diffOptions.quiet && isatty(fileno(stderr));
+    diffOptions.workerExecutable = selfExecutable();
     try {
       return crux::cli::runDiffCommand(diffOptions, std::cout, std::cerr);
-    } catch (const crux::InvalidInput& e) {
+    } catch (const std::exception& e) {  // invalid options; a worker that cannot be started
       std::cerr << "crux diff: " << e.what() << '\n';
       return 2;
     }

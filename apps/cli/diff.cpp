@@ -2,6 +2,7 @@
 /// the exact arbiter, shrinking, and the run's summary (docs/diff.md).
 
 #include "cli/diff.hpp"
+#include "cli/peer_worker.hpp"
 
 #include <crux/error.hpp>
 #include <crux/geometry/closest_point.hpp>
@@ -10,11 +11,6 @@
 
 #include <Eigen/Geometry>
 
-#include <csignal>
-#include <fcntl.h>
-#include <poll.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #if __has_include(<world_factory.hpp>)
 #include <world_factory.hpp>
@@ -629,6 +625,7 @@ std::string_view verdictName(Verdict verdict) {
     case Verdict::Unsupported: return "unsupported";
     case Verdict::Error: return "error";
     case Verdict::NoArbiter: return "no_arbiter";
+    case Verdict::PeerFailed: return "peer_failed";
   }
   return "?";
 }
@@ -729,77 +726,34 @@ struct DiffRunner::Impl {
     std::unique_ptr<BatchState> state;
     std::optional<Answer> setupError;
   };
+  /// A shared setup prepared in a worker's slot.
+  struct Slot {
+    int slot = 0;
+    std::optional<Answer> setupError;
+  };
   std::map<std::string, Prepared> shared;
+  std::map<std::string, Slot> sharedSlots;  ///< by backend + setup
   std::map<std::string, WorldTolerance, std::less<>> tolerances;
+  std::string workerExecutable;
+  double timeoutSeconds = 2;
+  std::map<Backend, std::unique_ptr<PeerWorker>> workers;
+
+  /// The worker answering `backend`; null when it answers in process.
+  PeerWorker* worker(Backend backend) {
+    if (workerExecutable.empty() || (backend != Backend::Fcl && backend != Backend::Bullet)) return nullptr;
+    auto& w = workers[backend];
+    if (!w) w = std::make_unique<PeerWorker>(PeerWorkerOptions{workerExecutable, backend, timeoutSeconds});
+    return w.get();
+  }
 };
 
-DiffRunner::DiffRunner() : impl_(std::make_unique<Impl>()) {}
+DiffRunner::DiffRunner(std::string workerExecutable, double timeoutSeconds) : impl_(std::make_unique<Impl>()) {
+  impl_->workerExecutable = std::move(workerExecutable);
+  impl_->timeoutSeconds = timeoutSeconds;
+}
 DiffRunner::~DiffRunner() = default;
 
 namespace {
-/// How long an isolated peer query may run before its process is killed.
-constexpr int kIsolatedTimeoutMs = 2000;
-
-/// Answers `line` in a forked child process and returns its answer; a child that dies (FCL 0.7's
-/// libccd GJK/EPA abort on assertions — "A is not in region 1", "isOutsidePolytopeFace" — on
-/// touching and degenerate convex pairs) gives an error answer naming the signal, and the run
-/// goes on. The child's standard error is discarded (the assertion text).
-Answer answerIsolated(const std::string& line, BatchState& state, std::string_view backend) {
-  int fds[2];
-  if (pipe(fds) != 0) return answerLine(line, state);
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  if (pid < 0) {
-    close(fds[0]);
-    close(fds[1]);
-    return answerLine(line, state);
-  }
-  if (pid == 0) {
-    close(fds[0]);
-    if (const int null = open("/dev/null", O_WRONLY); null >= 0) dup2(null, 2);
-    const std::string out = answerLine(line, state).dump();
-    for (std::size_t done = 0; done < out.size();) {
-      const ssize_t n = write(fds[1], out.data() + done, out.size() - done);
-      if (n <= 0) break;
-      done += std::size_t(n);
-    }
-    close(fds[1]);
-    _exit(0);
-  }
-  close(fds[1]);
-  std::string text;
-  char buffer[4096];
-  bool timedOut = false;
-  for (;;) {
-    pollfd p{fds[0], POLLIN, 0};
-    const int ready = poll(&p, 1, kIsolatedTimeoutMs);
-    if (ready == 0) {  // FCL also loops forever on some pairs: the child is killed
-      kill(pid, SIGKILL);
-      timedOut = true;
-      break;
-    }
-    if (ready < 0) break;
-    const ssize_t n = read(fds[0], buffer, sizeof buffer);
-    if (n <= 0) break;
-    text.append(buffer, std::size_t(n));
-  }
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!timedOut && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-    J a = J::parse(text, nullptr, false);
-    if (a.is_object()) return a;
-  }
-  J q = J::parse(line, nullptr, false);
-  J a = J::object();
-  if (q.is_object() && q.contains("op")) a["op"] = q["op"];
-  a["error"] = std::string(backend) + (timedOut ? " did not answer within " + std::to_string(kIsolatedTimeoutMs / 1000) +
-                                                     " s (killed)"
-                                               : " aborted" + (WIFSIGNALED(status)
-                                                                   ? " (signal " + std::to_string(WTERMSIG(status)) + ")"
-                                                                   : std::string()));
-  return a;
-}
 
 /// Runs setup lines; returns the first error answer, if any.
 std::optional<Answer> runSetup(const std::vector<std::string>& setup, BatchState& state) {
@@ -812,15 +766,54 @@ std::optional<Answer> runSetup(const std::vector<std::string>& setup, BatchState
   }
   return std::nullopt;
 }
+
+/// The first error among a worker's answers to setup lines, as runSetup reports it.
+std::optional<Answer> setupError(const std::vector<std::string>& answers, std::size_t setupLines) {
+  for (std::size_t i = 0; i < setupLines && i < answers.size(); ++i) {
+    Answer a = Answer::parse(answers[i], nullptr, false);
+    if (!a.is_object()) a = Answer{{"error", "unreadable answer: " + answers[i]}};
+    if (hasError(a)) {
+      a["error"] = "setup: " + a["error"].get<std::string>();
+      return a;
+    }
+  }
+  return std::nullopt;
+}
+
+Answer parsedAnswer(const std::string& text) {
+  Answer a = Answer::parse(text, nullptr, false);
+  return a.is_object() ? a : Answer{{"error", "unreadable answer: " + text}};
+}
+
 }  // namespace
 
 Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
   const auto b = parseBackend(backend);
   if (!b) throw InvalidInput("backends: unknown backend \"" + std::string(backend) + "\"");
+  if (PeerWorker* worker = impl_->worker(*b)) {
+    std::vector<std::string> lines = c.setup;
+    lines.push_back(c.query);
+    if (!c.sharedSetup) {
+      const std::vector<std::string> answers = worker->answer(lines, 0, true);
+      if (auto error = setupError(answers, c.setup.size())) return *error;
+      return parsedAnswer(answers.back());
+    }
+    std::string key(backend);
+    for (const auto& line : c.setup) key += "\n" + line;
+    auto it = impl_->sharedSlots.find(key);
+    if (it == impl_->sharedSlots.end()) {
+      Impl::Slot slot;
+      slot.slot = int(impl_->sharedSlots.size()) + 1;
+      const std::vector<std::string> answers = worker->answer(lines, slot.slot, true);
+      slot.setupError = setupError(answers, c.setup.size());
+      impl_->sharedSlots.emplace(key, slot);
+      return slot.setupError ? *slot.setupError : parsedAnswer(answers.back());
+    }
+    if (it->second.setupError) return *it->second.setupError;
+    return parsedAnswer(worker->answer({c.query}, it->second.slot).front());
+  }
   BatchOptions options;
   options.backend = *b;
-  // FCL's narrow phase may abort the process: its answers are computed in a child process
-  const bool isolate = backend == "fcl" && isNarrowOp(c.op);
   if (c.sharedSetup) {
     std::string key(backend);
     for (const auto& line : c.setup) key += "\n" + line;
@@ -832,11 +825,11 @@ Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
       it = impl_->shared.emplace(key, std::move(p)).first;
     }
     if (it->second.setupError) return *it->second.setupError;
-    return isolate ? answerIsolated(c.query, *it->second.state, backend) : answerLine(c.query, *it->second.state);
+    return answerLine(c.query, *it->second.state);
   }
   BatchState state(options);
   if (auto error = runSetup(c.setup, state)) return *error;
-  return isolate ? answerIsolated(c.query, state, backend) : answerLine(c.query, state);
+  return answerLine(c.query, state);
 }
 
 WorldTolerance DiffRunner::tolerance(std::string_view backend) {
@@ -865,6 +858,19 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   }
   if (!gotError.empty()) {
     if (startsWith(gotError, "unsupported:")) return {Verdict::Unsupported, "", gotError};
+    if (backend != "native") {
+      // "<backend> failed on <op>: ..." (crux::BackendFailure, or the worker process's end)
+      const std::string failed = std::string(backend) + " failed on ";
+      const std::string text = startsWith(gotError, "setup: ") ? gotError.substr(7) : gotError;
+      if (startsWith(text, failed)) {
+        const std::size_t colon = text.find(": ", failed.size());
+        const std::string what = colon == std::string::npos ? std::string() : text.substr(colon + 2);
+        const char* cause = startsWith(what, "timeout")                                   ? "timeout"
+                            : startsWith(what, "SIG") || startsWith(what, "the worker") ? "crash"
+                                                                                        : "exception";
+        return {Verdict::PeerFailed, cause, gotError};
+      }
+    }
     return {backend == "native" ? Verdict::CruxWrong : Verdict::Error, "error-answer", gotError};
   }
   const J query = J::parse(c.query, nullptr, false);
@@ -1080,8 +1086,8 @@ DiffCase shrinkCase(const DiffCase& c, const Classification& target,
 
 namespace {
 
-const std::vector<std::string> kVerdictColumns = {"agree", "within_tolerance", "peer_wrong", "crux_wrong",
-                                                  "unsupported", "error", "no_arbiter"};
+const std::vector<std::string> kVerdictColumns = {"agree",       "within_tolerance", "peer_wrong", "crux_wrong",
+                                                  "unsupported", "error",            "no_arbiter", "peer_failed"};
 
 std::vector<std::string> allQueryOps() {
   std::vector<std::string> ops;
@@ -1127,6 +1133,9 @@ Answer DiffSummary::toJson() const {
   J tcauses = J::object();
   for (const auto& [backend, m] : toleranceCauses) tcauses[backend] = J(m);
   j["within_tolerance_causes"] = tcauses;
+  J failures = J::object();
+  for (const auto& [backend, m] : peerFailures) failures[backend] = J(m);
+  j["peer_failures"] = failures;
   j["crux_wrong"] = cruxWrong;
   j["findings"] = J(findings);
   j["error_examples"] = J(exampleErrors);
@@ -1138,7 +1147,7 @@ void DiffSummary::print(std::ostream& out) const {
   for (const auto& [op, perBackend] : table)
     for (const auto& [b, counts] : perBackend) backends.insert(b);
   out << "crux diff: " << cases << " cases in " << std::fixed << std::setprecision(1) << seconds << " s\n";
-  out << "per op x backend (exact: answered / - / - / - / unsupported / error): agree / within tolerance / peer wrong / crux wrong / unsupported / error / no arbiter\n";
+  out << "per op x backend (exact: answered / - / - / - / unsupported / error): agree / within tolerance / peer wrong / crux wrong / unsupported / error / no arbiter / peer failed\n";
   out << std::left << std::setw(24) << "op";
   for (const auto& b : backends) out << std::setw(30) << b;
   out << '\n';
@@ -1156,7 +1165,8 @@ void DiffSummary::print(std::ostream& out) const {
     out << '\n';
   }
   for (const auto& [title, m] : {std::pair{"peer wrong, by likely cause", &peerCauses},
-                                 std::pair{"within tolerance, by reason", &toleranceCauses}}) {
+                                 std::pair{"within tolerance, by reason", &toleranceCauses},
+                                 std::pair{"peer failed (threw, crashed or timed out)", &peerFailures}}) {
     if (m->empty()) continue;
     out << title << ":\n";
     for (const auto& [backend, causes] : *m)
@@ -1206,7 +1216,7 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       anyOp = anyOp || options.ops.empty() || std::find(options.ops.begin(), options.ops.end(), op) != options.ops.end();
   if (!anyOp) throw InvalidInput("ops: no selected family generates any of the selected ops");
 
-  DiffRunner runner;
+  DiffRunner runner(options.workerExecutable, options.peerTimeoutSeconds);
   const WorldTolerance exactTol = runner.tolerance("exact");
   DiffSummary summary;
   std::map<std::string, int> written;  // shrunk cases per (backend, op, verdict, cause)
@@ -1251,8 +1261,10 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       ++summary.table[c.op][backend][std::string(verdictName(k.verdict))];
       if (k.verdict == Verdict::PeerWrong) ++summary.peerCauses[backend][k.cause];
       if (k.verdict == Verdict::WithinTolerance) ++summary.toleranceCauses[backend][k.cause];
+      if (k.verdict == Verdict::PeerFailed) ++summary.peerFailures[backend][k.cause];
       if (k.verdict == Verdict::CruxWrong) ++summary.cruxWrong;
-      if (k.verdict == Verdict::Error && !summary.exampleErrors.count(backend + "." + c.op))
+      if ((k.verdict == Verdict::Error || k.verdict == Verdict::PeerFailed) &&
+          !summary.exampleErrors.count(backend + "." + c.op))
         summary.exampleErrors[backend + "." + c.op] = k.detail + " <- " + c.query;
       const bool interesting = k.verdict == Verdict::CruxWrong || k.verdict == Verdict::PeerWrong;
       if (!interesting) continue;

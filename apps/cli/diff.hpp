@@ -54,8 +54,10 @@ struct DiffCase {
 };
 
 /// The verdict on one backend's answer to a case.
-enum class Verdict { Agree, WithinTolerance, PeerWrong, CruxWrong, Unsupported, Error, NoArbiter };
-/// "agree", "within_tolerance", "peer_wrong", "crux_wrong", "unsupported", "error", "no_arbiter".
+enum class Verdict { Agree, WithinTolerance, PeerWrong, CruxWrong, Unsupported, Error, NoArbiter, PeerFailed };
+/// "agree", "within_tolerance", "peer_wrong", "crux_wrong", "unsupported", "error", "no_arbiter",
+/// "peer_failed" (the peer library failed on the case: it threw, or its worker process crashed
+/// or ran out of time).
 std::string_view verdictName(Verdict verdict);
 
 /// A verdict with its likely cause ("" when none applies) and a one-line detail.
@@ -107,7 +109,11 @@ bool answersAgree(const std::string& queryLine, const Answer& got, const Answer&
 /// cases reuse one prepared state per backend and setup).
 class DiffRunner {
  public:
-  DiffRunner();
+  /// With a `workerExecutable` (the `crux` executable), fcl and bullet answer in worker
+  /// processes (PeerWorker) with a time limit of `timeoutSeconds` per line: a peer that aborts,
+  /// crashes or hangs gives "<backend> failed on <op>: ..." for that case only. Without one,
+  /// every backend answers in this process.
+  explicit DiffRunner(std::string workerExecutable = {}, double timeoutSeconds = 2);
   ~DiffRunner();
   /// The answer of `backend` to the case's query; an error in a setup line is returned as the
   /// answer (its "error" prefixed with "setup: ").
@@ -150,6 +156,10 @@ struct DiffOptions {
   bool quiet = false;                 ///< no text summary
   bool progress = false;              ///< draw a progress line on `err` (a terminal)
   int shrinkPerKind = 2;              ///< shrunk cases written per (backend, op, verdict, cause)
+  /// The `crux` executable: fcl and bullet answer in worker processes (DiffRunner). Empty: in
+  /// this process.
+  std::string workerExecutable;
+  double peerTimeoutSeconds = 2;      ///< time limit per line of a worker process
 };
 
 /// Counts of one run: per op and backend, per verdict; peer-wrong and within-tolerance causes
@@ -160,6 +170,7 @@ struct DiffSummary {
   std::map<std::string, std::map<std::string, std::map<std::string, std::uint64_t>>> table;  // op, backend, verdict
   std::map<std::string, std::map<std::string, std::uint64_t>> peerCauses;                    // backend, cause
   std::map<std::string, std::map<std::string, std::uint64_t>> toleranceCauses;               // backend, cause
+  std::map<std::string, std::map<std::string, std::uint64_t>> peerFailures;  // backend, crash/timeout/exception
   std::vector<Answer> findings;  ///< crux-wrong and shrunk peer cases (metadata)
   std::uint64_t cruxWrong = 0;
   /// The first error answer per "backend.op" (with its case), for diagnosis.
@@ -169,6 +180,7 @@ struct DiffSummary {
   /// The op × backend table and the causes as text.
   void print(std::ostream& out) const;
 };
+
 
 /// Runs the fuzzer. Returns the summary; throws InvalidInput for bad options (unknown family,
 /// op or backend).

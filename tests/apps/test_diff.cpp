@@ -14,6 +14,8 @@
 #include <map>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace crux::cli {
 namespace {
 
@@ -243,9 +245,28 @@ TEST(DiffClassify, ErrorsAndUnsupported) {
   const auto c = primitive(kSeparated, true);
   J unsupported = J{{"op", "triangle_sphere"}, {"error", "unsupported: triangle_sphere on fcl"}};
   EXPECT_EQ(classify(runner, c, "fcl", unsupported).verdict, Verdict::Unsupported);
-  J error = J{{"op", "triangle_sphere"}, {"error", "fcl failed on triangle_sphere: boom"}};
+  J error = J{{"op", "triangle_sphere"}, {"error", "invalid answer"}};
   EXPECT_EQ(classify(runner, c, "fcl", error).verdict, Verdict::Error);
   EXPECT_EQ(classify(runner, c, "native", error).verdict, Verdict::CruxWrong);
+}
+
+TEST(DiffClassify, PeerFailuresAreNamedByKind) {
+  DiffRunner runner;
+  const auto c = primitive(kSeparated, true);
+  const std::pair<const char*, const char*> kinds[] = {
+      {"fcl failed on triangle_sphere: boom", "exception"},
+      {"fcl failed on triangle_sphere: SIGABRT (peer.cpp:1: Assertion failed)", "crash"},
+      {"fcl failed on triangle_sphere: the worker exited with status 3", "crash"},
+      {"fcl failed on triangle_sphere: timeout (no answer within 2 s; the worker was killed)", "timeout"},
+      {"setup: fcl failed on mesh: SIGSEGV", "crash"}};
+  for (const auto& [text, cause] : kinds) {
+    const auto k = classify(runner, c, "fcl", J{{"op", "triangle_sphere"}, {"error", text}});
+    EXPECT_EQ(k.verdict, Verdict::PeerFailed) << text;
+    EXPECT_EQ(k.cause, cause) << text;
+  }
+  // another backend's failure text is not this peer's failure
+  EXPECT_EQ(classify(runner, c, "bullet", J{{"op", "triangle_sphere"}, {"error", "fcl failed on x: boom"}}).verdict,
+            Verdict::Error);
 }
 
 TEST(DiffClassify, TriangleNearPlaneWithinBulletTolerance) {
@@ -603,6 +624,44 @@ TEST(DiffNarrowPhase, ShortRunFindsNoCruxWrong) {
   ASSERT_TRUE(s.table.count("model_distance") && s.table.at("model_distance").count("native"));
   const auto& md = s.table.at("model_distance").at("native");
   EXPECT_GE(md.count("agree") ? md.at("agree") : 0u, 20u);
+}
+
+
+// ---- peers in worker processes ---------------------------------------------------------------------
+
+/// Path of the `crux` executable, built next to this test.
+std::string cruxExecutable() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  std::string path(self, std::size_t(std::max<ssize_t>(n, 0)));
+  return path.substr(0, path.rfind('/') + 1) + "crux";
+}
+
+std::vector<std::string> peersBuilt() {
+  std::vector<std::string> out;
+  for (const auto b : builtBackends())
+    if (b == "fcl" || b == "bullet") out.emplace_back(b);
+  return out;
+}
+
+TEST(DiffRunner, PeersInWorkerProcessesAnswerAsInProcess) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  DiffRunner inProcess, isolated(cruxExecutable(), 30);
+  int compared = 0;
+  for (const auto family : diffFamilies()) {
+    for (std::uint64_t i = 0; i < 4; ++i) {
+      const auto c = generateCase(family, 31, i, g);
+      ASSERT_TRUE(c);
+      // FCL 0.7's narrow phase may abort in process (the reason for the workers)
+      if (c->op == "distance" || c->op == "contacts" || c->op == "mesh_distance" || c->op == "model_distance") continue;
+      for (const std::string& peer : peersBuilt()) {
+        EXPECT_EQ(isolated.run(*c, peer), inProcess.run(*c, peer)) << peer << " " << family << " " << i;
+        ++compared;
+      }
+    }
+  }
+  if (!peersBuilt().empty()) EXPECT_GT(compared, 40);
 }
 
 }  // namespace
