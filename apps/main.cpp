@@ -123,6 +123,25 @@ int main(int argc, char** argv) {
   diff->add_option("--meshes", diffOptions.meshDir, "Directory of the real meshes (bunny00.off, cow.off, ...)")
       ->capture_default_str();
   diff->add_flag("--quiet", diffOptions.quiet, "No text summary");
+  diff->add_option("--first-case", diffOptions.firstCase,
+                   "Index of the first case: the run answers cases K..K+N-1 (--cases N) of the sequence --seed "
+                   "defines, so shards of a campaign are runs of consecutive ranges (docs/diff.md)")
+      ->capture_default_str();
+  diff->add_option("--shard-dir", diffOptions.shardDir,
+                   "Write this run as a campaign shard: DIR/started.json at the start, the shrunk cases to "
+                   "DIR/findings, the summary to DIR/summary.json at the end (`crux diff merge` reads them)");
+  CLI::App* merge = diff->add_subcommand(
+      "merge",
+      "Merge the shard directories of a campaign (runs of --first-case/--cases --shard-dir): add the op x "
+      "backend tables, join the findings without duplicates, name the shards missing or failed, and print "
+      "and write the same summary a serial run gives. Exit 1: crux wrong found; 3: shards missing or failed.");
+  std::vector<std::string> mergeDirs;
+  std::string mergeJson, mergeOut;
+  bool mergeQuiet = false;
+  merge->add_option("shards", mergeDirs, "Shard directories")->required();
+  merge->add_option("--json", mergeJson, "Write the merged summary as JSON to this file");
+  merge->add_option("--out", mergeOut, "Copy the kept findings' files here");
+  merge->add_flag("--quiet", mergeQuiet, "No text summary");
   diff->add_option("--peer-timeout", diffOptions.peerTimeoutSeconds,
                    "Time limit per line, in seconds, of the worker processes answering fcl and bullet")
       ->capture_default_str()
@@ -174,6 +193,14 @@ int main(int argc, char** argv) {
       return status;
     } catch (const std::exception& e) {  // invalid options; a worker that cannot be started
       std::cerr << "crux batch: " << e.what() << '\n';
+      return 2;
+    }
+  }
+  if (merge->parsed()) {
+    try {
+      return crux::cli::runMergeCommand(mergeDirs, mergeJson, mergeOut, mergeQuiet, std::cout);
+    } catch (const crux::InvalidInput& e) {
+      std::cerr << "crux diff merge: " << e.what() << '\n';
       return 2;
     }
   }

@@ -1114,6 +1114,13 @@ void writeCase(const std::string& dir, const std::string& name, const DiffCase& 
 
 Answer DiffSummary::toJson() const {
   J j = J::object();
+  j["seed"] = seed;
+  j["first_case"] = firstCase;
+  j["requested_cases"] = requestedCases;
+  j["families"] = families;
+  j["ops"] = ops;
+  j["backends"] = backends;
+  j["shrink_per_kind"] = shrinkPerKind;
   j["cases"] = cases;
   j["seconds"] = seconds;
   J t = J::object();
@@ -1139,6 +1146,7 @@ Answer DiffSummary::toJson() const {
   j["crux_wrong"] = cruxWrong;
   j["findings"] = J(findings);
   j["error_examples"] = J(exampleErrors);
+  j["error_example_cases"] = J(exampleErrorCases);
   return j;
 }
 
@@ -1223,8 +1231,15 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   double lastDraw = -1;
-  for (std::uint64_t index = 0;; ++index) {
-    if (options.seconds > 0 ? elapsed() >= options.seconds : index >= options.cases) break;
+  summary.seed = options.seed;
+  summary.firstCase = options.firstCase;
+  summary.requestedCases = options.seconds > 0 ? 0 : options.cases;
+  summary.families = families;
+  summary.ops = options.ops;
+  summary.backends = backends;
+  summary.shrinkPerKind = options.shrinkPerKind;
+  for (std::uint64_t index = options.firstCase;; ++index) {
+    if (options.seconds > 0 ? elapsed() >= options.seconds : index >= options.firstCase + options.cases) break;
     const std::string& family = families[index % families.size()];
     const auto generated = generateCase(family, options.seed, index, generator);
     if (!generated) continue;
@@ -1242,8 +1257,10 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
     {
       const std::string e = errorText(exact);
       ++summary.table[c.op]["exact"][e.empty() ? "agree" : startsWith(e, "unsupported:") ? "unsupported" : "error"];
-      if (!e.empty() && !summary.exampleErrors.count("exact." + c.op))
+      if (!e.empty() && !summary.exampleErrors.count("exact." + c.op)) {
         summary.exampleErrors["exact." + c.op] = e + " <- " + c.query;
+        summary.exampleErrorCases["exact." + c.op] = c.index;
+      }
     }
     // Narrow-phase ops on a build whose exact backend does not answer them: native is the
     // reference for the peers (and has no arbiter itself).
@@ -1264,8 +1281,10 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       if (k.verdict == Verdict::PeerFailed) ++summary.peerFailures[backend][k.cause];
       if (k.verdict == Verdict::CruxWrong) ++summary.cruxWrong;
       if ((k.verdict == Verdict::Error || k.verdict == Verdict::PeerFailed) &&
-          !summary.exampleErrors.count(backend + "." + c.op))
+          !summary.exampleErrors.count(backend + "." + c.op)) {
         summary.exampleErrors[backend + "." + c.op] = k.detail + " <- " + c.query;
+        summary.exampleErrorCases[backend + "." + c.op] = c.index;
+      }
       const bool interesting = k.verdict == Verdict::CruxWrong || k.verdict == Verdict::PeerWrong;
       if (!interesting) continue;
       const std::string kind = backend + "." + (k.verdict == Verdict::CruxWrong ? "crux-wrong" : k.cause) + "." + c.op;
@@ -1287,7 +1306,8 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       const DiffCase small = shrink ? shrinkCase(c, k, reclassify, c.sharedSetup ? 60 : 300) : c;
       const Answer smallExact = runner.run(small, "exact"), smallGot = runner.run(small, backend);
       const std::string name = kind + "." + std::to_string(c.seed) + "-" + std::to_string(c.index);
-      J meta = J{{"name", name},         {"family", c.family},
+      J meta = J{{"name", name},         {"kind", kind},
+                 {"family", c.family},
                  {"seed", c.seed},       {"index", c.index},
                  {"op", c.op},           {"backend", backend},
                  {"verdict", std::string(verdictName(k.verdict))},
@@ -1319,14 +1339,32 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
   return summary;
 }
 
-int runDiffCommand(const DiffOptions& options, std::ostream& out, std::ostream& err) {
-  const DiffSummary summary = runDiff(options, err);
-  if (!options.quiet) summary.print(out);
-  if (!options.jsonFile.empty()) {
-    std::ofstream json(options.jsonFile);
-    json << summary.toJson().dump(2) << '\n';
-    if (!json) throw InvalidInput("json: cannot write \"" + options.jsonFile + "\"");
+void writeJsonFile(const std::string& path, const Answer& json) {
+  const std::string temporary = path + ".partial";
+  {
+    std::ofstream out(temporary);
+    out << json.dump(2) << '\n';
+    if (!out) throw InvalidInput("json: cannot write \"" + temporary + "\"");
   }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) throw InvalidInput("json: cannot write \"" + path + "\"");
+}
+
+int runDiffCommand(const DiffOptions& options, std::ostream& out, std::ostream& err) {
+  DiffOptions run = options;
+  if (!options.shardDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options.shardDir, ec);
+    if (ec) throw InvalidInput("shard-dir: cannot create \"" + options.shardDir + "\": " + ec.message());
+    if (run.outDir.empty()) run.outDir = options.shardDir + "/findings";
+    if (run.jsonFile.empty()) run.jsonFile = options.shardDir + "/summary.json";
+    std::filesystem::remove(options.shardDir + "/summary.json", ec);  // a rerun replaces the shard
+    writeJsonFile(options.shardDir + "/started.json",
+                  J{{"seed", options.seed}, {"first_case", options.firstCase},
+                    {"requested_cases", options.seconds > 0 ? 0 : options.cases}});
+  }
+  const DiffSummary summary = runDiff(run, err);
+  if (!run.quiet) summary.print(out);
+  if (!run.jsonFile.empty()) writeJsonFile(run.jsonFile, summary.toJson());
   return summary.cruxWrong > 0 ? 1 : 0;
 }
 

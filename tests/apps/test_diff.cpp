@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -627,7 +629,7 @@ TEST(DiffNarrowPhase, ShortRunFindsNoCruxWrong) {
 }
 
 
-// ---- peers in worker processes ---------------------------------------------------------------------
+// ---- peers in worker processes, and campaigns in shards ------------------------------------------
 
 /// Path of the `crux` executable, built next to this test.
 std::string cruxExecutable() {
@@ -662,6 +664,116 @@ TEST(DiffRunner, PeersInWorkerProcessesAnswerAsInProcess) {
     }
   }
   if (!peersBuilt().empty()) EXPECT_GT(compared, 40);
+}
+
+/// A summary without what differs between equal runs: the times and the campaign's shard list.
+J comparable(J summary) {
+  for (const char* key : {"seconds", "shards", "missing_cases"}) summary.erase(key);
+  return summary;
+}
+
+DiffOptions campaignOptions() {
+  DiffOptions o;
+  o.seed = 4242;
+  o.backends = peersBuilt();
+  o.backends.push_back("native");
+  o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  o.workerExecutable = cruxExecutable();
+  o.quiet = true;
+  o.shrinkPerKind = 1;
+  return o;
+}
+
+TEST(DiffCampaign, MergedShardsEqualTheSerialRun) {
+  const std::string root = testing::TempDir() + "/diff_campaign";
+  std::filesystem::remove_all(root);
+  DiffOptions serial = campaignOptions();
+  serial.cases = 60;
+  std::ostringstream out, err;
+  const J whole = runDiff(serial, err).toJson();
+  std::vector<std::string> dirs;
+  for (const auto& [first, count] : {std::pair{0, 17}, std::pair{17, 30}, std::pair{47, 13}}) {
+    DiffOptions shard = campaignOptions();
+    shard.firstCase = std::uint64_t(first);
+    shard.cases = std::uint64_t(count);
+    shard.shardDir = root + "/shard-" + std::to_string(first);
+    dirs.push_back(shard.shardDir);
+    runDiffCommand(shard, out, err);
+    EXPECT_TRUE(std::filesystem::exists(shard.shardDir + "/summary.json"));
+  }
+  std::reverse(dirs.begin(), dirs.end());  // the order of the directories does not matter
+  const MergedCampaign merged = mergeShards(dirs);
+  EXPECT_TRUE(merged.complete());
+  EXPECT_EQ(comparable(merged.toJson()), comparable(whole));
+  EXPECT_EQ(merged.summary.cases, 60u);
+  // a shard given twice is merged once
+  dirs.push_back(dirs.front());
+  EXPECT_EQ(comparable(mergeShards(dirs).toJson()), comparable(whole));
+}
+
+TEST(DiffCampaign, MissingAndFailedShardsAreNamedAndARerunCompletesTheCampaign) {
+  const std::string root = testing::TempDir() + "/diff_campaign_failed";
+  std::filesystem::remove_all(root);
+  std::ostringstream out, err;
+  std::vector<std::string> dirs;
+  for (int first : {0, 10, 20}) {
+    DiffOptions shard = campaignOptions();
+    shard.firstCase = std::uint64_t(first);
+    shard.cases = 10;
+    shard.shardDir = root + "/shard-" + std::to_string(first);
+    dirs.push_back(shard.shardDir);
+    runDiffCommand(shard, out, err);
+  }
+  // shard 10 was cancelled: it started, wrote no summary
+  std::filesystem::remove(root + "/shard-10/summary.json");
+  dirs.push_back(root + "/shard-30");  // never started
+  MergedCampaign merged = mergeShards(dirs);
+  EXPECT_FALSE(merged.complete());
+  ASSERT_EQ(merged.shards.size(), 4u);
+  EXPECT_EQ(merged.shards[1].status, "failed");
+  EXPECT_EQ(merged.shards[3].status, "missing");
+  EXPECT_EQ(merged.missingRanges, std::vector<std::string>{"10..19"});
+  std::ostringstream text;
+  merged.print(text);
+  EXPECT_NE(text.str().find("shard failed: " + root + "/shard-10 (cases 10..19"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("shard missing: " + root + "/shard-30"), std::string::npos) << text.str();
+  EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", "", true, out), 3);
+  // rerun the failed shard alone: the three shards now equal a serial run of 30 cases
+  DiffOptions rerun = campaignOptions();
+  rerun.firstCase = 10;
+  rerun.cases = 10;
+  rerun.shardDir = root + "/shard-10";
+  runDiffCommand(rerun, out, err);
+  dirs.pop_back();
+  merged = mergeShards(dirs);
+  EXPECT_TRUE(merged.complete());
+  DiffOptions serial = campaignOptions();
+  serial.cases = 30;
+  EXPECT_EQ(comparable(merged.toJson()), comparable(runDiff(serial, err).toJson()));
+  EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", root + "/findings", true, out), 0);
+  EXPECT_EQ(comparable(J::parse(std::ifstream(root + "/merged.json"))), comparable(merged.toJson()));
+}
+
+TEST(DiffCampaign, ShardsOfDifferentRunsAreRefused) {
+  const std::string root = testing::TempDir() + "/diff_campaign_mixed";
+  std::filesystem::remove_all(root);
+  std::ostringstream out, err;
+  DiffOptions a = campaignOptions();
+  a.backends = {"native"};
+  a.cases = 3;
+  a.shardDir = root + "/a";
+  runDiffCommand(a, out, err);
+  DiffOptions b = a;
+  b.seed = 7;
+  b.firstCase = 3;
+  b.shardDir = root + "/b";
+  runDiffCommand(b, out, err);
+  EXPECT_THROW(mergeShards({a.shardDir, b.shardDir}), InvalidInput);
+  DiffOptions c = a;
+  c.firstCase = 2;
+  c.shardDir = root + "/c";
+  runDiffCommand(c, out, err);
+  EXPECT_THROW(mergeShards({a.shardDir, c.shardDir}), InvalidInput);  // 0..2 and 2..4 overlap
 }
 
 }  // namespace
