@@ -384,7 +384,8 @@ bool isolatedBackend(Backend backend) { return backend == Backend::Fcl || backen
 
 /// runBatch for a peer backend in a worker process (PeerWorker), one line at a time.
 int runIsolated(std::istream& in, std::ostream& out, const BatchOptions& options) {
-  PeerWorker worker({options.workerExecutable, options.backend, options.timeoutSeconds});
+  PeerWorker worker({options.workerExecutable, options.backend, options.timeoutSeconds,
+                     std::max(options.timeoutSeconds, 60.0)});
   std::string line;
   std::vector<std::string> one(1);
   while (std::getline(in, line)) {
@@ -513,6 +514,8 @@ int runWorker(std::istream& in, std::ostream& out, const BatchOptions& options) 
   inProcess.threads = 1;
   std::map<int, BatchState> slots;
   BatchState* state = nullptr;
+  out << "ready\n";
+  out.flush();
   std::string line;
   while (std::getline(in, line)) {
     if (line.empty()) continue;

@@ -721,6 +721,10 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
 
 // ---- running -------------------------------------------------------------------------------------
 
+/// Time limit of a case's setup lines in a worker (loading a real mesh into FCL takes seconds
+/// on a loaded machine); the queries have DiffOptions::peerTimeoutSeconds.
+constexpr double kSetupTimeoutSeconds = 60;
+
 struct DiffRunner::Impl {
   struct Prepared {
     std::unique_ptr<BatchState> state;
@@ -742,7 +746,9 @@ struct DiffRunner::Impl {
   PeerWorker* worker(Backend backend) {
     if (workerExecutable.empty() || (backend != Backend::Fcl && backend != Backend::Bullet)) return nullptr;
     auto& w = workers[backend];
-    if (!w) w = std::make_unique<PeerWorker>(PeerWorkerOptions{workerExecutable, backend, timeoutSeconds});
+    if (!w)
+      w = std::make_unique<PeerWorker>(
+          PeerWorkerOptions{workerExecutable, backend, timeoutSeconds, std::max(kSetupTimeoutSeconds, timeoutSeconds)});
     return w.get();
   }
 };
@@ -794,7 +800,7 @@ Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
     std::vector<std::string> lines = c.setup;
     lines.push_back(c.query);
     if (!c.sharedSetup) {
-      const std::vector<std::string> answers = worker->answer(lines, 0, true);
+      const std::vector<std::string> answers = worker->answer(lines, 0, true, c.setup.size());
       if (auto error = setupError(answers, c.setup.size())) return *error;
       return parsedAnswer(answers.back());
     }
@@ -804,7 +810,7 @@ Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
     if (it == impl_->sharedSlots.end()) {
       Impl::Slot slot;
       slot.slot = int(impl_->sharedSlots.size()) + 1;
-      const std::vector<std::string> answers = worker->answer(lines, slot.slot, true);
+      const std::vector<std::string> answers = worker->answer(lines, slot.slot, true, c.setup.size());
       slot.setupError = setupError(answers, c.setup.size());
       impl_->sharedSlots.emplace(key, slot);
       return slot.setupError ? *slot.setupError : parsedAnswer(answers.back());
@@ -1300,8 +1306,9 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
         return classifyAnswer(t, backend, g, e, tol, exactTol, probe);
       };
       // Peer findings of the narrow-phase ops stay unshrunk: the shrinker's snapped numbers make
-      // degenerate simplices on which FCL 0.7's libccd GJK aborts the process (assertion "A is not
-      // in region 1" in doSimplex2), which no exception handler can contain.
+      // degenerate simplices on which FCL 0.7's libccd GJK aborts (assertion "A is not in region
+      // 1" in doSimplex2) or loops: a worker restart or the whole time limit per shrink step (and
+      // the end of the process for a runner without workers).
       const bool shrink = !(isNarrowOp(c.op) && backend != "native");
       const DiffCase small = shrink ? shrinkCase(c, k, reclassify, c.sharedSetup ? 60 : 300) : c;
       const Answer smallExact = runner.run(small, "exact"), smallGot = runner.run(small, backend);

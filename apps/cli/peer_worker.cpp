@@ -28,6 +28,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+/// How long a new worker may take to say "ready".
+constexpr std::chrono::duration<double> kStartupLimit{60.0};
+
 /// "SIGABRT", "SIGSEGV", ... (glibc's abbreviation), or "signal N".
 std::string signalText(int sig) {
   const char* abbrev = sigabbrev_np(sig);
@@ -60,7 +63,7 @@ std::string secondsText(double s) {
 }  // namespace
 
 PeerWorker::PeerWorker(PeerWorkerOptions options) : options_(std::move(options)) {
-  if (!(options_.timeoutSeconds > 0)) throw InvalidInput("timeout: must be positive");
+  if (!(options_.timeoutSeconds > 0) || !(options_.stateTimeoutSeconds > 0)) throw InvalidInput("timeout: must be positive");
   start();
 }
 
@@ -102,6 +105,7 @@ void PeerWorker::start() {
   socket_ = fds[0];
   fcntl(socket_, F_SETFL, fcntl(socket_, F_GETFL) | O_NONBLOCK);
   pending_.clear();
+  ready_ = false;
   selected_ = -1;
   live_.clear();
 }
@@ -120,7 +124,7 @@ void PeerWorker::stop() {
   if (pid_ > 0) reap(false);
 }
 
-std::string PeerWorker::reap(bool timedOut) {
+std::string PeerWorker::reap(bool timedOut, double limitSeconds) {
   if (socket_ >= 0) close(socket_);
   socket_ = -1;
   if (pid_ <= 0) return "no worker";
@@ -145,7 +149,7 @@ std::string PeerWorker::reap(bool timedOut) {
   const std::string detail = stderrFile_ >= 0 ? lastErrorLine(stderrFile_) : std::string();
   std::string what;
   if (timedOut)
-    what = "timeout (no answer within " + secondsText(options_.timeoutSeconds) + " s; the worker was killed)";
+    what = "timeout (no answer within " + secondsText(limitSeconds) + " s; the worker was killed)";
   else if (WIFSIGNALED(status))
     what = signalText(WTERMSIG(status));
   else if (WIFEXITED(status))
@@ -156,7 +160,7 @@ std::string PeerWorker::reap(bool timedOut) {
   return what;
 }
 
-PeerWorker::Exchange PeerWorker::exchange(const std::vector<std::string>& framed) {
+PeerWorker::Exchange PeerWorker::exchange(const std::vector<std::string>& framed, const std::vector<double>& limits) {
   Exchange result;
   if (pid_ <= 0) {
     try {
@@ -170,34 +174,56 @@ PeerWorker::Exchange PeerWorker::exchange(const std::vector<std::string>& framed
   std::string out;
   for (const std::string& line : framed) (out += line) += '\n';
   std::size_t written = 0;
-  const auto limit = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options_.timeoutSeconds));
-  auto deadline = Clock::now() + limit;
+  // the time limit of the reply awaited next
+  const auto limit = [&] {
+    const std::size_t i = std::min(result.replies.size(), limits.size() - 1);
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(limits[i]));
+  };
+  // a new worker first says "ready" (loading the libraries takes a while, longer under
+  // sanitizers): the time limit per line starts after that
+  auto deadline = Clock::now() + (ready_ ? limit() : std::chrono::duration_cast<Clock::duration>(kStartupLimit));
   char buffer[65536];
   while (result.replies.size() < framed.size()) {
     // complete replies already read
     for (std::size_t eol; result.replies.size() < framed.size() && (eol = pending_.find('\n')) != std::string::npos;) {
-      result.replies.push_back(pending_.substr(0, eol));
+      std::string reply = pending_.substr(0, eol);
       pending_.erase(0, eol + 1);
-      deadline = Clock::now() + limit;  // the next line's time starts now
+      if (!ready_) {
+        if (reply != "ready") {
+          reap(false);
+          result.failure = "the worker did not start (it wrote \"" + reply.substr(0, 100) + "\")";
+          return result;
+        }
+        ready_ = true;
+        deadline = Clock::now() + limit();
+        continue;
+      }
+      result.replies.push_back(std::move(reply));
+      deadline = Clock::now() + limit();  // the next line's time starts now
     }
     if (result.replies.size() == framed.size()) break;
-    pollfd p{socket_, short(POLLIN | (written < out.size() ? POLLOUT : 0)), 0};
+    const bool sending = ready_ && written < out.size();
+    pollfd p{socket_, short(POLLIN | (sending ? POLLOUT : 0)), 0};
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
     const int ready = left > 0 ? poll(&p, 1, int(std::min<long long>(left + 1, 1 << 30))) : 0;
     if (ready < 0 && errno == EINTR) continue;
     if (ready == 0) {
-      result.failure = reap(true);
+      const bool starting = !ready_;
+      const double seconds = limits[std::min(result.replies.size(), limits.size() - 1)];
+      result.failure = reap(true, seconds);
+      if (starting)
+        result.failure = "the worker did not start within " + secondsText(kStartupLimit.count()) + " s (it was killed)";
       return result;
     }
     if (ready < 0) {
       result.failure = reap(false);
       return result;
     }
-    if ((p.revents & POLLOUT) && written < out.size()) {
+    if ((p.revents & POLLOUT) && sending) {
       const ssize_t n = send(socket_, out.data() + written, out.size() - written, MSG_NOSIGNAL | MSG_DONTWAIT);
       if (n > 0) {
         written += std::size_t(n);
-        deadline = Clock::now() + limit;  // a long line's time starts when it has been sent
+        deadline = Clock::now() + limit();  // a long line's time starts when it has been sent
       } else if (n < 0 && errno != EAGAIN && errno != EINTR) {
         result.failure = reap(false);
         return result;
@@ -216,7 +242,8 @@ PeerWorker::Exchange PeerWorker::exchange(const std::vector<std::string>& framed
   return result;
 }
 
-std::vector<std::string> PeerWorker::answer(const std::vector<std::string>& lines, int slot, bool reset) {
+std::vector<std::string> PeerWorker::answer(const std::vector<std::string>& lines, int slot, bool reset,
+                                            std::size_t setupLines) {
   std::vector<std::string> answers;
   answers.reserve(lines.size());
   if (reset) log_[slot].clear();
@@ -225,6 +252,7 @@ std::vector<std::string> PeerWorker::answer(const std::vector<std::string>& line
     // one exchange: select the slot (a fresh one after a reset or in a new worker, followed by
     // the replay of its log), then the lines not answered yet
     std::vector<std::string> framed;
+    std::vector<double> limits;  // per reply: state lines (replayed, setup) get the state limit
     const bool live = pid_ > 0 && live_.count(slot) > 0;
     std::size_t replayed = 0;
     if (!live || resetNow) {
@@ -235,8 +263,12 @@ std::vector<std::string> PeerWorker::answer(const std::vector<std::string>& line
       framed.push_back("s" + std::to_string(slot));
     }
     const std::size_t prefix = framed.size();
-    for (std::size_t i = answers.size(); i < lines.size(); ++i) framed.push_back("q" + lines[i]);
-    const Exchange e = exchange(framed);
+    limits.assign(prefix, options_.stateTimeoutSeconds);
+    for (std::size_t i = answers.size(); i < lines.size(); ++i) {
+      framed.push_back("q" + lines[i]);
+      limits.push_back(i < setupLines ? options_.stateTimeoutSeconds : options_.timeoutSeconds);
+    }
+    const Exchange e = exchange(framed, limits);
     resetNow = false;
     if (e.replies.size() < prefix) {
       // the slot's state could not be restored: the line gets the failure, and the replayed line

@@ -1,6 +1,6 @@
 #!/bin/bash
 # A worker for PeerWorker's tests (tests/apps/test_peer_worker.cpp): it speaks the worker
-# protocol of apps/cli/peer_worker.hpp and fails on demand, so that every failure kind is
+# protocol of apps/cli/peer_worker.hpp ("ready" first) and fails on demand, so that every failure kind is
 # exercised without depending on a peer library's defects. Called as
 #   fault_worker.sh batch --backend B --worker
 # For each "q" line it answers {"op":"echo","n":N}, N counting the q lines this process has
@@ -11,6 +11,7 @@
 #   HANG   never answers (the process becomes `sleep`, so killing its pid ends it);
 #   EXIT   exits with status 3.
 # Every q line is appended to $FAULT_WORKER_LOG when that is set.
+echo ready
 n=0
 while IFS= read -r line; do
   case "$line" in

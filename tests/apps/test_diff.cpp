@@ -340,8 +340,8 @@ TEST(DiffRun, SameSeedSameSummary) {
   o.seed = 11;
   o.cases = 40;
   o.backends = {"native", "fcl"};
-  // issue 5's ops: FCL's narrow phase runs in child processes (it aborts or loops on some
-  // pairs), which costs seconds per stuck case; DiffNarrowPhase covers those ops
+  // issue 5's ops: FCL's narrow phase aborts or loops on some pairs, and this runner answers
+  // in process (no worker executable); DiffNarrowPhase covers those ops
   o.ops = {"triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_triangle", "closest_point_triangle",
            "mesh_sphere", "mesh_mesh", "model_sphere", "scene_pairs"};
   std::ostringstream err;

@@ -87,6 +87,18 @@ TEST(PeerWorker, AHangIsKilledAtTheTimeLimit) {
   EXPECT_FALSE(processExists(first));  // killed by its pid and reaped
 }
 
+TEST(PeerWorker, SetupLinesHaveTheStateTimeLimit) {
+  // a query may take 10 s here, a setup line (or a replayed state line) 0.3 s
+  PeerWorker worker({kFaultWorker, Backend::Fcl, 10, 0.3});
+  const auto start = std::chrono::steady_clock::now();
+  const auto answers = worker.answer({R"({"op":"load_mesh","x":"HANG"})", R"({"op":"distance"})"}, 0, true, 1);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  ASSERT_EQ(answers.size(), 2u);
+  EXPECT_EQ(errorOf(parsed(answers[0])).rfind("fcl failed on load_mesh: timeout (no answer within 0.3 s", 0), 0u)
+      << answers[0];
+  EXPECT_EQ(parsed(answers[1])["n"], 1);
+}
+
 TEST(PeerWorker, SlotsKeepTheirOwnStateAndAResetDropsIt) {
   const std::string log = testing::TempDir() + "/peer_worker_slots.log";
   std::remove(log.c_str());
