@@ -157,9 +157,16 @@ constexpr double kFclGjkTolerance = 1e-12;
 
 /// fcl::distance with nearest points (world coordinates) and signed distance requested, at the
 /// tolerance for the pair: kFclPenetrationTolerance when fcl::collide finds them overlapping,
-/// else kFclGjkTolerance.
+/// else kFclGjkTolerance. A triangle mesh (BVHModel, also a triangle operand) against an
+/// overlapping convex shape throws: FCL 0.7 answers that pair with a meaningless distance (0,
+/// 8e-323) and nearest points it leaves partly uninitialised (a different answer per run).
 fcl::DistanceResultd signedDistance(const FclOperand& a, const FclOperand& b) {
   const bool overlapping = collide(*a.geometry, a.pose, *b.geometry, b.pose);
+  const bool meshA = a.geometry->getObjectType() == fcl::OT_BVH, meshB = b.geometry->getObjectType() == fcl::OT_BVH;
+  if (overlapping && meshA != meshB)
+    throw std::runtime_error(
+        "FCL 0.7 has no signed distance for a triangle mesh against an overlapping shape (its answer is 0 with "
+        "uninitialised nearest points)");
   fcl::DistanceRequestd request(true, true, 0.0, 0.0, overlapping ? kFclPenetrationTolerance : kFclGjkTolerance);
   fcl::DistanceResultd result;
   fcl::distance(a.geometry.get(), a.pose, b.geometry.get(), b.pose, request, result);

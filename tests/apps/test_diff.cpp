@@ -674,7 +674,7 @@ J comparable(J summary) {
 
 DiffOptions campaignOptions() {
   DiffOptions o;
-  o.seed = 4242;
+  o.seed = 1;
   o.backends = peersBuilt();
   o.backends.push_back("native");
   o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
@@ -706,9 +706,53 @@ TEST(DiffCampaign, MergedShardsEqualTheSerialRun) {
   EXPECT_TRUE(merged.complete());
   EXPECT_EQ(comparable(merged.toJson()), comparable(whole));
   EXPECT_EQ(merged.summary.cases, 60u);
+  // not a trivial equality: the run has findings and error examples to join
+  EXPECT_FALSE(merged.summary.findings.empty());
+  EXPECT_FALSE(merged.summary.exampleErrors.empty());
   // a shard given twice is merged once
   dirs.push_back(dirs.front());
   EXPECT_EQ(comparable(mergeShards(dirs).toJson()), comparable(whole));
+}
+
+TEST(DiffCampaign, MergeKeepsTheFirstFindingsPerKindAndTheFirstErrorExample) {
+  // two hand-made shard summaries: shard b (cases 10..19) holds a finding of a kind shard a
+  // (0..9) already holds twice, one of a new kind, and an earlier error example of a key
+  const std::string root = testing::TempDir() + "/diff_campaign_kinds";
+  std::filesystem::remove_all(root);
+  auto shard = [&](const std::string& name, std::uint64_t first, const std::vector<std::pair<int, std::string>>& found,
+                   const std::map<std::string, std::uint64_t>& examples) {
+    DiffSummary s;
+    s.seed = 3;
+    s.firstCase = first;
+    s.requestedCases = 10;
+    s.cases = 10;
+    s.shrinkPerKind = 2;
+    s.table["distance"]["fcl"]["agree"] = 10 - found.size();
+    s.table["distance"]["fcl"]["peer_wrong"] = found.size();
+    for (const auto& [index, kind] : found) {
+      s.findings.push_back(J{{"name", kind + ".3-" + std::to_string(index)}, {"kind", kind}, {"index", index}});
+      ++s.peerCauses["fcl"][kind];
+    }
+    for (const auto& [where, index] : examples) {
+      s.exampleErrors[where] = "case " + std::to_string(index);
+      s.exampleErrorCases[where] = index;
+    }
+    std::filesystem::create_directories(root + "/" + name);
+    writeJsonFile(root + "/" + name + "/summary.json", s.toJson());
+    return root + "/" + name;
+  };
+  const std::string b = shard("b", 10, {{11, "k1"}, {12, "k2"}}, {{"fcl.distance", 13}, {"bullet.contacts", 19}});
+  const std::string a = shard("a", 0, {{2, "k1"}, {5, "k1"}}, {{"fcl.distance", 4}});
+  const MergedCampaign merged = mergeShards({b, a});
+  ASSERT_TRUE(merged.complete());
+  std::vector<std::string> names;
+  for (const J& f : merged.summary.findings) names.push_back(f["name"].get<std::string>());
+  EXPECT_EQ(names, (std::vector<std::string>{"k1.3-2", "k1.3-5", "k2.3-12"}));
+  EXPECT_EQ(merged.summary.exampleErrors.at("fcl.distance"), "case 4");
+  EXPECT_EQ(merged.summary.exampleErrors.at("bullet.contacts"), "case 19");
+  EXPECT_EQ(merged.summary.table.at("distance").at("fcl").at("peer_wrong"), 4u);
+  EXPECT_EQ(merged.summary.peerCauses.at("fcl").at("k1"), 3u);
+  EXPECT_EQ(merged.summary.cases, 20u);
 }
 
 TEST(DiffCampaign, MissingAndFailedShardsAreNamedAndARerunCompletesTheCampaign) {
@@ -716,39 +760,39 @@ TEST(DiffCampaign, MissingAndFailedShardsAreNamedAndARerunCompletesTheCampaign) 
   std::filesystem::remove_all(root);
   std::ostringstream out, err;
   std::vector<std::string> dirs;
-  for (int first : {0, 10, 20}) {
+  for (int first : {0, 6, 12}) {
     DiffOptions shard = campaignOptions();
     shard.firstCase = std::uint64_t(first);
-    shard.cases = 10;
+    shard.cases = 6;
     shard.shardDir = root + "/shard-" + std::to_string(first);
     dirs.push_back(shard.shardDir);
     runDiffCommand(shard, out, err);
   }
-  // shard 10 was cancelled: it started, wrote no summary
-  std::filesystem::remove(root + "/shard-10/summary.json");
-  dirs.push_back(root + "/shard-30");  // never started
+  // shard 6 was cancelled: it started, wrote no summary
+  std::filesystem::remove(root + "/shard-6/summary.json");
+  dirs.push_back(root + "/shard-18");  // never started
   MergedCampaign merged = mergeShards(dirs);
   EXPECT_FALSE(merged.complete());
   ASSERT_EQ(merged.shards.size(), 4u);
   EXPECT_EQ(merged.shards[1].status, "failed");
   EXPECT_EQ(merged.shards[3].status, "missing");
-  EXPECT_EQ(merged.missingRanges, std::vector<std::string>{"10..19"});
+  EXPECT_EQ(merged.missingRanges, std::vector<std::string>{"6..11"});
   std::ostringstream text;
   merged.print(text);
-  EXPECT_NE(text.str().find("shard failed: " + root + "/shard-10 (cases 10..19"), std::string::npos) << text.str();
-  EXPECT_NE(text.str().find("shard missing: " + root + "/shard-30"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("shard failed: " + root + "/shard-6 (cases 6..11"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("shard missing: " + root + "/shard-18"), std::string::npos) << text.str();
   EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", "", true, out), 3);
-  // rerun the failed shard alone: the three shards now equal a serial run of 30 cases
+  // rerun the failed shard alone: the three shards now equal a serial run of 18 cases
   DiffOptions rerun = campaignOptions();
-  rerun.firstCase = 10;
-  rerun.cases = 10;
-  rerun.shardDir = root + "/shard-10";
+  rerun.firstCase = 6;
+  rerun.cases = 6;
+  rerun.shardDir = root + "/shard-6";
   runDiffCommand(rerun, out, err);
   dirs.pop_back();
   merged = mergeShards(dirs);
   EXPECT_TRUE(merged.complete());
   DiffOptions serial = campaignOptions();
-  serial.cases = 30;
+  serial.cases = 18;
   EXPECT_EQ(comparable(merged.toJson()), comparable(runDiff(serial, err).toJson()));
   EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", root + "/findings", true, out), 0);
   EXPECT_EQ(comparable(J::parse(std::ifstream(root + "/merged.json"))), comparable(merged.toJson()));
