@@ -141,6 +141,15 @@ TEST(DiffClassify, FclNearestPointsInCollision) {
   const auto k = classify(runner, c, "fcl", got);
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "nearest-points-in-collision");
+  // the point on an edge whose exact closest point rounds 2e-15 away from it (a denormal corner;
+  // found by crux diff, seed 98765 case 291), and a point clearly off the triangle
+  const auto onEdge = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[1.401298464324817e-45,-6,-12],[-18,12,-12],[0,0,0]],"point":[-9,3,-12]})",
+      false);
+  const auto k2 = classify(runner, onEdge, "fcl", got);
+  EXPECT_EQ(k2.cause, "nearest-points-in-collision") << describe(k2);
+  const auto off = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,2]})", true);
+  EXPECT_NE(classify(runner, off, "fcl", got).cause, "nearest-points-in-collision");
 }
 
 TEST(DiffClassify, NumericWithinAndBeyondTolerance) {
