@@ -188,8 +188,20 @@ bool probeFlips(const DiffCase& c, const J& query, const J& exact, const J& got,
     listUnion = listCommon;
     first = false;
   }
+  // scene_pairs: move a model of the first pair on which the answers differ (the last model
+  // added may be in no such pair)
+  std::string mover;
+  if (c.op == "scene_pairs" && got.contains("pairs") && exact.contains("pairs")) {
+    const std::set<J> g(got["pairs"].begin(), got["pairs"].end()), e(exact["pairs"].begin(), exact["pairs"].end());
+    for (const auto* from : {&e, &g}) {
+      const std::set<J>& other = from == &e ? g : e;
+      for (const J& pair : *from)
+        if (mover.empty() && !other.count(pair) && pair.is_array() && pair.size() == 2 && pair[1].is_string())
+          mover = pair[1].get<std::string>();
+    }
+  }
   for (const Vec3d& off : probeOffsets(tau, !c.sharedSetup)) {
-    const auto moved = translatedCase(c, off);
+    const auto moved = translatedCase(c, off, mover);
     if (!moved) return false;
     const Answer p = probeExact(*moved);
     if (hasError(p)) continue;
@@ -648,7 +660,7 @@ double caseMagnitude(const DiffCase& c) {
   return s;
 }
 
-std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
+std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset, std::string_view model) {
   DiffCase out = c;
   J q = J::parse(c.query, nullptr, false);
   if (!q.is_object()) return std::nullopt;
@@ -695,10 +707,15 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
     }
     return std::nullopt;
   } else if (c.op == "scene_pairs") {
-    // move the last model added
+    // move `model` (its local translation in the last line that sets it), or the last model added
     for (auto line = out.setup.rbegin(); line != out.setup.rend(); ++line) {
       J m = J::parse(*line, nullptr, false);
-      if (!m.is_object() || m.value("op", "") != "add_model") continue;
+      if (!m.is_object()) continue;
+      const std::string op = m.value("op", "");
+      const bool sets = model.empty() ? op == "add_model"
+                                      : (op == "add_model" && m.value("name", "") == model) ||
+                                            (op == "set_transform" && m.value("model", "") == model);
+      if (!sets) continue;
       moveTransform(m["transform"], offset);
       *line = m.dump();
       return out;

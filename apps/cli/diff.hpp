@@ -97,9 +97,10 @@ std::optional<DiffCase> generateCase(std::string_view family, std::uint64_t seed
 /// Largest coordinate magnitude of a case (points, radii, plane offsets, translations;
 /// directions, normals, rotations and indices excluded), at least extraMagnitude.
 double caseMagnitude(const DiffCase& c);
-/// The case with its query shape (or, for scene_pairs, the last model) translated by `offset`;
-/// nothing when the op has no shape to move (children).
-std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset);
+/// The case with its query shape (or, for scene_pairs, the model named `model`, by default the
+/// last model added) translated by `offset`; nothing when the op has no shape to move (children)
+/// or the model is not placed by any line.
+std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset, std::string_view model = {});
 
 /// Whether two answers to `queryLine` agree: equal booleans and lists (a bounds-only
 /// scene_query may answer a superset), numbers within `tolerance`. Error answers never agree.

@@ -152,6 +152,29 @@ TEST(DiffClassify, FclNearestPointsInCollision) {
   EXPECT_NE(classify(runner, off, "fcl", got).cause, "nearest-points-in-collision");
 }
 
+TEST(DiffClassify, ScenePairsProbeMovesAModelOfTheDifferingPair) {
+  // found by crux diff (seed 98765, case 1286, shrunk): n0 and n2 share the vertex (-1,6,0)
+  // after their quarter turns; FCL and Bullet, on float-rounded quaternions, report no pair.
+  // The probe must move n2 (of the differing pair), not n3 (the last model added, in no pair).
+  DiffRunner runner;
+  DiffCase c;
+  c.op = "scene_pairs";
+  c.setup = {R"({"op":"mesh","name":"m0","vertices":[[0,0,0],[3,-1,2],[0,0,1]],"triangles":[[0,1,2]]})",
+             R"({"op":"mesh","name":"m1","vertices":[[2,1,-1],[0,0,0],[0,0,-1]],"triangles":[[0,1,2]]})",
+             R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[-4,4,-1]}})",
+             R"({"op":"add_model","name":"n2","mesh":"m1","transform":{"rotation":[0.7071067811865476,0,0,0.7071067811865476],"translation":[0,4,1]}})",
+             R"({"op":"add_model","name":"n3","mesh":"m0","transform":{"rotation":[0,1,0,0],"translation":[0,0,0]}})"};
+  c.query = R"({"op":"scene_pairs"})";
+  const J none = J{{"op", "scene_pairs"}, {"pairs", J::array()}};
+  ASSERT_EQ(runner.run(c, "exact")["pairs"], J::parse(R"([["n0","n2"]])"));
+  const auto k = classify(runner, c, "fcl", none);
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  const auto moved = translatedCase(c, Vec3d(1, 0, 0), "n2");
+  ASSERT_TRUE(moved);
+  EXPECT_NE(moved->setup[3], c.setup[3]);
+  EXPECT_EQ(moved->setup[4], c.setup[4]);
+}
+
 TEST(DiffClassify, NumericWithinAndBeyondTolerance) {
   DiffRunner runner;
   const auto c = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,3]})", true);
