@@ -274,6 +274,13 @@ bool degenerate(const std::array<V, 3>& t) {
          (long double)u[0] * v[1] - (long double)u[1] * v[0] == 0;
 }
 
+/// The smallest height of a triangle (twice its area over its longest edge; 0 when degenerate).
+double smallestHeight(const std::array<V, 3>& t) {
+  const Vec3d a(t[0][0], t[0][1], t[0][2]), b(t[1][0], t[1][1], t[1][2]), c(t[2][0], t[2][1], t[2][2]);
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  return longest > 0 ? (b - a).cross(c - a).norm() / longest : 0;
+}
+
 /// A ray origin or segment endpoint lying exactly on the plane of a (non-degenerate) triangle.
 bool endpointOnPlane(const J& query, const std::vector<std::array<V, 3>>& tris) {
   std::vector<V> points;
@@ -967,6 +974,9 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, tris)) return peer("plane-endpoint");
   for (const auto& t : caseTriangles(c, query, true))
     if (degenerate(t)) return peer("degenerate-triangle");
+  // a sliver thinner than the peer's tolerance: within τ of the segment it nearly is
+  for (const auto& t : caseTriangles(c, query, true))
+    if (smallestHeight(t) <= tau) return peer("sliver-triangle");
   bool pointSphere = false;
   if (flatShape(query, &pointSphere)) return peer(bullet && pointSphere ? "point-sphere" : "flat-shape");
   if (bullet && (c.op == "mesh_mesh" || c.op == "scene_pairs") && diff == Difference::Boolean &&

@@ -120,6 +120,24 @@ TEST(DiffClassify, DegenerateTriangle) {
   EXPECT_EQ(k.cause, "degenerate-triangle");
 }
 
+TEST(DiffClassify, SliverThinnerThanThePeersTolerance) {
+  // found by crux diff (seed 98765, case 1683, sliver family): a corner 5.4e-20 from another;
+  // FCL answers [0,0,1], as for a degenerate triangle
+  DiffRunner runner;
+  const J got = J{{"op", "closest_point_triangle"}, {"point", J::array({0, 0, 1})}};
+  const auto sliver = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[0,0,0],[0,0.025390625,1],[0,0,-5.421010862427522e-20]],"point":[0,0,-2]})",
+      false);
+  auto k = classify(runner, sliver, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "sliver-triangle");
+  // the same answer on a fat triangle stays unexplained
+  const auto fat = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[0,0,0],[0,0.5,1],[0,-0.5,0]],"point":[0,0,-2]})", false);
+  k = classify(runner, fat, "fcl", got);
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+}
+
 TEST(DiffClassify, FlatShapeAndPointSphere) {
   DiffRunner runner;
   const auto box = primitive(
