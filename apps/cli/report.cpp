@@ -650,6 +650,7 @@ int runReport(const ReportOptions& options, std::ostream& progress) {
     }
     c.plan = {{"browser", 8}};
     c.say("re-rendering " + options.renderFrom);
+    results["report"]["source_dir"] = CRUX_REPORT_SOURCE_DIR;  // the corpus linked is this checkout's
   } else {
     results = runSteps(c);
   }

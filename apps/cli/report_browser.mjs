@@ -93,7 +93,8 @@ const measure = `(() => {
     document_width: document.documentElement.scrollWidth,
     wide_elements: [...document.body.querySelectorAll('*')]
       .filter((e) => e.getBoundingClientRect().right > innerWidth + 0.5 && !(e.parentElement && e.parentElement.getBoundingClientRect().right > innerWidth + 0.5))
-      .map((e) => e.tagName.toLowerCase() + (e.id ? '#' + e.id : '') + (e.className && typeof e.className === 'string' ? '.' + e.className : '')),
+      .map((e) => e.tagName.toLowerCase() + (e.id ? '#' + e.id : '') + (e.className && typeof e.className === 'string' ? '.' + e.className : '') +
+        ' in ' + (e.closest('section')?.querySelector('h1,h2')?.textContent ?? 'body')),
     viewport_width: innerWidth,
     scripts: document.querySelectorAll('script').length,
   };

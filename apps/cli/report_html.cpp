@@ -317,8 +317,10 @@ std::vector<std::string> correctnessLines(const Json& c) {
     std::string line = backendName(backend) + ": " + count(b["peer_wrong"]) + " wrong";
     const std::string causes = causesText(b.value("peer_wrong_causes", Json::object()));
     if (!causes.empty()) line += " (" + causes + ")";
+    // Unsupported ops and cases without an arbiter are not compared.
+    const double compared = num(b, "answers") - num(b, "unsupported") - num(b, "no_arbiter");
     line += ", " + count(b["within_tolerance"]) + " within tolerance, " + count(b["error"]) + " errors, of " +
-            count(b["answers"]) + " answers";
+            fmt("%.0f", compared) + " answers compared";
     lines.push_back(line);
   }
   return lines;
@@ -353,7 +355,7 @@ std::string verdictHtml(const Json& v) {
   for (const std::string& line : correctnessLines(c)) o << "<li>" << html(line) << "</li>";
   o << "</ul>\n<p class=\"note\">Peers are judged against exact too; their disagreements, grouped by cause, are under "
        "<a href=\"#cross-validation\">Cross-validation</a>.</p></div>\n";
-  o << "<div class=\"card\"><h2>Where is crux faster?</h2>\n";
+  o << "<div class=\"card perf\"><h2>Where is crux faster?</h2>\n";
   const Json& perf = v["performance"];
   if (perf.empty()) {
     o << "<p>No timed workload with a peer in this build (benches not built).</p>";
@@ -501,7 +503,8 @@ std::string findingsHtml(const Json& diff, const Json& corpus, const std::string
     const bool recorded = corpus.is_array() && std::find(corpus.begin(), corpus.end(), Json(backend + "." + cause + ".jsonl")) != corpus.end();
     o << "<div class=\"finding " << (cruxWrong ? "bad" : "peer") << "\"><h4>" << (cruxWrong ? "CRUX WRONG" : html(backendName(backend)))
       << " &mdash; " << html(cause.empty() ? "crux wrong" : cause) << " <span class=\"note\">" << fmt("%.0f", sizes[key])
-      << (cruxWrong ? " shown" : " cases in this run") << (recorded ? ", recorded in the corpus" : "") << "</span></h4>\n";
+      << (sizes[key] == 1 ? " case" : " cases") << (cruxWrong ? " shown" : " in this run") << (recorded ? ", recorded in the corpus" : "")
+      << "</span></h4>\n";
     for (std::size_t i = 0; i < list.size() && i < std::size_t(kFindingsShownPerCause); ++i) {
       const Json& f = *list[i];
       o << "<p class=\"note\"><code>" << html(str(f, "op")) << "</code>, family " << html(str(f, "family")) << ", seed "
@@ -606,12 +609,12 @@ const char* kStyle =
     "body{font-family:sans-serif;max-width:1100px;margin:0 auto;padding:0 1em;color:#222;line-height:1.35}"
     "h1{margin:.4em 0 .1em}h2{margin:1.2em 0 .4em;border-bottom:1px solid #ddd}"
     ".machine{color:#555;font-size:13px;margin:.2em 0 .6em}"
-    ".cards{display:flex;flex-wrap:wrap;gap:12px}.card{flex:1 1 420px;border:1px solid #ccc;border-radius:6px;"
+    ".cards{display:flex;flex-wrap:wrap;gap:12px}.card{flex:1 1 340px;border:1px solid #ccc;border-radius:6px;"
     "padding:.2em .9em .6em}.card h2{border:0;margin:.4em 0 .2em;font-size:18px}.card.ok{border-left:8px solid #1a9641}"
     ".card.bad{border-left:8px solid #d7191c}.card.unknown{border-left:8px solid #bdbdbd}.big{font-size:17px;font-weight:bold;margin:.3em 0}"
     ".card ul{margin:.2em 0;padding-left:1.2em;font-size:14px}"
     ".note{color:#555;font-size:12.5px}table{border-collapse:collapse;margin:.5em 0;font-size:13px}"
-    "td,th{border:1px solid #ccc;padding:2px 6px;text-align:left;vertical-align:top}td.num{text-align:right}"
+    "td,th{border:1px solid #ccc;padding:2px 6px;text-align:left;vertical-align:top}td.num{text-align:right;white-space:nowrap}.card.perf{flex:1.6 1 540px}"
     "td.win{color:#1a7a35;font-weight:bold;text-align:right}td.loss{color:#b2182b;font-weight:bold;text-align:right}"
     "table.verdict td,table.verdict th{font-size:13.5px}"
     "svg.chart{display:block;margin:1em 0;max-width:100%;height:auto}"

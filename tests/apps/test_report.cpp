@@ -469,7 +469,7 @@ TEST(ReportVerdict, PutsTheCruxWrongCountFirstAndPeerDisagreementsByCause) {
   EXPECT_EQ(c["backends"]["fcl"]["peer_wrong_causes"]["sphere-local-point"], 7);
   const std::string md = crux::cli::renderSummary(r);
   EXPECT_NE(md.find("**0 crux-wrong answers** in 92 generated crux diff cases"), std::string::npos) << md;
-  EXPECT_NE(md.find("- Bullet: 12 wrong (margin 9, touching 3), 0 within tolerance, 0 errors, of 92 answers"), std::string::npos) << md;
+  EXPECT_NE(md.find("- Bullet: 12 wrong (margin 9, touching 3), 0 within tolerance, 0 errors, of 92 answers compared"), std::string::npos) << md;
   const std::string html = crux::cli::renderHtml(r);
   // The grid: one row per op, a cell per backend with its counts spelled out.
   EXPECT_NE(html.find("<table class=\"grid\">"), std::string::npos);
