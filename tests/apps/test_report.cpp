@@ -29,19 +29,14 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using crux::cli::test::readFile;
 
 std::string binDir() {
   const std::string crux = crux::cli::test::cruxExecutable();
   return crux.substr(0, crux.rfind('/'));
 }
 
-bool exists(const std::string& path) { return access(path.c_str(), F_OK) == 0; }
+bool exists(const std::string& path) { return crux::cli::test::fileExists(path); }
 
 std::string unescapeHtml(std::string s) {
   const std::pair<const char*, const char*> entities[] = {{"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}};

@@ -22,14 +22,9 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using crux::cli::test::readFile;
 
-bool exists(const std::string& path) { return access(path.c_str(), F_OK) == 0; }
+bool exists(const std::string& path) { return crux::cli::test::fileExists(path); }
 
 class ReportInBrowser : public ::testing::Test {
  protected:
