@@ -54,7 +54,8 @@ std::string scalar(const Json& v) {
   return v.dump();
 }
 
-std::string count(const Json& v) { return v.is_number() ? fmt("%.0f", v.get<double>()) : "0"; }
+/// The count j[key] as text; "0" when absent.
+std::string count(const Json& j, const char* key) { return fmt("%.0f", num(j, key)); }
 
 /// A batch-protocol answer in readable form: `key: value, ...` (without the echoed id and op),
 /// vectors as [x, y, z].
@@ -314,12 +315,12 @@ std::vector<std::string> correctnessLines(const Json& c) {
   const Json backends = c.value("backends", Json::object());
   for (const auto& [backend, b] : backends.items()) {
     if (backend == "native" || backend == "exact") continue;
-    std::string line = backendName(backend) + ": " + count(b["peer_wrong"]) + " wrong";
+    std::string line = backendName(backend) + ": " + count(b, "peer_wrong") + " wrong";
     const std::string causes = causesText(b.value("peer_wrong_causes", Json::object()));
     if (!causes.empty()) line += " (" + causes + ")";
     // Unsupported ops and cases without an arbiter are not compared.
     const double compared = num(b, "answers") - num(b, "unsupported") - num(b, "no_arbiter");
-    line += ", " + count(b["within_tolerance"]) + " within tolerance, " + count(b["error"]) + " errors, of " +
+    line += ", " + count(b, "within_tolerance") + " within tolerance, " + count(b, "error") + " errors, of " +
             fmt("%.0f", compared) + " answers compared";
     lines.push_back(line);
   }
@@ -329,8 +330,8 @@ std::vector<std::string> correctnessLines(const Json& c) {
 /// The headline of the cross-validation: crux's wrong answers, and what they were counted over.
 std::pair<std::string, std::string> cruxWrongText(const Json& c) {
   if (!c.value("diff_available", false)) return {"crux diff did not run", str(c, "diff_reason")};
-  return {count(c["crux_wrong"]) + " crux-wrong answers",
-          "in " + count(c["diff_cases"]) + " generated crux diff cases, every backend's answer judged against the exact (CGAL) backend"};
+  return {count(c, "crux_wrong") + " crux-wrong answers",
+          "in " + count(c, "diff_cases") + " generated crux diff cases, every backend's answer judged against the exact (CGAL) backend"};
 }
 
 /// "bench_scaling: refit, 100000 triangles: 0.45x".
@@ -364,14 +365,14 @@ std::string verdictHtml(const Json& v) {
          "peer&nbsp;/&nbsp;crux time</th><th>worst row for crux</th></tr>\n";
     for (const Json& p : perf) {
       const Json& g = p["geomean"];
-      o << "<tr><td><b>" << html(str(p, "name")) << "</b></td><td class=\"num\">" << count(p["crux_faster"]) << " of "
-        << count(p["workloads"]) << "</td><td class=\"num\">" << count(p["crux_slower"]) << " of " << count(p["workloads"])
+      o << "<tr><td><b>" << html(str(p, "name")) << "</b></td><td class=\"num\">" << count(p, "crux_faster") << " of "
+        << count(p, "workloads") << "</td><td class=\"num\">" << count(p, "crux_slower") << " of " << count(p, "workloads")
         << "</td><td class=\"num "
         << (g.is_number() && g.get<double>() >= 1 ? "win" : "loss") << "\">"
         << (g.is_number() ? fmt("%.2fx", g.get<double>()) : "-") << "</td><td>";
       if (p["worst"].is_object()) o << html(worstText(p)) << "<b>" << fmt("%.2fx", num(p["worst"], "ratio")) << "</b>";
       if (num(p, "answers_differ") > 0)
-        o << "<br><span class=\"note\">" << count(p["answers_differ"]) << " more with different answers, not counted</span>";
+        o << "<br><span class=\"note\">" << count(p, "answers_differ") << " more with different answers, not counted</span>";
       o << "</td></tr>\n";
     }
     o << "</table>\n<p class=\"note\">Per workload, peer time / crux time: &gt; 1 means crux is faster. Memory rows are "
@@ -555,7 +556,7 @@ std::string sanityLine(const Json& s) {
 std::string comparisonHtml(const Json& c) {
   std::ostringstream o;
   o << "<section id=\"comparison\"><h2>Compared with the run of " << html(str(c, "old_date")) << "</h2>\n<p>"
-    << count(c["regressions"]) << " regressions, " << count(c["improvements"])
+    << count(c, "regressions") << " regressions, " << count(c, "improvements")
     << " improvements beyond the noise the runs measured (the relative spread, max &minus; min over median, of crux's "
        "and the peer's timed runs, in the old run plus the new; rows whose bench records no runs take the median "
        "noise of their report, marked &ldquo;est.&rdquo;; rows with no noise measured are not flagged).";
@@ -725,17 +726,17 @@ std::string renderSummary(const nlohmann::json& results) {
   } else {
     o << "| peer | crux faster | crux slower | geometric mean of peer / crux time | worst row for crux |\n|---|---|---|---|---|\n";
     for (const Json& p : perf) {
-      o << "| " << str(p, "name") << " | " << count(p["crux_faster"]) << " of " << count(p["workloads"]) << " | "
-        << count(p["crux_slower"]) << " of " << count(p["workloads"]) << " | " << (p["geomean"].is_number() ? fmt("%.2fx", num(p, "geomean")) : "-") << " | ";
+      o << "| " << str(p, "name") << " | " << count(p, "crux_faster") << " of " << count(p, "workloads") << " | "
+        << count(p, "crux_slower") << " of " << count(p, "workloads") << " | " << (p["geomean"].is_number() ? fmt("%.2fx", num(p, "geomean")) : "-") << " | ";
       if (p["worst"].is_object()) o << worstText(p) << fmt("%.2fx", num(p["worst"], "ratio"));
-      if (num(p, "answers_differ") > 0) o << " (" << count(p["answers_differ"]) << " more with different answers, not counted)";
+      if (num(p, "answers_differ") > 0) o << " (" << count(p, "answers_differ") << " more with different answers, not counted)";
       o << " |\n";
     }
   }
   if (results.contains("comparison")) {
     const Json& cmp = results["comparison"];
-    o << "\n## Compared with the run of " << str(cmp, "old_date") << "\n\n" << count(cmp["regressions"]) << " regressions, "
-      << count(cmp["improvements"]) << " improvements beyond the measured noise (index.html lists every row).\n\n";
+    o << "\n## Compared with the run of " << str(cmp, "old_date") << "\n\n" << count(cmp, "regressions") << " regressions, "
+      << count(cmp, "improvements") << " improvements beyond the measured noise (index.html lists every row).\n\n";
     for (const Json& r : cmp["rows"])
       if (!str(r, "flag").empty()) {
         const std::string unit = str(r, "value_unit");
@@ -799,7 +800,7 @@ std::string renderHtml(const nlohmann::json& results) {
   } else if (!data.is_object() || !data.contains("table")) {
     o << "<p>crux diff wrote no summary (exit " << html(scalar(diff.value("exit_status", Json()))) << ").</p>\n";
   } else {
-    o << "<p><code>crux diff</code> answered " << count(data["cases"]) << " generated cases on every backend and judged each "
+    o << "<p><code>crux diff</code> answered " << count(data, "cases") << " generated cases on every backend and judged each "
       << "answer against the exact (CGAL) backend; per op and backend:</p>\n"
       << gridHtml(data["table"]) << "<p class=\"note\">command: <code>" << html(str(diff, "command")) << "</code></p>\n";
     const std::string corpusHref = "file://" + str(results.value("report", Json::object()), "source_dir") +
