@@ -376,7 +376,9 @@ std::string verdictHtml(const Json& v) {
       o << "</td></tr>\n";
     }
     o << "</table>\n<p class=\"note\">Per workload, peer time / crux time: &gt; 1 means crux is faster. Memory rows are "
-         "not counted; every row is in <a href=\"#workloads\">All workloads</a>.</p>";
+         "not counted; every row is in <a href=\"#workloads\">All workloads</a>.";
+    if (v.contains("note")) o << " <b>" << html(str(v, "note")) << "</b>";
+    o << "</p>";
   }
   o << "</div>\n</div>\n";
   o << "</section>\n";
@@ -720,6 +722,7 @@ std::string renderSummary(const nlohmann::json& results) {
   o << "## Is crux right?\n\n**" << cruxWrongText(c).first << "** " << cruxWrongText(c).second << ".\n\n";
   for (const std::string& line : correctnessLines(c)) o << "- " << line << "\n";
   o << "\n## Where is crux faster?\n\n";
+  if (v.contains("note")) o << "**" << str(v, "note") << "**\n\n";
   const Json& perf = v["performance"];
   if (perf.empty()) {
     o << "No timed workload with a peer in this build.\n";

@@ -105,6 +105,7 @@ nlohmann::json reportVerdict(const nlohmann::json& results) {
   v["build"] = join({"crux " + str(m, "crux_version") + (str(m, "crux_real").empty() ? "" : " (Real = " + str(m, "crux_real") + ")"),
                      str(m, "compiler") + (str(m, "build_type").empty() ? "" : " " + str(m, "build_type")) +
                          (str(m, "cxx_flags").empty() ? "" : " [" + str(m, "cxx_flags") + "]")});
+  if (str(r, "budget") == "tiny") v["note"] = "Budget tiny: a test of the report itself; its timings mean nothing.";
   v["run"] = join({str(r, "date"), str(r, "budget").empty() ? "" : "budget " + str(r, "budget"),
                    str(r, "bench_clock").empty() ? "" : "bench clock " + str(r, "bench_clock"),
                    r.contains("seconds") ? fmt("%.0f s", num(r, "seconds")) : ""});
