@@ -57,6 +57,11 @@ std::string scalar(const Json& v) {
 /// The count j[key] as text; "0" when absent.
 std::string count(const Json& j, const char* key) { return fmt("%.0f", num(j, key)); }
 
+/// "1 regression", "2 regressions": the count j[key] and `noun`, plural unless it is 1.
+std::string counted(const Json& j, const char* key, const std::string& noun) {
+  return count(j, key) + " " + noun + (num(j, key) == 1 ? "" : "s");
+}
+
 /// A batch-protocol answer in readable form: `key: value, ...` (without the echoed id and op),
 /// vectors as [x, y, z].
 std::string answerText(const Json& v, bool top = true) {
@@ -558,31 +563,36 @@ std::string sanityLine(const Json& s) {
 std::string comparisonHtml(const Json& c) {
   std::ostringstream o;
   o << "<section id=\"comparison\"><h2>Compared with the run of " << html(str(c, "old_date")) << "</h2>\n<p>"
-    << count(c, "regressions") << " regressions, " << count(c, "improvements")
-    << " improvements beyond the noise the runs measured (the relative spread, max &minus; min over median, of crux's "
+    << counted(c, "regressions", "regression") << ", " << counted(c, "improvements", "improvement")
+    << " beyond the noise the runs measured (the relative spread, max &minus; min over median, of crux's "
        "and the peer's timed runs, in the old run plus the new; rows whose bench records no runs take the median "
        "noise of their report, marked &ldquo;est.&rdquo;; rows with no noise measured are not flagged).";
   if (!c.value("same_clock", true)) o << " <b>The runs used different bench clocks (old: " << html(str(c, "old_bench_clock")) << ").</b>";
   if (!c.value("same_budget", true)) o << " <b>The runs had different budgets (old: " << html(str(c, "old_budget")) << ").</b>";
-  o << "</p>\n<table><tr><th>workload</th><th>figure</th><th>old</th><th>today</th><th>change</th><th>noise</th><th></th></tr>\n";
-  std::vector<const Json*> rows;
-  for (const Json& r : c["rows"]) rows.push_back(&r);
-  std::stable_sort(rows.begin(), rows.end(), [](const Json* a, const Json* b) {
-    const auto rank = [](const Json* r) { return str(*r, "flag") == "regression" ? 0 : str(*r, "flag") == "improvement" ? 1 : 2; };
-    return rank(a) < rank(b);
-  });
-  for (const Json* r : rows) {
-    const std::string unit = str(*r, "value_unit");
-    const auto value = [&unit](double v) { return unit == "ratio" ? fmt("%.2fx", v) : valueText(v, unit); };
-    const std::string flag = str(*r, "flag");
-    o << "<tr class=\"" << flag << "\"><td>" << html(str(*r, "title")) << "</td><td>" << html(str(*r, "what")) << "</td><td>"
-      << html(value(num(*r, "old"))) << "</td><td>" << html(value(num(*r, "new"))) << "</td><td>"
-      << fmt("%+.1f%%", 100 * num(*r, "change")) << "</td><td>"
-      << ((*r)["noise"].is_number() ? fmt("%.1f%%", 100 * num(*r, "noise")) + (r->value("noise_measured", false) ? "" : " est.")
-                                    : "not measured")
-      << "</td><td>" << (flag.empty() ? "" : "<b>" + flag + "</b>") << "</td></tr>\n";
-  }
-  o << "</table></section>\n";
+  o << "</p>\n";
+  // The flagged rows (regressions first) in view, the others folded.
+  const std::string header = "<table><tr><th>workload</th><th>figure</th><th>old</th><th>today</th><th>change</th><th>noise</th><th></th></tr>\n";
+  std::ostringstream flagged, quiet;
+  int quietRows = 0;
+  for (const char* pass : {"regression", "improvement", ""})
+    for (const Json& r : c["rows"]) {
+      const std::string flag = str(r, "flag");
+      if (flag != pass) continue;
+      const std::string unit = str(r, "value_unit");
+      const auto value = [&unit](double v) { return unit == "ratio" ? fmt("%.2fx", v) : valueText(v, unit); };
+      std::ostringstream& out = flag.empty() ? quiet : flagged;
+      quietRows += flag.empty();
+      out << "<tr class=\"" << flag << "\"><td>" << html(str(r, "title")) << "</td><td>" << html(str(r, "what")) << "</td><td>"
+          << html(value(num(r, "old"))) << "</td><td>" << html(value(num(r, "new"))) << "</td><td>"
+          << fmt("%+.1f%%", 100 * num(r, "change")) << "</td><td>"
+          << (r["noise"].is_number() ? fmt("%.1f%%", 100 * num(r, "noise")) + (r.value("noise_measured", false) ? "" : " est.")
+                                     : "not measured")
+          << "</td><td>" << (flag.empty() ? "" : "<b>" + flag + "</b>") << "</td></tr>\n";
+    }
+  if (!flagged.str().empty()) o << header << flagged.str() << "</table>\n";
+  if (quietRows > 0)
+    o << "<details><summary>" << quietRows << " figures within their noise</summary>\n" << header << quiet.str() << "</table></details>\n";
+  o << "</section>\n";
   return o.str();
 }
 
@@ -738,8 +748,8 @@ std::string renderSummary(const nlohmann::json& results) {
   }
   if (results.contains("comparison")) {
     const Json& cmp = results["comparison"];
-    o << "\n## Compared with the run of " << str(cmp, "old_date") << "\n\n" << count(cmp, "regressions") << " regressions, "
-      << count(cmp, "improvements") << " improvements beyond the measured noise (index.html lists every row).\n\n";
+    o << "\n## Compared with the run of " << str(cmp, "old_date") << "\n\n" << counted(cmp, "regressions", "regression") << ", "
+      << counted(cmp, "improvements", "improvement") << " beyond the measured noise (index.html lists every row).\n\n";
     for (const Json& r : cmp["rows"])
       if (!str(r, "flag").empty()) {
         const std::string unit = str(r, "value_unit");

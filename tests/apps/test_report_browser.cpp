@@ -1,7 +1,8 @@
 // The report as a reader sees it: index.html rendered (`crux report --render`) from a small
 // real results.json (tests/apps/data/report_results_tiny.json, a `crux report --budget tiny`
 // run) and opened in headless Chromium by the report's browser check
-// (apps/cli/report_browser.mjs). Skips only when /usr/bin/chromium is absent.
+// (apps/cli/report_browser.mjs), compared with itself so that every section is drawn. Skips
+// only when /usr/bin/chromium is absent.
 // ctest: one process (the tests share one rendering and one browser run)
 
 #include "batch_test_util.hpp"
@@ -35,8 +36,9 @@ class ReportInBrowser : public ::testing::Test {
     ASSERT_NE(dir, nullptr);
     out_ = dir;
     const std::string fixture = std::string(CRUX_SOURCE_DIR) + "/tests/apps/data/report_results_tiny.json";
+    // Compared with itself, so the page has every section.
     const auto [status, text] = crux::cli::test::run(crux::cli::test::cruxExecutable() + " report --render " + fixture +
-                                                     " --out " + out_ + " 2>&1");
+                                                     " --compare " + fixture + " --out " + out_ + " 2>&1");
     status_ = status;
     output_ = text;
     results_ = Json::parse(readFile(out_ + "/results.json"), nullptr, false);
@@ -61,6 +63,7 @@ int ReportInBrowser::status_ = -1;
 Json ReportInBrowser::results_, ReportInBrowser::browser_;
 
 TEST_F(ReportInBrowser, LoadsWithoutConsoleErrorsScriptsOrNetworkRequests) {
+  ASSERT_TRUE(results_.contains("comparison"));
   EXPECT_EQ(browser_["console_errors"], Json::array()) << browser_["console_errors"].dump(1);
   EXPECT_EQ(browser_["external_requests"], Json::array()) << browser_["external_requests"].dump(1);
   EXPECT_EQ(browser_["screen"]["scripts"], 0);
