@@ -335,7 +335,7 @@ std::vector<std::string> correctnessLines(const Json& c) {
 /// The headline of the cross-validation: crux's wrong answers, and what they were counted over.
 std::pair<std::string, std::string> cruxWrongText(const Json& c) {
   if (!c.value("diff_available", false)) return {"crux diff did not run", str(c, "diff_reason")};
-  return {count(c, "crux_wrong") + " crux-wrong answers",
+  return {counted(c, "crux_wrong", "crux-wrong answer"),
           "in " + count(c, "diff_cases") + " generated crux diff cases, every backend's answer judged against the exact (CGAL) backend"};
 }
 

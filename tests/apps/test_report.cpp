@@ -478,6 +478,28 @@ TEST(ReportVerdict, PutsTheCruxWrongCountFirstAndPeerDisagreementsByCause) {
   EXPECT_EQ(html.find("<table><tr><th></th>"), std::string::npos) << "a raw JSON table is back";
 }
 
+TEST(ReportVerdict, ACruxWrongFindingTurnsTheVerdictRedAndIsListedFirst) {
+  Json r = handMadeResults();
+  Json data = diffData();
+  data["crux_wrong"] = 1;
+  data["table"]["distance"]["native"] = {{"agree", 39}, {"crux_wrong", 1}};
+  Json wrong = data["findings"][0];
+  wrong["name"] = "native.crux-wrong.distance.1-9";
+  wrong["backend"] = "native";
+  wrong["verdict"] = "crux_wrong";
+  wrong["cause"] = "beyond-tolerance";
+  data["findings"].push_back(wrong);  // after the peer finding in the file
+  r["cross_validation"]["diff"] = {{"available", true}, {"exit_status", 1}, {"command", "crux diff"}, {"data", data}};
+  const std::string html = crux::cli::renderHtml(r);
+  EXPECT_NE(html.find("<div class=\"card bad\"><h2>Is crux right?</h2>"), std::string::npos);
+  EXPECT_NE(html.find(">1 crux-wrong answer<"), std::string::npos);
+  const auto cruxWrong = html.find("<h4>CRUX WRONG"), peer = html.find("<h4>FCL");
+  ASSERT_NE(cruxWrong, std::string::npos);
+  ASSERT_NE(peer, std::string::npos);
+  EXPECT_LT(cruxWrong, peer);
+  EXPECT_NE(html.find("| crux batch --backend native</pre>"), std::string::npos);
+}
+
 TEST(ReportViews, ScalingSeriesCarryTheirLogLogSlope) {
   const Json series = crux::cli::chartSeries(handMadeResults());
   // crux's build time grows 10x from 1k to 10k triangles, Bullet's too: slope 1.
