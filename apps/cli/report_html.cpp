@@ -865,7 +865,7 @@ std::string renderHtml(const nlohmann::json& results) {
       o << (str(*m.front().second, "kind") == "bar" ? barChart(m.front().first, *m.front().second) : lineChart(m));
     }
     // Table of times per workload.
-    const Json data = step.value("data", Json());
+    const Json benchData = step.value("data", Json());
     std::vector<WorkloadFigures> mine;
     for (const WorkloadFigures& f : figures(results))
       if (f.bench == bench) mine.push_back(f);
@@ -886,8 +886,8 @@ std::string renderHtml(const nlohmann::json& results) {
       o << "</table>\n";
     }
     if (!mine.empty()) o << "</details>\n";
-    if (data.is_object()) o << targetsHtml(data.value("targets", Json()));
-    if (mine.empty() && data.is_object())
+    if (benchData.is_object()) o << targetsHtml(benchData.value("targets", Json()));
+    if (mine.empty() && benchData.is_object())
       o << "<p>This bench's figures have a format the report does not read: see <a href=\"results.json\">results.json</a>.</p>\n";
     if (step.contains("text")) o << "<p>(no JSON output: its printed tables)</p><pre>" << html(str(step, "text")) << "</pre>\n";
     o << "</section>\n";
