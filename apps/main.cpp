@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
       "report",
       "The main job: cross-validation (oracle sanity suite, crux diff) and performance against Embree, "
       "FCL and Bullet (bench_mesh, bench_scene, bench_scaling, ...), written to DIR/index.html (SVG "
-      "charts), DIR/summary.md and DIR/results.json (docs/report.md). Progress on stderr.");
+      "charts), DIR/summary.md and DIR/results.json (docs/report.md). Progress on stderr when it is a terminal.");
   crux::cli::ReportOptions reportOptions;
   bool reportQuick = false, reportFull = false;
   std::string reportBudget;
@@ -171,6 +171,11 @@ int main(int argc, char** argv) {
                    "Also count instructions per ray per backend under valgrind's callgrind");
   report->add_option("--bin-dir", reportOptions.binDir,
                      "Directory of the bench executables and test_sanity (default: next to crux)");
+  report->add_option("--render", reportOptions.renderFrom,
+                     "Run nothing: re-render DIR's outputs from this results.json (of an earlier run)");
+  report->add_option("--compare", reportOptions.compareWith,
+                     "An earlier run's results.json: per workload its figures beside today's, changes beyond "
+                     "the measured noise flagged");
 
   try {
     app.parse(argc, argv);
@@ -235,6 +240,7 @@ int main(int argc, char** argv) {
     if (reportBudget == "tiny") reportOptions.budget = crux::cli::ReportBudget::Tiny;
     if (reportBudget == "full") reportOptions.budget = crux::cli::ReportBudget::Full;
     if (reportBudget == "quick") reportOptions.budget = crux::cli::ReportBudget::Quick;
+    reportOptions.progressLine = isatty(fileno(stderr)) && isatty(fileno(stdout));
     return crux::cli::runReport(reportOptions, std::cerr);
   }
   if (info->parsed()) {
