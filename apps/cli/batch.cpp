@@ -409,6 +409,9 @@ int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options) {
   while (std::getline(in, line)) {
     writeAnswer(out, answerLine(line, state));
     if (!out) return 1;
+    // Before waiting for more input, the answers so far reach the reader: a driver that writes a
+    // line and waits for its answer (crux.World, docs/python.md) is not left waiting on our buffer.
+    if (in.rdbuf()->in_avail() <= 0) out.flush();
   }
   out.flush();
   return (in.bad() || !out) ? 1 : 0;
