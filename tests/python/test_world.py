@@ -24,7 +24,7 @@ def world_or_skip(backend):
 
 @pytest.fixture(scope="module")
 def native():
-    with crux.World("native") as w:
+    with world_or_skip("native") as w:
         yield w
 
 
