@@ -107,7 +107,14 @@ def test_poses_in_every_form_give_the_same_transform():
     m = np.eye(4)
     m[:3, :3] = [[np.cos(angle), -np.sin(angle), 0], [np.sin(angle), np.cos(angle), 0], [0, 0, 1]]
     m[:3, 3] = t
-    answers = {
-        tuple(crux.touching_pairs(a, b, pose_b=p).ravel()) for p in [(q, t), m, np.r_[q, t], [q.tolist(), t.tolist()]]
-    }
+    same_numbers = [(q, t), np.r_[q, t], [q.tolist(), t.tolist()]]
+    # the same numbers in any container: the same transform, bit for bit
+    answers = {tuple(crux.touching_pairs(a, b, pose_b=p).ravel()) for p in same_numbers}
     assert len(answers) == 1 and len(next(iter(answers))) > 0
+    scene = crux.Scene()
+    poses = [scene.world_pose(scene.add(a, p)) for p in same_numbers + [m]]
+    for p in poses[1:3]:
+        np.testing.assert_array_equal(p, poses[0])
+    # the matrix gives that rotation up to the rounding of its quaternion
+    np.testing.assert_allclose(poses[3], poses[0], atol=1e-6)
+    np.testing.assert_allclose(poses[0], m, atol=1e-6)
