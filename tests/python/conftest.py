@@ -92,3 +92,20 @@ def run_in_child(code, payload):
     done = subprocess.run([sys.executable, "-c", code], input=payload, capture_output=True, timeout=120)
     assert done.returncode == 0, done.stderr.decode(errors="replace")
     return done.stdout
+
+
+def evaluate_in_child(obj, rays, expressions):
+    """Pickles (obj, rays) to a new interpreter, which evaluates each expression (`obj` and `rays` in
+    scope) and sends the results back as arrays: {name: array}."""
+    import io
+    import pickle
+
+    code = (
+        "import sys, pickle, io, numpy as np\n"
+        "obj, rays = pickle.loads(sys.stdin.buffer.read())\n"
+        "buf = io.BytesIO()\n"
+        "np.savez(buf, **{k: eval(e) for k, e in %r.items()})\n"
+        "sys.stdout.buffer.write(buf.getvalue())\n" % (expressions,)
+    )
+    out = np.load(io.BytesIO(run_in_child(code, pickle.dumps((obj, rays)))))
+    return {k: out[k] for k in expressions}

@@ -207,21 +207,16 @@ def test_threads_do_not_change_answers(bunny):
 
 
 def test_pickle_round_trip_in_a_child_process(bunny):
-    import io
     import pickle
 
-    from conftest import run_in_child
+    from conftest import evaluate_in_child
 
     rays = random_rays(bunny, 2000, seed=11)
-    code = (
-        "import sys, pickle, io, numpy as np\n"
-        "mesh, rays = pickle.loads(sys.stdin.buffer.read())\n"
-        "h = mesh.ray_closest(rays)\n"
-        "buf = io.BytesIO(); np.savez(buf, t=h.t, triangle=h.triangle, point=h.point, name=mesh.name,\n"
-        "    v=mesh.vertices, f=mesh.triangles, closed=mesh.closed)\n"
-        "sys.stdout.buffer.write(buf.getvalue())\n"
-    )
-    out = np.load(io.BytesIO(run_in_child(code, pickle.dumps((bunny, rays)))))
+    out = evaluate_in_child(bunny, rays, {
+        "t": "obj.ray_closest(rays).t", "triangle": "obj.ray_closest(rays).triangle",
+        "point": "obj.ray_closest(rays).point", "name": "obj.name", "v": "obj.vertices", "f": "obj.triangles",
+        "closed": "obj.closed",
+    })
     here = bunny.ray_closest(rays)
     np.testing.assert_array_equal(out["t"], here.t)
     np.testing.assert_array_equal(out["triangle"], here.triangle)

@@ -1,14 +1,11 @@
 """Tests of python/src/scene_bindings.cpp: crux.Scene's models and poses, batched rays and region
 queries against the per-mesh answers, the overlapping pairs, and pickling."""
 
-import io
-import pickle
-
 import numpy as np
 import pytest
 
 import crux
-from conftest import random_rays, run_in_child, torus, unit_cube
+from conftest import evaluate_in_child, random_rays, torus, unit_cube
 
 
 def quat_z(angle):
@@ -110,15 +107,10 @@ def test_scene_pickle_round_trip_in_a_child_process():
     d = s.add(torus(), (quat_z(0.3), [0, 0, 4]), parent=c)
     s.remove(b)  # a gap in the ids
     rays = random_rays(torus(), 1000, seed=2) * np.r_[3, 3, 3, 1, 1, 1].astype(crux.REAL)
-    code = (
-        "import sys, pickle, io, numpy as np\n"
-        "scene, rays = pickle.loads(sys.stdin.buffer.read())\n"
-        "h = scene.ray_closest(rays)\n"
-        "buf = io.BytesIO(); np.savez(buf, model=h.model, t=h.t, ids=scene.ids(),\n"
-        "    poses=np.stack([scene.world_pose(i) for i in scene.ids()]), pairs=scene.overlapping_pairs())\n"
-        "sys.stdout.buffer.write(buf.getvalue())\n"
-    )
-    out = np.load(io.BytesIO(run_in_child(code, pickle.dumps((s, rays)))))
+    out = evaluate_in_child(s, rays, {
+        "model": "obj.ray_closest(rays).model", "t": "obj.ray_closest(rays).t", "ids": "obj.ids()",
+        "poses": "np.stack([obj.world_pose(i) for i in obj.ids()])", "pairs": "obj.overlapping_pairs()",
+    })
     h = s.ray_closest(rays)
     np.testing.assert_array_equal(out["model"], h.model)
     np.testing.assert_array_equal(out["t"], h.t)
