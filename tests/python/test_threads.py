@@ -12,7 +12,8 @@ from conftest import random_rays
 
 
 def _counter_progress_during(call):
-    """How often a pure-Python thread could increment a counter while `call` ran."""
+    """How far a pure-Python thread counts while `call` runs, as a fraction of how far it counts in
+    as long alone (just before, the calling thread asleep), and how long the call took."""
     count = [0]
     stop = threading.Event()
 
@@ -22,24 +23,28 @@ def _counter_progress_during(call):
 
     spinner = threading.Thread(target=spin)
     spinner.start()
-    time.sleep(0.05)
-    before = count[0]
-    start = time.perf_counter()
+    time.sleep(0.02)
+    start, before = time.perf_counter(), count[0]
+    time.sleep(0.2)
+    alone = (count[0] - before) / (time.perf_counter() - start)
+    start, before = time.perf_counter(), count[0]
     call()
     seconds = time.perf_counter() - start
     progress = count[0] - before
     stop.set()
     spinner.join()
-    return progress, seconds
+    return progress / (alone * seconds), seconds
 
 
 def test_the_gil_is_released_during_a_batch(bunny):
-    rays = np.tile(random_rays(bunny, 20000, seed=4), (10, 1))
-    progress, seconds = _counter_progress_during(lambda: bunny.ray_closest(rays, threads=1))
-    assert seconds > 0.05, "the batch must last long enough to measure"
-    # With the GIL held the spinner cannot run during the call (switch interval 5 ms: at most a
-    # few slices before the call takes it); released, it runs all along: millions per second.
-    assert progress > 1000, (progress, seconds)
+    rays = np.tile(random_rays(bunny, 20000, seed=4), (15, 1))
+    fraction, seconds = _counter_progress_during(lambda: bunny.ray_closest(rays, threads=1))
+    assert seconds > 0.2, "the batch must last long enough to measure"
+    # A call holding the GIL lets the counter run only while the interpreter hands the GIL over at
+    # its start and end (switch interval 5 ms): C calls holding it for 0.2-0.5 s (pickle.dumps of a
+    # long list) measured 0.03-0.09. Released, the counter runs all along: ~1 on idle cores, ~0.5
+    # measured on a machine loaded 7x over its 2 cores (the batch thread takes its share).
+    assert fraction > 0.25, (fraction, seconds)
 
 
 def test_two_python_threads_run_batches_faster_than_one_after_the_other(bunny):
