@@ -570,6 +570,66 @@ TEST(BatchRun, ThreadsMustBePositiveAndDoNotChangeTheOutput) {
   EXPECT_EQ(splitLines(out1.str()).size(), 3u);
 }
 
+/// Output that keeps what is written pending until flushed, as a pipe's writer buffers it.
+class PendingOutput : public std::streambuf {
+ public:
+  std::string pending, flushed;
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (c != traits_type::eof()) pending.push_back(char(c));
+    return c;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    pending.append(s, std::size_t(n));
+    return n;
+  }
+  int sync() override {
+    flushed += pending;
+    pending.clear();
+    return 0;
+  }
+};
+
+/// Input handed over one line at a time, as a driver writing a line and waiting for its answer
+/// does: each time the reader asks for more (it would block on a pipe), what the output had
+/// flushed by then is recorded.
+class LineByLineInput : public std::streambuf {
+ public:
+  LineByLineInput(std::vector<std::string> lines, const PendingOutput& out) : lines_(std::move(lines)), out_(out) {}
+  std::vector<std::string> flushedAtEachWait;
+
+ protected:
+  int_type underflow() override {
+    flushedAtEachWait.push_back(out_.flushed);
+    if (next_ == lines_.size()) return traits_type::eof();
+    current_ = lines_[next_++] + "\n";
+    setg(current_.data(), current_.data(), current_.data() + current_.size());
+    return traits_type::to_int_type(current_[0]);
+  }
+  std::streamsize showmanyc() override { return 0; }  // nothing beyond the line handed over
+
+ private:
+  std::vector<std::string> lines_;
+  std::size_t next_ = 0;
+  std::string current_;
+  const PendingOutput& out_;
+};
+
+TEST(BatchRun, EveryAnswerIsFlushedBeforeWaitingForTheNextLine) {
+  const std::vector<std::string> lines = {
+      op("triangle_plane", "\"triangle\":" + kUnitTriangle + R"(,"plane":{"normal":[0,0,1],"d":0})"), "{}",
+      op("triangle_plane", "\"triangle\":" + kUnitTriangle + R"(,"plane":{"normal":[0,0,1],"d":5})")};
+  PendingOutput outBuf;
+  LineByLineInput inBuf(lines, outBuf);
+  std::istream in(&inBuf);
+  std::ostream out(&outBuf);
+  ASSERT_EQ(runBatch(in, out, BatchOptions{}), 0);
+  ASSERT_EQ(inBuf.flushedAtEachWait.size(), lines.size() + 1);
+  for (std::size_t k = 0; k < inBuf.flushedAtEachWait.size(); ++k)
+    EXPECT_EQ(splitLines(inBuf.flushedAtEachWait[k]).size(), k) << "answers flushed before reading line " << k;
+}
+
 TEST(BatchRun, FailingOutputIsReported) {
   std::istringstream in("{}\n{}\n");
   std::ostringstream out;
