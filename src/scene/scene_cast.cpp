@@ -55,18 +55,6 @@ class PathCollector final : public RayProxyCollector {
   Real pathLength_, slack_;
 };
 
-class BallCollector final : public ProxyCollector {
- public:
-  explicit BallCollector(std::vector<ModelId>& ids) : ids_(ids) {}
-  bool add(ProxyId id) override {
-    ids_.push_back(id);
-    return true;
-  }
-
- private:
-  std::vector<ModelId>& ids_;
-};
-
 /// Runs a cast of a shape of size `size` whose origin goes from c0 to c1.
 template <class CastModel>
 std::optional<SceneCastHit> run(const Scene& scene, const CastModel& castModel, const Vec3& c0, const Vec3& c1,
@@ -92,11 +80,7 @@ std::optional<SceneCastHit> run(const Scene& scene, const CastModel& castModel, 
   Ray ray{c0, dir};
   if (!(pathLength > 0) || !(dir.cast<double>().squaredNorm() > 0)) {
     // no path: the boxes touching the ball the shape sweeps about its fixed origin
-    std::vector<ModelId> candidates;
-    BallCollector collector(candidates);
-    scene.broadPhase().query(Sphere{c0, Real(margin)}, collector);
-    std::sort(candidates.begin(), candidates.end());
-    for (const ModelId id : candidates)
+    for (const ProxyId id : queryIds(scene.broadPhase(), Sphere{c0, Real(margin)}))
       if (!best.consider(id)) break;
     return best.best;
   }
