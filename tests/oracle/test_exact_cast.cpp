@@ -103,7 +103,7 @@ TEST(ExactCast, SolverMatchesClosedForms) {
 TEST(ExactCast, NativePolytopeCastsContainTheExactTime) {
   GridShapes g(1234);
   int hits = 0, misses = 0, starts = 0;
-  const int n = 1500;
+  const int n = 800;
   for (int i = 0; i < n; ++i) {
     const ConvexShape a = g.polytope(i % 3), b = g.polytope((i / 3) % 3);
     const Transform ta = g.pose(), tb = g.pose();
@@ -137,7 +137,7 @@ TEST(ExactCast, NativePolytopeCastsContainTheExactTime) {
 TEST(ExactCast, NativeRoundedHitOrMissIsExact) {
   GridShapes g(99);
   int hits = 0, misses = 0;
-  const int n = 1000;
+  const int n = 600;
   for (int i = 0; i < n; ++i) {
     const ConvexShape a = g.rounded(i % 2);
     const ConvexShape b = (i / 2) % 2 ? g.rounded((i / 4) % 2) : g.polytope((i / 4) % 3);
