@@ -425,7 +425,9 @@ const std::vector<std::string_view>& protocolOps() {
         // scene
         "scene_ray", "scene_query", "scene_pairs",
         // narrow phase and volumes (issue 6; beyond the shared contract, see docs/batch.md)
-        "contacts", "distance", "mesh_distance", "model_distance", "point_inside"};
+        "contacts", "distance", "mesh_distance", "model_distance", "point_inside",
+        // shape casts (docs/batch.md)
+        "cast"};
     std::sort(v.begin(), v.end());
     return v;
   }();
