@@ -35,6 +35,13 @@ std::string joinedBackendNames(const char* separator) {
   return s;
 }
 
+/// This executable's path (/proc/self/exe), for the worker processes of `crux batch` and `crux diff`.
+std::string selfExecutable() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  return n > 0 ? std::string(self, std::size_t(n)) : std::string();
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,6 +75,19 @@ int main(int argc, char** argv) {
                    "is identical for every N.")
       ->capture_default_str()
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
+  double batchTimeout = 30;
+  bool batchWorker = false, batchInProcess = false;
+  batch
+      ->add_option("--timeout", batchTimeout,
+                   "Time limit per line, in seconds, of the worker process that answers fcl and bullet: a "
+                   "line that takes longer gets \"<backend> failed on <op>: timeout ...\" and the worker is "
+                   "restarted")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  batch->add_flag("--in-process", batchInProcess,
+                  "Answer fcl and bullet in this process (no worker): faster to start, but a peer library "
+                  "that aborts or hangs takes the whole run down");
+  batch->add_flag("--worker", batchWorker, "Internal: the worker side of an isolated peer backend")->group("");
 
   CLI::App* info = app.add_subcommand(
       "info",
@@ -103,13 +123,36 @@ int main(int argc, char** argv) {
   diff->add_option("--meshes", diffOptions.meshDir, "Directory of the real meshes (bunny00.off, cow.off, ...)")
       ->capture_default_str();
   diff->add_flag("--quiet", diffOptions.quiet, "No text summary");
+  diff->add_option("--first-case", diffOptions.firstCase,
+                   "Index of the first case: the run answers cases K..K+N-1 (--cases N) of the sequence --seed "
+                   "defines, so shards of a campaign are runs of consecutive ranges (docs/diff.md)")
+      ->capture_default_str();
+  diff->add_option("--shard-dir", diffOptions.shardDir,
+                   "Write this run as a campaign shard: DIR/started.json at the start, the shrunk cases to "
+                   "DIR/findings, the summary to DIR/summary.json at the end (`crux diff merge` reads them)");
+  CLI::App* merge = diff->add_subcommand(
+      "merge",
+      "Merge the shard directories of a campaign (runs of --first-case/--cases --shard-dir): add the op x "
+      "backend tables, join the findings without duplicates, name the shards missing or failed, and print "
+      "and write the same summary a serial run gives. Exit 1: crux wrong found; 3: shards missing or failed.");
+  std::vector<std::string> mergeDirs;
+  std::string mergeJson, mergeOut;
+  bool mergeQuiet = false;
+  merge->add_option("shards", mergeDirs, "Shard directories")->required();
+  merge->add_option("--json", mergeJson, "Write the merged summary as JSON to this file");
+  merge->add_option("--out", mergeOut, "Copy the kept findings' files here");
+  merge->add_flag("--quiet", mergeQuiet, "No text summary");
+  diff->add_option("--peer-timeout", diffOptions.peerTimeoutSeconds,
+                   "Time limit per line, in seconds, of the worker processes answering fcl and bullet")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   // ---- crux report (the main job, docs/report.md) ----
   CLI::App* report = app.add_subcommand(
       "report",
       "The main job: cross-validation (oracle sanity suite, crux diff) and performance against Embree, "
       "FCL and Bullet (bench_mesh, bench_scene, bench_scaling, ...), written to DIR/index.html (SVG "
-      "charts), DIR/summary.md and DIR/results.json (docs/report.md). Progress on stderr.");
+      "charts), DIR/summary.md and DIR/results.json (docs/report.md). Progress on stderr when it is a terminal.");
   crux::cli::ReportOptions reportOptions;
   bool reportQuick = false, reportFull = false;
   std::string reportBudget;
@@ -128,6 +171,11 @@ int main(int argc, char** argv) {
                    "Also count instructions per ray per backend under valgrind's callgrind");
   report->add_option("--bin-dir", reportOptions.binDir,
                      "Directory of the bench executables and test_sanity (default: next to crux)");
+  report->add_option("--render", reportOptions.renderFrom,
+                     "Run nothing: re-render DIR's outputs from this results.json (of an earlier run)");
+  report->add_option("--compare", reportOptions.compareWith,
+                     "An earlier run's results.json: per workload its figures beside today's, changes beyond "
+                     "the measured noise flagged");
 
   try {
     app.parse(argc, argv);
@@ -141,12 +189,23 @@ int main(int argc, char** argv) {
     crux::cli::BatchOptions options;
     options.backend = *crux::cli::parseBackend(backend);
     options.threads = threads;
+    options.timeoutSeconds = batchTimeout;
+    if (!batchInProcess) options.workerExecutable = selfExecutable();
     try {
+      if (batchWorker) return crux::cli::runWorker(std::cin, std::cout, options);
       const int status = crux::cli::runBatch(std::cin, std::cout, options);
       if (status != 0) std::cerr << "crux batch: reading standard input or writing standard output failed\n";
       return status;
-    } catch (const crux::InvalidInput& e) {
+    } catch (const std::exception& e) {  // invalid options; a worker that cannot be started
       std::cerr << "crux batch: " << e.what() << '\n';
+      return 2;
+    }
+  }
+  if (merge->parsed()) {
+    try {
+      return crux::cli::runMergeCommand(mergeDirs, mergeJson, mergeOut, mergeQuiet, std::cout);
+    } catch (const crux::InvalidInput& e) {
+      std::cerr << "crux diff merge: " << e.what() << '\n';
       return 2;
     }
   }
@@ -168,9 +227,10 @@ int main(int argc, char** argv) {
     diffOptions.ops = split(diffOps);
     diffOptions.backends = split(diffBackends);
     diffOptions.progress = !diffOptions.quiet && isatty(fileno(stderr));
+    diffOptions.workerExecutable = selfExecutable();
     try {
       return crux::cli::runDiffCommand(diffOptions, std::cout, std::cerr);
-    } catch (const crux::InvalidInput& e) {
+    } catch (const std::exception& e) {  // invalid options; a worker that cannot be started
       std::cerr << "crux diff: " << e.what() << '\n';
       return 2;
     }
@@ -180,6 +240,7 @@ int main(int argc, char** argv) {
     if (reportBudget == "tiny") reportOptions.budget = crux::cli::ReportBudget::Tiny;
     if (reportBudget == "full") reportOptions.budget = crux::cli::ReportBudget::Full;
     if (reportBudget == "quick") reportOptions.budget = crux::cli::ReportBudget::Quick;
+    reportOptions.progressLine = isatty(fileno(stderr)) && isatty(fileno(stdout));
     return crux::cli::runReport(reportOptions, std::cerr);
   }
   if (info->parsed()) {

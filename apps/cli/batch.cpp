@@ -3,6 +3,7 @@
 #include "cli/json_codec.hpp"
 #include "cli/mesh_ops.hpp"
 #include "cli/narrowphase_ops.hpp"
+#include "cli/peer_worker.hpp"
 #include "cli/primitive_ops.hpp"
 #include "cli/scene_ops.hpp"
 
@@ -15,6 +16,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <cstdlib>
+#include <mutex>
 #include <istream>
 #include <ostream>
 #include <stdexcept>
@@ -257,18 +261,68 @@ Answer answerSafely(const ParsedLine& parsed, BatchState& state) {
 /// The output line of an answer (without its '\n'), as writeAnswer writes it.
 std::string answerText(const Answer& answer) { return answer.dump(-1, ' ', false, Answer::error_handler_t::replace); }
 
+/// The answers of a window of lines, written in input order as soon as each answer and all
+/// before it are done (from whichever thread completes the prefix), each write flushed: a crash
+/// loses no answer that could have been written.
+class OrderedOutput {
+ public:
+  OrderedOutput(std::ostream& out, std::vector<std::string>& answers) : out_(out), answers_(answers) {}
+  /// Starts a window of `n` answers.
+  void reset(std::size_t n) {
+    if (capacity_ < n) {
+      done_ = std::make_unique<std::atomic<bool>[]>(n);
+      capacity_ = n;
+    }
+    for (std::size_t i = 0; i < n; ++i) done_[i].store(false, std::memory_order_relaxed);
+    size_ = n;
+    next_ = 0;
+  }
+  /// answers[i] is final: writes it and the answers after it that are done, unless another
+  /// thread is writing (that thread, or the next finish, writes them).
+  void finished(std::size_t i) {
+    done_[i].store(true, std::memory_order_release);
+    std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (lock) drain();
+  }
+  /// Writes every done answer in order; at the end of a window, all of them. False when
+  /// writing failed.
+  bool drain() {
+    const std::size_t first = next_;
+    while (next_ < size_ && done_[next_].load(std::memory_order_acquire)) out_ << answers_[next_++] << '\n';
+    if (next_ != first) out_.flush();
+    return bool(out_);
+  }
+  bool finish() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return drain() && next_ == size_;
+  }
+
+ private:
+  std::ostream& out_;
+  std::vector<std::string>& answers_;
+  std::unique_ptr<std::atomic<bool>[]> done_;
+  std::size_t capacity_ = 0, size_ = 0, next_ = 0;
+  std::mutex mutex_;
+};
+
 /// Answers lines [begin, end) of a window, all queries, in parallel (the world was prepared),
 /// serialising each answer on its worker too.
 void answerInParallel(const std::vector<ParsedLine>& parsed, std::vector<std::string>& answers, std::size_t begin,
-                      std::size_t end, BatchState& state, tbb::task_arena& arena) {
+                      std::size_t end, BatchState& state, tbb::task_arena& arena, OrderedOutput& output) {
   if (end - begin < 2) {
-    for (std::size_t i = begin; i < end; ++i) answers[i] = answerText(answerSafely(parsed[i], state));
+    for (std::size_t i = begin; i < end; ++i) {
+      answers[i] = answerText(answerSafely(parsed[i], state));
+      output.finished(i);
+    }
     return;
   }
   state.world->prepareConcurrentQueries();
   arena.execute([&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i != r.end(); ++i) answers[i] = answerText(answerSafely(parsed[i], state));
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        answers[i] = answerText(answerSafely(parsed[i], state));
+        output.finished(i);
+      }
     });
   });
 }
@@ -279,15 +333,25 @@ int runParallel(std::istream& in, std::ostream& out, BatchState& state, int thre
   std::vector<std::string> lines;
   std::vector<ParsedLine> parsed;
   std::vector<std::string> answers;
+  OrderedOutput output(out, answers);
   lines.reserve(kBatchWindow);
   for (bool more = true; more;) {
+    // a window: the lines already available (at least one, at most kBatchWindow), so that a
+    // client waiting for each answer before it writes the next line is answered
     lines.clear();
     std::string line;
-    while (lines.size() < kBatchWindow && std::getline(in, line)) lines.push_back(std::move(line));
-    more = lines.size() == kBatchWindow;
+    while (lines.size() < kBatchWindow) {
+      if (!lines.empty() && in.rdbuf()->in_avail() <= 0) break;
+      if (!std::getline(in, line)) {
+        more = false;
+        break;
+      }
+      lines.push_back(std::move(line));
+    }
     if (lines.empty()) break;
     parsed.assign(lines.size(), ParsedLine{});
     answers.assign(lines.size(), std::string());
+    output.reset(lines.size());
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines.size()),
                         [&](const tbb::blocked_range<std::size_t>& r) {
@@ -303,15 +367,32 @@ int runParallel(std::istream& in, std::ostream& out, BatchState& state, int thre
     std::size_t runStart = 0;
     for (std::size_t i = 0; i < parsed.size(); ++i) {
       if (parsed[i].answer || !isBarrierOp(parsed[i].op)) continue;
-      answerInParallel(parsed, answers, runStart, i, state, arena);
+      answerInParallel(parsed, answers, runStart, i, state, arena, output);
       answers[i] = answerText(answerSafely(parsed[i], state));
+      output.finished(i);
       runStart = i + 1;
     }
-    answerInParallel(parsed, answers, runStart, parsed.size(), state, arena);
-    for (const std::string& a : answers) {
-      out << a << '\n';
-      if (!out) return 1;
-    }
+    answerInParallel(parsed, answers, runStart, parsed.size(), state, arena, output);
+    if (!output.finish()) return 1;
+  }
+  out.flush();
+  return (in.bad() || !out) ? 1 : 0;
+}
+
+/// Whether `backend` runs in a worker process when BatchOptions::workerExecutable is set.
+bool isolatedBackend(Backend backend) { return backend == Backend::Fcl || backend == Backend::Bullet; }
+
+/// runBatch for a peer backend in a worker process (PeerWorker), one line at a time.
+int runIsolated(std::istream& in, std::ostream& out, const BatchOptions& options) {
+  PeerWorker worker({options.workerExecutable, options.backend, options.timeoutSeconds,
+                     std::max(options.timeoutSeconds, 60.0)});
+  std::string line;
+  std::vector<std::string> one(1);
+  while (std::getline(in, line)) {
+    one[0] = std::move(line);
+    out << worker.answer(one).front() << '\n';
+    out.flush();
+    if (!out) return 1;
   }
   out.flush();
   return (in.bad() || !out) ? 1 : 0;
@@ -344,7 +425,9 @@ const std::vector<std::string_view>& protocolOps() {
         // scene
         "scene_ray", "scene_query", "scene_pairs",
         // narrow phase and volumes (issue 6; beyond the shared contract, see docs/batch.md)
-        "contacts", "distance", "mesh_distance", "model_distance", "point_inside"};
+        "contacts", "distance", "mesh_distance", "model_distance", "point_inside",
+        // shape casts (docs/batch.md)
+        "cast"};
     std::sort(v.begin(), v.end());
     return v;
   }();
@@ -403,15 +486,63 @@ void writeAnswer(std::ostream& out, const Answer& answer) { out << answerText(an
 int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options) {
   if (options.threads < 1)
     throw InvalidInput("threads: must be at least 1, got " + std::to_string(options.threads));
+  if (!(options.timeoutSeconds > 0))
+    throw InvalidInput("timeout: must be positive, got " + std::to_string(options.timeoutSeconds));
   BatchState state(options);
+  if (!options.workerExecutable.empty() && isolatedBackend(options.backend)) return runIsolated(in, out, options);
   if (options.threads > 1 && state.world->concurrentQueries()) return runParallel(in, out, state, options.threads);
   std::string line;
   while (std::getline(in, line)) {
     writeAnswer(out, answerLine(line, state));
+    out.flush();  // streamed: a crash later loses no answer written so far
     if (!out) return 1;
   }
   out.flush();
   return (in.bad() || !out) ? 1 : 0;
+}
+
+std::string failureAnswer(const std::string& line, Backend backend, const std::string& failure) {
+  const ParsedLine parsed = parseLine(line);
+  const std::string& op = parsed.op;
+  const std::optional<WorldOp> worldOp = parseOp(op);
+  const std::string message = worldOp ? BackendFailure(*worldOp, backendName(backend), failure).what()
+                                      : std::string(backendName(backend)) + " failed: " + failure;
+  return answerText(errorAnswer(parsed.request, message));
+}
+
+int runWorker(std::istream& in, std::ostream& out, const BatchOptions& options) {
+  BatchOptions inProcess = options;
+  inProcess.workerExecutable.clear();
+  inProcess.threads = 1;
+  std::map<int, BatchState> slots;
+  BatchState* state = nullptr;
+  out << "ready\n";
+  out.flush();
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    const char tag = line[0];
+    if (tag == 'r' || tag == 's') {
+      const int slot = std::atoi(line.c_str() + 1);
+      auto it = slots.find(slot);
+      if (it == slots.end()) it = slots.emplace(slot, BatchState(inProcess)).first;
+      else if (tag == 'r') it->second = BatchState(inProcess);
+      state = &it->second;
+      out << "ok\n";
+    } else if (tag == 'q') {
+      if (!state) state = &slots.emplace(0, BatchState(inProcess)).first->second;
+      const ParsedLine parsed = parseLine(line.substr(1));
+      const Answer answer = answerSafely(parsed, *state);
+      const bool changed = !parsed.answer && isBarrierOp(parsed.op) && parsed.op != "scene_pairs" &&
+                           !answer.contains("error");
+      out << (changed ? '+' : '=') << answerText(answer) << '\n';
+    } else {
+      out << "=" << answerText(errorAnswer(Json(), "worker: unknown tag")) << '\n';
+    }
+    out.flush();
+    if (!out) return 1;
+  }
+  return 0;
 }
 
 }  // namespace crux::cli

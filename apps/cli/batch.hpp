@@ -47,6 +47,13 @@ struct BatchOptions {
   /// (native), runBatch answers each run of consecutive query lines in parallel with oneTBB;
   /// the output is byte-identical to N = 1. Peer backends are answered serially.
   int threads = 1;
+  /// The `crux` executable. When set, runBatch answers the peer backends (fcl, bullet) in a
+  /// worker process (PeerWorker, apps/cli/peer_worker.hpp): a query on which the peer library
+  /// aborts, crashes or exceeds timeoutSeconds gets "<backend> failed on <op>: <signal or
+  /// timeout>" and every other line is answered. Empty: every backend answers in process.
+  std::string workerExecutable;
+  /// Time limit per line of a worker process, in seconds (> 0).
+  double timeoutSeconds = 30;
 };
 
 struct BatchState;
@@ -129,15 +136,28 @@ Answer answerLine(const std::string& line, BatchState& state);
 /// shortest form; invalid UTF-8 replaced by U+FFFD) followed by '\n'.
 void writeAnswer(std::ostream& out, const Answer& answer);
 
-/// Runs a batch: answers every line of `in` on `out`, one line each, in order, and flushes.
+/// Runs a batch: answers every line of `in` on `out`, one line each, in order, flushing each
+/// answer as soon as it and every answer before it are written (so a crash loses no answer
+/// already computed in order). With a workerExecutable, fcl and bullet answer in a worker
+/// process (see BatchOptions::workerExecutable).
 /// With options.threads > 1 and a world whose concurrentQueries() is true, it reads windows of
-/// up to kBatchWindow lines, answers each run of consecutive non-barrier lines in parallel
+/// the lines already available (std::streambuf::in_avail; at least one, up to kBatchWindow), answers each run of consecutive non-barrier lines in parallel
 /// (oneTBB, at most `threads` workers, after CollisionWorld::prepareConcurrentQueries()) and
 /// each barrier line alone, and writes the answers in input order: the output is identical to
 /// threads = 1. Returns 0 when `in` was read to its end and every answer was written, 1 when
-/// reading or writing failed. Throws crux::InvalidInput for invalid options (threads < 1, a
-/// backend not built).
+/// reading or writing failed. Throws crux::InvalidInput for invalid options (threads < 1,
+/// timeoutSeconds <= 0, a backend not built).
 int runBatch(std::istream& in, std::ostream& out, const BatchOptions& options);
+
+/// The error answer (one line of text) of a request line on which `backend`'s worker process
+/// failed: the request's "id" and "op" echoed and "error": "<backend> failed on <op>:
+/// <failure>" (crux::BackendFailure's text).
+std::string failureAnswer(const std::string& line, Backend backend, const std::string& failure);
+
+/// `crux batch --worker`: the worker side of PeerWorker's protocol (apps/cli/peer_worker.hpp),
+/// answering in process with one BatchState per slot, every reply flushed. Returns 0 at the end
+/// of `in`, 1 when writing failed.
+int runWorker(std::istream& in, std::ostream& out, const BatchOptions& options);
 
 /// Lines runBatch reads ahead with threads > 1.
 inline constexpr std::size_t kBatchWindow = 4096;

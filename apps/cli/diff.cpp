@@ -2,6 +2,7 @@
 /// the exact arbiter, shrinking, and the run's summary (docs/diff.md).
 
 #include "cli/diff.hpp"
+#include "cli/peer_worker.hpp"
 
 #include <crux/error.hpp>
 #include <crux/geometry/closest_point.hpp>
@@ -10,11 +11,6 @@
 
 #include <Eigen/Geometry>
 
-#include <csignal>
-#include <fcntl.h>
-#include <poll.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #if __has_include(<world_factory.hpp>)
 #include <world_factory.hpp>
@@ -192,8 +188,20 @@ bool probeFlips(const DiffCase& c, const J& query, const J& exact, const J& got,
     listUnion = listCommon;
     first = false;
   }
+  // scene_pairs: move a model of the first pair on which the answers differ (the last model
+  // added may be in no such pair)
+  std::string mover;
+  if (c.op == "scene_pairs" && got.contains("pairs") && exact.contains("pairs")) {
+    const std::set<J> g(got["pairs"].begin(), got["pairs"].end()), e(exact["pairs"].begin(), exact["pairs"].end());
+    for (const auto* from : {&e, &g}) {
+      const std::set<J>& other = from == &e ? g : e;
+      for (const J& pair : *from)
+        if (mover.empty() && !other.count(pair) && pair.is_array() && pair.size() == 2 && pair[1].is_string())
+          mover = pair[1].get<std::string>();
+    }
+  }
   for (const Vec3d& off : probeOffsets(tau, !c.sharedSetup)) {
-    const auto moved = translatedCase(c, off);
+    const auto moved = translatedCase(c, off, mover);
     if (!moved) return false;
     const Answer p = probeExact(*moved);
     if (hasError(p)) continue;
@@ -264,6 +272,13 @@ bool degenerate(const std::array<V, 3>& t) {
   return (long double)u[1] * v[2] - (long double)u[2] * v[1] == 0 &&
          (long double)u[2] * v[0] - (long double)u[0] * v[2] == 0 &&
          (long double)u[0] * v[1] - (long double)u[1] * v[0] == 0;
+}
+
+/// The smallest height of a triangle (twice its area over its longest edge; 0 when degenerate).
+double smallestHeight(const std::array<V, 3>& t) {
+  const Vec3d a(t[0][0], t[0][1], t[0][2]), b(t[1][0], t[1][1], t[1][2]), c(t[2][0], t[2][1], t[2][2]);
+  const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
+  return longest > 0 ? (b - a).cross(c - a).norm() / longest : 0;
 }
 
 /// A ray origin or segment endpoint lying exactly on the plane of a (non-degenerate) triangle.
@@ -629,6 +644,7 @@ std::string_view verdictName(Verdict verdict) {
     case Verdict::Unsupported: return "unsupported";
     case Verdict::Error: return "error";
     case Verdict::NoArbiter: return "no_arbiter";
+    case Verdict::PeerFailed: return "peer_failed";
   }
   return "?";
 }
@@ -651,7 +667,7 @@ double caseMagnitude(const DiffCase& c) {
   return s;
 }
 
-std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
+std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset, std::string_view model) {
   DiffCase out = c;
   J q = J::parse(c.query, nullptr, false);
   if (!q.is_object()) return std::nullopt;
@@ -698,10 +714,15 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
     }
     return std::nullopt;
   } else if (c.op == "scene_pairs") {
-    // move the last model added
+    // move `model` (its local translation in the last line that sets it), or the last model added
     for (auto line = out.setup.rbegin(); line != out.setup.rend(); ++line) {
       J m = J::parse(*line, nullptr, false);
-      if (!m.is_object() || m.value("op", "") != "add_model") continue;
+      if (!m.is_object()) continue;
+      const std::string op = m.value("op", "");
+      const bool sets = model.empty() ? op == "add_model"
+                                      : (op == "add_model" && m.value("name", "") == model) ||
+                                            (op == "set_transform" && m.value("model", "") == model);
+      if (!sets) continue;
       moveTransform(m["transform"], offset);
       *line = m.dump();
       return out;
@@ -724,82 +745,45 @@ std::optional<DiffCase> translatedCase(const DiffCase& c, const Vec3d& offset) {
 
 // ---- running -------------------------------------------------------------------------------------
 
+/// Time limit of a case's setup lines in a worker (loading a real mesh into FCL takes seconds
+/// on a loaded machine); the queries have DiffOptions::peerTimeoutSeconds.
+constexpr double kSetupTimeoutSeconds = 60;
+
 struct DiffRunner::Impl {
   struct Prepared {
     std::unique_ptr<BatchState> state;
     std::optional<Answer> setupError;
   };
+  /// A shared setup prepared in a worker's slot.
+  struct Slot {
+    int slot = 0;
+    std::optional<Answer> setupError;
+  };
   std::map<std::string, Prepared> shared;
+  std::map<std::string, Slot> sharedSlots;  ///< by backend + setup
   std::map<std::string, WorldTolerance, std::less<>> tolerances;
+  std::string workerExecutable;
+  double timeoutSeconds = 2;
+  std::map<Backend, std::unique_ptr<PeerWorker>> workers;
+
+  /// The worker answering `backend`; null when it answers in process.
+  PeerWorker* worker(Backend backend) {
+    if (workerExecutable.empty() || (backend != Backend::Fcl && backend != Backend::Bullet)) return nullptr;
+    auto& w = workers[backend];
+    if (!w)
+      w = std::make_unique<PeerWorker>(
+          PeerWorkerOptions{workerExecutable, backend, timeoutSeconds, std::max(kSetupTimeoutSeconds, timeoutSeconds)});
+    return w.get();
+  }
 };
 
-DiffRunner::DiffRunner() : impl_(std::make_unique<Impl>()) {}
+DiffRunner::DiffRunner(std::string workerExecutable, double timeoutSeconds) : impl_(std::make_unique<Impl>()) {
+  impl_->workerExecutable = std::move(workerExecutable);
+  impl_->timeoutSeconds = timeoutSeconds;
+}
 DiffRunner::~DiffRunner() = default;
 
 namespace {
-/// How long an isolated peer query may run before its process is killed.
-constexpr int kIsolatedTimeoutMs = 2000;
-
-/// Answers `line` in a forked child process and returns its answer; a child that dies (FCL 0.7's
-/// libccd GJK/EPA abort on assertions — "A is not in region 1", "isOutsidePolytopeFace" — on
-/// touching and degenerate convex pairs) gives an error answer naming the signal, and the run
-/// goes on. The child's standard error is discarded (the assertion text).
-Answer answerIsolated(const std::string& line, BatchState& state, std::string_view backend) {
-  int fds[2];
-  if (pipe(fds) != 0) return answerLine(line, state);
-  std::fflush(nullptr);
-  const pid_t pid = fork();
-  if (pid < 0) {
-    close(fds[0]);
-    close(fds[1]);
-    return answerLine(line, state);
-  }
-  if (pid == 0) {
-    close(fds[0]);
-    if (const int null = open("/dev/null", O_WRONLY); null >= 0) dup2(null, 2);
-    const std::string out = answerLine(line, state).dump();
-    for (std::size_t done = 0; done < out.size();) {
-      const ssize_t n = write(fds[1], out.data() + done, out.size() - done);
-      if (n <= 0) break;
-      done += std::size_t(n);
-    }
-    close(fds[1]);
-    _exit(0);
-  }
-  close(fds[1]);
-  std::string text;
-  char buffer[4096];
-  bool timedOut = false;
-  for (;;) {
-    pollfd p{fds[0], POLLIN, 0};
-    const int ready = poll(&p, 1, kIsolatedTimeoutMs);
-    if (ready == 0) {  // FCL also loops forever on some pairs: the child is killed
-      kill(pid, SIGKILL);
-      timedOut = true;
-      break;
-    }
-    if (ready < 0) break;
-    const ssize_t n = read(fds[0], buffer, sizeof buffer);
-    if (n <= 0) break;
-    text.append(buffer, std::size_t(n));
-  }
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!timedOut && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-    J a = J::parse(text, nullptr, false);
-    if (a.is_object()) return a;
-  }
-  J q = J::parse(line, nullptr, false);
-  J a = J::object();
-  if (q.is_object() && q.contains("op")) a["op"] = q["op"];
-  a["error"] = std::string(backend) + (timedOut ? " did not answer within " + std::to_string(kIsolatedTimeoutMs / 1000) +
-                                                     " s (killed)"
-                                               : " aborted" + (WIFSIGNALED(status)
-                                                                   ? " (signal " + std::to_string(WTERMSIG(status)) + ")"
-                                                                   : std::string()));
-  return a;
-}
 
 /// Runs setup lines; returns the first error answer, if any.
 std::optional<Answer> runSetup(const std::vector<std::string>& setup, BatchState& state) {
@@ -812,15 +796,54 @@ std::optional<Answer> runSetup(const std::vector<std::string>& setup, BatchState
   }
   return std::nullopt;
 }
+
+/// The first error among a worker's answers to setup lines, as runSetup reports it.
+std::optional<Answer> setupError(const std::vector<std::string>& answers, std::size_t setupLines) {
+  for (std::size_t i = 0; i < setupLines && i < answers.size(); ++i) {
+    Answer a = Answer::parse(answers[i], nullptr, false);
+    if (!a.is_object()) a = Answer{{"error", "unreadable answer: " + answers[i]}};
+    if (hasError(a)) {
+      a["error"] = "setup: " + a["error"].get<std::string>();
+      return a;
+    }
+  }
+  return std::nullopt;
+}
+
+Answer parsedAnswer(const std::string& text) {
+  Answer a = Answer::parse(text, nullptr, false);
+  return a.is_object() ? a : Answer{{"error", "unreadable answer: " + text}};
+}
+
 }  // namespace
 
 Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
   const auto b = parseBackend(backend);
   if (!b) throw InvalidInput("backends: unknown backend \"" + std::string(backend) + "\"");
+  if (PeerWorker* worker = impl_->worker(*b)) {
+    std::vector<std::string> lines = c.setup;
+    lines.push_back(c.query);
+    if (!c.sharedSetup) {
+      const std::vector<std::string> answers = worker->answer(lines, 0, true, c.setup.size());
+      if (auto error = setupError(answers, c.setup.size())) return *error;
+      return parsedAnswer(answers.back());
+    }
+    std::string key(backend);
+    for (const auto& line : c.setup) key += "\n" + line;
+    auto it = impl_->sharedSlots.find(key);
+    if (it == impl_->sharedSlots.end()) {
+      Impl::Slot slot;
+      slot.slot = int(impl_->sharedSlots.size()) + 1;
+      const std::vector<std::string> answers = worker->answer(lines, slot.slot, true, c.setup.size());
+      slot.setupError = setupError(answers, c.setup.size());
+      impl_->sharedSlots.emplace(key, slot);
+      return slot.setupError ? *slot.setupError : parsedAnswer(answers.back());
+    }
+    if (it->second.setupError) return *it->second.setupError;
+    return parsedAnswer(worker->answer({c.query}, it->second.slot).front());
+  }
   BatchOptions options;
   options.backend = *b;
-  // FCL's narrow phase may abort the process: its answers are computed in a child process
-  const bool isolate = backend == "fcl" && isNarrowOp(c.op);
   if (c.sharedSetup) {
     std::string key(backend);
     for (const auto& line : c.setup) key += "\n" + line;
@@ -832,11 +855,11 @@ Answer DiffRunner::run(const DiffCase& c, std::string_view backend) {
       it = impl_->shared.emplace(key, std::move(p)).first;
     }
     if (it->second.setupError) return *it->second.setupError;
-    return isolate ? answerIsolated(c.query, *it->second.state, backend) : answerLine(c.query, *it->second.state);
+    return answerLine(c.query, *it->second.state);
   }
   BatchState state(options);
   if (auto error = runSetup(c.setup, state)) return *error;
-  return isolate ? answerIsolated(c.query, state, backend) : answerLine(c.query, state);
+  return answerLine(c.query, state);
 }
 
 WorldTolerance DiffRunner::tolerance(std::string_view backend) {
@@ -865,6 +888,19 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   }
   if (!gotError.empty()) {
     if (startsWith(gotError, "unsupported:")) return {Verdict::Unsupported, "", gotError};
+    if (backend != "native") {
+      // "<backend> failed on <op>: ..." (crux::BackendFailure, or the worker process's end)
+      const std::string failed = std::string(backend) + " failed on ";
+      const std::string text = startsWith(gotError, "setup: ") ? gotError.substr(7) : gotError;
+      if (startsWith(text, failed)) {
+        const std::size_t colon = text.find(": ", failed.size());
+        const std::string what = colon == std::string::npos ? std::string() : text.substr(colon + 2);
+        const char* cause = startsWith(what, "timeout")                                   ? "timeout"
+                            : startsWith(what, "SIG") || startsWith(what, "the worker") ? "crash"
+                                                                                        : "exception";
+        return {Verdict::PeerFailed, cause, gotError};
+      }
+    }
     return {backend == "native" ? Verdict::CruxWrong : Verdict::Error, "error-answer", gotError};
   }
   const J query = J::parse(c.query, nullptr, false);
@@ -929,12 +965,18 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (bullet && probeFlips(c, query, exact, got, 0.04, numTol, probeExact, false)) return peer("margin");
     return peer("unexplained");
   }
+  // the point on the triangle: exact's closest point is the point itself, up to exact's one
+  // rounding of the result (within τ; a corner 1.4e-45 off the grid puts an edge's midpoint 2e-15
+  // from its rounded closest point), and FCL, seeing a collision, computes no nearest point
   if (fcl && c.op == "closest_point_triangle" && query.contains("point") &&
-      maxDiff(exact["point"], query["point"]) == 0)
+      maxDiff(exact["point"], query["point"]) <= tau)
     return peer("nearest-points-in-collision");
   if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, tris)) return peer("plane-endpoint");
   for (const auto& t : caseTriangles(c, query, true))
     if (degenerate(t)) return peer("degenerate-triangle");
+  // a sliver thinner than the peer's tolerance: within τ of the segment it nearly is
+  for (const auto& t : caseTriangles(c, query, true))
+    if (smallestHeight(t) <= tau) return peer("sliver-triangle");
   bool pointSphere = false;
   if (flatShape(query, &pointSphere)) return peer(bullet && pointSphere ? "point-sphere" : "flat-shape");
   if (bullet && (c.op == "mesh_mesh" || c.op == "scene_pairs") && diff == Difference::Boolean &&
@@ -1080,8 +1122,8 @@ DiffCase shrinkCase(const DiffCase& c, const Classification& target,
 
 namespace {
 
-const std::vector<std::string> kVerdictColumns = {"agree", "within_tolerance", "peer_wrong", "crux_wrong",
-                                                  "unsupported", "error", "no_arbiter"};
+const std::vector<std::string> kVerdictColumns = {"agree",       "within_tolerance", "peer_wrong", "crux_wrong",
+                                                  "unsupported", "error",            "no_arbiter", "peer_failed"};
 
 std::vector<std::string> allQueryOps() {
   std::vector<std::string> ops;
@@ -1108,6 +1150,13 @@ void writeCase(const std::string& dir, const std::string& name, const DiffCase& 
 
 Answer DiffSummary::toJson() const {
   J j = J::object();
+  j["seed"] = seed;
+  j["first_case"] = firstCase;
+  j["requested_cases"] = requestedCases;
+  j["families"] = families;
+  j["ops"] = ops;
+  j["backends"] = backends;
+  j["shrink_per_kind"] = shrinkPerKind;
   j["cases"] = cases;
   j["seconds"] = seconds;
   J t = J::object();
@@ -1127,9 +1176,13 @@ Answer DiffSummary::toJson() const {
   J tcauses = J::object();
   for (const auto& [backend, m] : toleranceCauses) tcauses[backend] = J(m);
   j["within_tolerance_causes"] = tcauses;
+  J failures = J::object();
+  for (const auto& [backend, m] : peerFailures) failures[backend] = J(m);
+  j["peer_failures"] = failures;
   j["crux_wrong"] = cruxWrong;
   j["findings"] = J(findings);
   j["error_examples"] = J(exampleErrors);
+  j["error_example_cases"] = J(exampleErrorCases);
   return j;
 }
 
@@ -1138,7 +1191,7 @@ void DiffSummary::print(std::ostream& out) const {
   for (const auto& [op, perBackend] : table)
     for (const auto& [b, counts] : perBackend) backends.insert(b);
   out << "crux diff: " << cases << " cases in " << std::fixed << std::setprecision(1) << seconds << " s\n";
-  out << "per op x backend (exact: answered / - / - / - / unsupported / error): agree / within tolerance / peer wrong / crux wrong / unsupported / error / no arbiter\n";
+  out << "per op x backend (exact: answered / - / - / - / unsupported / error): agree / within tolerance / peer wrong / crux wrong / unsupported / error / no arbiter / peer failed\n";
   out << std::left << std::setw(24) << "op";
   for (const auto& b : backends) out << std::setw(30) << b;
   out << '\n';
@@ -1156,7 +1209,8 @@ void DiffSummary::print(std::ostream& out) const {
     out << '\n';
   }
   for (const auto& [title, m] : {std::pair{"peer wrong, by likely cause", &peerCauses},
-                                 std::pair{"within tolerance, by reason", &toleranceCauses}}) {
+                                 std::pair{"within tolerance, by reason", &toleranceCauses},
+                                 std::pair{"peer failed (threw, crashed or timed out)", &peerFailures}}) {
     if (m->empty()) continue;
     out << title << ":\n";
     for (const auto& [backend, causes] : *m)
@@ -1206,15 +1260,22 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       anyOp = anyOp || options.ops.empty() || std::find(options.ops.begin(), options.ops.end(), op) != options.ops.end();
   if (!anyOp) throw InvalidInput("ops: no selected family generates any of the selected ops");
 
-  DiffRunner runner;
+  DiffRunner runner(options.workerExecutable, options.peerTimeoutSeconds);
   const WorldTolerance exactTol = runner.tolerance("exact");
   DiffSummary summary;
   std::map<std::string, int> written;  // shrunk cases per (backend, op, verdict, cause)
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   double lastDraw = -1;
-  for (std::uint64_t index = 0;; ++index) {
-    if (options.seconds > 0 ? elapsed() >= options.seconds : index >= options.cases) break;
+  summary.seed = options.seed;
+  summary.firstCase = options.firstCase;
+  summary.requestedCases = options.seconds > 0 ? 0 : options.cases;
+  summary.families = families;
+  summary.ops = options.ops;
+  summary.backends = backends;
+  summary.shrinkPerKind = options.shrinkPerKind;
+  for (std::uint64_t index = options.firstCase;; ++index) {
+    if (options.seconds > 0 ? elapsed() >= options.seconds : index >= options.firstCase + options.cases) break;
     const std::string& family = families[index % families.size()];
     const auto generated = generateCase(family, options.seed, index, generator);
     if (!generated) continue;
@@ -1232,8 +1293,10 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
     {
       const std::string e = errorText(exact);
       ++summary.table[c.op]["exact"][e.empty() ? "agree" : startsWith(e, "unsupported:") ? "unsupported" : "error"];
-      if (!e.empty() && !summary.exampleErrors.count("exact." + c.op))
+      if (!e.empty() && !summary.exampleErrors.count("exact." + c.op)) {
         summary.exampleErrors["exact." + c.op] = e + " <- " + c.query;
+        summary.exampleErrorCases["exact." + c.op] = c.index;
+      }
     }
     // Narrow-phase ops on a build whose exact backend does not answer them: native is the
     // reference for the peers (and has no arbiter itself).
@@ -1251,9 +1314,13 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
       ++summary.table[c.op][backend][std::string(verdictName(k.verdict))];
       if (k.verdict == Verdict::PeerWrong) ++summary.peerCauses[backend][k.cause];
       if (k.verdict == Verdict::WithinTolerance) ++summary.toleranceCauses[backend][k.cause];
+      if (k.verdict == Verdict::PeerFailed) ++summary.peerFailures[backend][k.cause];
       if (k.verdict == Verdict::CruxWrong) ++summary.cruxWrong;
-      if (k.verdict == Verdict::Error && !summary.exampleErrors.count(backend + "." + c.op))
+      if ((k.verdict == Verdict::Error || k.verdict == Verdict::PeerFailed) &&
+          !summary.exampleErrors.count(backend + "." + c.op)) {
         summary.exampleErrors[backend + "." + c.op] = k.detail + " <- " + c.query;
+        summary.exampleErrorCases[backend + "." + c.op] = c.index;
+      }
       const bool interesting = k.verdict == Verdict::CruxWrong || k.verdict == Verdict::PeerWrong;
       if (!interesting) continue;
       const std::string kind = backend + "." + (k.verdict == Verdict::CruxWrong ? "crux-wrong" : k.cause) + "." + c.op;
@@ -1269,13 +1336,15 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
         return classifyAnswer(t, backend, g, e, tol, exactTol, probe);
       };
       // Peer findings of the narrow-phase ops stay unshrunk: the shrinker's snapped numbers make
-      // degenerate simplices on which FCL 0.7's libccd GJK aborts the process (assertion "A is not
-      // in region 1" in doSimplex2), which no exception handler can contain.
+      // degenerate simplices on which FCL 0.7's libccd GJK aborts (assertion "A is not in region
+      // 1" in doSimplex2) or loops: a worker restart or the whole time limit per shrink step (and
+      // the end of the process for a runner without workers).
       const bool shrink = !(isNarrowOp(c.op) && backend != "native");
       const DiffCase small = shrink ? shrinkCase(c, k, reclassify, c.sharedSetup ? 60 : 300) : c;
       const Answer smallExact = runner.run(small, "exact"), smallGot = runner.run(small, backend);
       const std::string name = kind + "." + std::to_string(c.seed) + "-" + std::to_string(c.index);
-      J meta = J{{"name", name},         {"family", c.family},
+      J meta = J{{"name", name},         {"kind", kind},
+                 {"family", c.family},
                  {"seed", c.seed},       {"index", c.index},
                  {"op", c.op},           {"backend", backend},
                  {"verdict", std::string(verdictName(k.verdict))},
@@ -1307,14 +1376,32 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
   return summary;
 }
 
-int runDiffCommand(const DiffOptions& options, std::ostream& out, std::ostream& err) {
-  const DiffSummary summary = runDiff(options, err);
-  if (!options.quiet) summary.print(out);
-  if (!options.jsonFile.empty()) {
-    std::ofstream json(options.jsonFile);
-    json << summary.toJson().dump(2) << '\n';
-    if (!json) throw InvalidInput("json: cannot write \"" + options.jsonFile + "\"");
+void writeJsonFile(const std::string& path, const Answer& json) {
+  const std::string temporary = path + ".partial";
+  {
+    std::ofstream out(temporary);
+    out << json.dump(2) << '\n';
+    if (!out) throw InvalidInput("json: cannot write \"" + temporary + "\"");
   }
+  if (std::rename(temporary.c_str(), path.c_str()) != 0) throw InvalidInput("json: cannot write \"" + path + "\"");
+}
+
+int runDiffCommand(const DiffOptions& options, std::ostream& out, std::ostream& err) {
+  DiffOptions run = options;
+  if (!options.shardDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options.shardDir, ec);
+    if (ec) throw InvalidInput("shard-dir: cannot create \"" + options.shardDir + "\": " + ec.message());
+    if (run.outDir.empty()) run.outDir = options.shardDir + "/findings";
+    if (run.jsonFile.empty()) run.jsonFile = options.shardDir + "/summary.json";
+    std::filesystem::remove(options.shardDir + "/summary.json", ec);  // a rerun replaces the shard
+    writeJsonFile(options.shardDir + "/started.json",
+                  J{{"seed", options.seed}, {"first_case", options.firstCase},
+                    {"requested_cases", options.seconds > 0 ? 0 : options.cases}});
+  }
+  const DiffSummary summary = runDiff(run, err);
+  if (!run.quiet) summary.print(out);
+  if (!run.jsonFile.empty()) writeJsonFile(run.jsonFile, summary.toJson());
   return summary.cruxWrong > 0 ? 1 : 0;
 }
 

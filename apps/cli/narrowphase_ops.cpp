@@ -137,6 +137,34 @@ void modelDistanceOp(const Json& request, Answer& answer, BatchState& state) {
   if (d) writeDistance(answer, *d);
 }
 
+/// cast: a (a convex operand), exactly one of "motion" (a translation) or "end" (a transform:
+/// the rigid motion from a's pose to it), b (a convex operand or a mesh).
+void castOp(const Json& request, Answer& answer, BatchState& state) {
+  const WorldOperand a = readOperand(request, "a", state);
+  const WorldOperand b = readOperand(request, "b", state);
+  const bool hasMotion = request.contains("motion"), hasEnd = request.contains("end");
+  if (hasMotion == hasEnd)
+    fail(hasMotion ? "end" : "motion",
+         "expected exactly one of \"motion\" (a translation [x, y, z]) and \"end\" (a transform)");
+  WorldMotion motion;
+  if (hasMotion) motion.translation = readVec3(member(request, "motion"), "motion");
+  else motion.end = readTransform(member(request, "end"), "end");
+  const WorldCast c = state.world->cast(a, motion, b);
+  answer["hit"] = c.hit;
+  if (!c.hit) return;
+  if (!c.timeKnown) {
+    answer["t"] = nullptr;
+    return;
+  }
+  answer["t"] = writeDouble(c.t, "t");
+  answer["point_a"] = writeVec3d(c.pointA, "point_a");
+  answer["point_b"] = writeVec3d(c.pointB, "point_b");
+  answer["normal"] = writeVec3d(c.normal + Vec3d::Zero(), "normal");  // + 0: no "-0.0"
+  answer["starts_overlapping"] = c.startsOverlapping;
+  answer["depth"] = writeDouble(c.depth, "depth");
+  if (c.triangleB) answer["triangle"] = *c.triangleB;
+}
+
 /// point_inside: mesh, point -> inside (the mesh must be closed).
 void pointInsideOp(const Json& request, Answer& answer, BatchState& state) {
   const std::string& name = readString(member(request, "mesh"), "mesh", "a mesh name (string)");
@@ -179,6 +207,7 @@ void addNarrowPhaseOps(OpTable& table) {
   table["mesh_distance"] = meshDistanceOp;
   table["model_distance"] = modelDistanceOp;
   table["point_inside"] = pointInsideOp;
+  table["cast"] = castOp;
 }
 
 }  // namespace crux::cli

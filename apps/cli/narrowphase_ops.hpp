@@ -1,7 +1,7 @@
 #pragma once
 /// @file narrowphase_ops.hpp  Handlers of the batch protocol's narrow-phase and volume ops (issue
 /// 6; documented in docs/batch.md, "Contacts, distance and volumes"): `contacts`, `distance`,
-/// `mesh_distance`, `model_distance`, `point_inside`. Each reads its fields, resolves mesh and
+/// `mesh_distance`, `model_distance`, `point_inside`, and `cast` (shape casts). Each reads its fields, resolves mesh and
 /// model names, and asks the batch's crux::CollisionWorld (CollisionWorld::contacts, distance,
 /// meshDistance, modelDistance, pointInside).
 
@@ -9,7 +9,7 @@
 
 namespace crux::cli {
 
-/// Adds contacts, distance, mesh_distance, model_distance and point_inside to the table.
+/// Adds contacts, distance, mesh_distance, model_distance, point_inside and cast to the table.
 void addNarrowPhaseOps(OpTable& table);
 
 /// Reads a contacts/distance operand (field `key` of the request): an object with exactly one

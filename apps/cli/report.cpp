@@ -1,20 +1,29 @@
 #include "cli/report.hpp"
 
+#include "cli/batch.hpp"
+#include "cli/report_figures.hpp"
+
 #include <crux/config.hpp>
 
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <fstream>
+#include <functional>
 #include <iomanip>
+#include <map>
 #include <ostream>
 #include <sstream>
 #include <thread>
+#include <utility>
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/stat.h>
@@ -78,10 +87,16 @@ bool writeText(const std::string& path, const std::string& text) {
 struct RunResult {
   int status = -1;  ///< exit status; 128 + signal when killed; -1 when it could not start
   double seconds = 0;
+  bool timedOut = false;
 };
 
-/// Runs argv[0] (a path) with stdout and stderr appended to `logPath`; waits for it.
-RunResult runProcess(const std::vector<std::string>& argv, const std::string& logPath) {
+/// Runs argv[0] (a path) with stdout and stderr appended to `logPath` and stdin from
+/// `stdinPath`; waits for it, calling `tick` about twice a second. With a timeout (> 0) the
+/// process runs in its own process group, killed as a whole after `timeoutSeconds`; without
+/// one it stays in ours, so a Ctrl-C on the terminal stops it with the report.
+RunResult runProcess(const std::vector<std::string>& argv, const std::string& logPath,
+                     const std::string& stdinPath = "/dev/null", double timeoutSeconds = 0,
+                     const std::function<void()>& tick = nullptr) {
   RunResult r;
   std::vector<char*> args;
   for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
@@ -90,16 +105,37 @@ RunResult runProcess(const std::vector<std::string>& argv, const std::string& lo
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, logPath.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
   posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 0, stdinPath.c_str(), O_RDONLY, 0);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  if (timeoutSeconds > 0) {
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
+  }
   const auto start = std::chrono::steady_clock::now();
+  const auto elapsed = [&start] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   pid_t pid = 0;
-  const int err = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int err = posix_spawn(&pid, args[0], &actions, &attributes, args.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (err != 0) return r;
   int wstatus = 0;
-  while (waitpid(pid, &wstatus, 0) < 0) {
+  double lastTick = 0;
+  for (;;) {
+    const pid_t done = waitpid(pid, &wstatus, WNOHANG);
+    if (done == pid || (done < 0 && errno != EINTR)) break;
+    if (timeoutSeconds > 0 && elapsed() > timeoutSeconds && !r.timedOut) {
+      r.timedOut = true;
+      kill(-pid, SIGKILL);
+    }
+    if (tick && elapsed() - lastTick >= 0.5) {
+      lastTick = elapsed();
+      tick();
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(elapsed() < 1 ? 5 : 100));
   }
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (r.timedOut) kill(-pid, SIGKILL);  // what the process left behind in its group
+  r.seconds = elapsed();
   r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus);
   return r;
 }
@@ -197,19 +233,51 @@ std::string utcNow() {
 
 // ---- steps ----------------------------------------------------------------------------------
 
-/// Shared state of one run: where things go and how progress is shown.
+std::string minutes(double seconds) {
+  const long s = std::lround(std::max(0.0, seconds));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%ld:%02ld", s / 60, s % 60);
+  return buf;
+}
+
+/// Shared state of one run: where things go and how progress is shown. Every line goes to
+/// raw/progress.log; on a terminal, one status line is redrawn on `progress`: the step, its
+/// number, the time it has run, and the time left estimated from the steps' expected durations
+/// (the previous run in the same directory when it had the same budget, else typical figures).
 struct Context {
   ReportOptions options;
   std::string rawDir;
   std::ostream* progress = nullptr;
+  std::ofstream log;
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   int failures = 0;
   std::string clock;  ///< "wall" or "cpu", resolved from options.clock
+  std::vector<std::pair<std::string, double>> plan;  ///< every step and its expected seconds
+  std::size_t step = 0;                               ///< 1-based index in plan of the running step
+  double stepStart = 0;
 
   double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); }
-  void say(const std::string& line) const {
-    *progress << "crux report [" << std::fixed << std::setprecision(1) << elapsed() << " s] " << line << std::endl;
-    progress->unsetf(std::ios::floatfield);
+  void say(const std::string& line) {
+    log << "crux report [" << std::fixed << std::setprecision(1) << elapsed() << " s] " << line << std::endl;
+  }
+  /// Starts the step `name` of the plan.
+  void begin(const std::string& name) {
+    for (std::size_t i = 0; i < plan.size(); ++i)
+      if (plan[i].first == name || name.rfind(plan[i].first + "-", 0) == 0) step = i + 1;
+    stepStart = elapsed();
+    draw();
+  }
+  void draw() {
+    if (!options.progressLine || step == 0) return;
+    const double inStep = elapsed() - stepStart;
+    double left = std::max(0.0, plan[step - 1].second - inStep);
+    for (std::size_t i = step; i < plan.size(); ++i) left += plan[i].second;
+    *progress << "\r\033[Kcrux report [" << step << "/" << plan.size() << "] " << plan[step - 1].first << ": " << minutes(inStep)
+              << " (total " << minutes(elapsed()) << ", about " << minutes(left) << " left)" << std::flush;
+  }
+  /// Clears the status line (before a message that must stay, and at the end).
+  void clearLine() {
+    if (options.progressLine) *progress << "\r\033[K" << std::flush;
   }
   std::string bin(const std::string& name) const { return options.binDir + "/" + name; }
 };
@@ -223,7 +291,8 @@ Json runStep(Context& c, const std::string& name, const std::vector<std::string>
   std::remove(log.c_str());
   std::remove(jsonPath.c_str());
   c.say("running " + commandLine(argv));
-  const RunResult r = runProcess(argv, log);
+  c.begin(name);
+  const RunResult r = runProcess(argv, log, "/dev/null", 0, [&c] { c.draw(); });
   Json step = Json::object();
   step["available"] = true;
   step["command"] = commandLine(argv);
@@ -260,6 +329,64 @@ Json sanitySuite(Context& c) {
   return step;
 }
 
+/// Attaches to the crux diff findings the report shows (report::kFindingsShownPerCause of each
+/// verdict, backend and cause; at most 8 in all on the tiny budget) their case lines
+/// (raw/diff-cases) and every built backend's answer to them, through `crux batch` as a user
+/// would replay them.
+void replayFindings(Context& c, Json& findings) {
+  constexpr double kReplaySeconds = 20;  // FCL's GJK may loop forever on some cases (docs/diff.md)
+  const int limit = c.options.budget == ReportBudget::Tiny ? 8 : 1000;
+  const std::string out = c.rawDir + "/replay.out";
+  std::map<std::string, int> shown;
+  int replayed = 0;
+  for (Json& f : findings) {
+    const std::string group = f.value("verdict", "") + "|" + f.value("backend", "") + "|" + f.value("cause", "");
+    if (++shown[group] > report::kFindingsShownPerCause || replayed >= limit) continue;
+    ++replayed;
+    const std::string cases = c.rawDir + "/diff-cases/" + f.value("name", "") + ".jsonl";
+    std::ifstream in(cases);
+    if (!in) continue;
+    Json lines = Json::array();
+    for (std::string line; std::getline(in, line);)
+      if (!trim(line).empty()) lines.push_back(line);
+    f["lines"] = lines;
+    Json answers = Json::object();
+    for (const auto backend : backendNames()) {
+      std::remove(out.c_str());
+      const RunResult r = runProcess({c.bin("crux"), "batch", "--backend", std::string(backend)}, out, cases, kReplaySeconds,
+                                     [&c] { c.draw(); });
+      std::string last;
+      std::ifstream answer(out);
+      for (std::string line; std::getline(answer, line);)
+        if (!trim(line).empty()) last = line;
+      if (r.status == 2 && last.find("not built") != std::string::npos) continue;  // a backend not built in
+      Json a = Json::parse(last, nullptr, false);
+      if (r.timedOut) answers[std::string(backend)] = "no answer within " + std::to_string(int(kReplaySeconds)) + " s (killed)";
+      else if (!a.is_discarded() && a.is_object()) answers[std::string(backend)] = a;
+      else answers[std::string(backend)] = "exit " + std::to_string(r.status) + (last.empty() ? "" : ": " + last);
+    }
+    std::remove(out.c_str());
+    f["answers"] = answers;
+  }
+}
+
+/// The files of the known-peer-disagreement corpus (docs/diff.md, "Corpora").
+Json corpusFiles() {
+  Json files = Json::array();
+  const std::string dir = std::string(CRUX_REPORT_SOURCE_DIR) + "/oracle/known-peer-disagreements";
+  if (DIR* d = opendir(dir.c_str())) {
+    std::vector<std::string> names;
+    while (const dirent* e = readdir(d)) {
+      const std::string n = e->d_name;
+      if (n.size() > 6 && n.compare(n.size() - 6, 6, ".jsonl") == 0) names.push_back(n);
+    }
+    closedir(d);
+    std::sort(names.begin(), names.end());
+    for (const std::string& n : names) files.push_back(n);
+  }
+  return files;
+}
+
 Json diffRun(Context& c) {
   const std::string self = c.bin("crux");
   const std::string probeLog = c.rawDir + "/diff-probe.log";
@@ -277,6 +404,7 @@ Json diffRun(Context& c) {
   Json step = runStep(c, "diff", argv, true);
   // Exit 1 means crux answered wrong somewhere: a result the report shows, and a failure.
   if (step["exit_status"] != 0) ++c.failures;
+  if (step["data"].is_object() && step["data"].contains("findings")) replayFindings(c, step["data"]["findings"]);
   return step;
 }
 
@@ -385,6 +513,104 @@ Json callgrind(Context& c) {
   return out;
 }
 
+/// Expected seconds of each step: the previous run in the output directory when it had the same
+/// budget, else typical figures of a 2-core machine.
+std::vector<std::pair<std::string, double>> stepPlan(const Context& c) {
+  const ReportBudget b = c.options.budget;
+  const auto typical = [b](double tiny, double quick, double full) {
+    return b == ReportBudget::Tiny ? tiny : b == ReportBudget::Quick ? quick : full;
+  };
+  std::vector<std::pair<std::string, double>> plan;
+  if (isExecutable(c.bin("test_sanity"))) plan.emplace_back("sanity", typical(5, 10, 10));
+  if (isExecutable(c.bin("crux"))) plan.emplace_back("diff", typical(8, 45, 320));
+  const std::map<std::string, std::vector<double>> benchTypical = {{"bench_mesh", {10, 150, 900}},
+                                                                   {"bench_scene", {5, 60, 900}},
+                                                                   {"bench_scaling", {5, 120, 1200}},
+                                                                   {"bench_parallel", {5, 30, 60}},
+                                                                   {"bench_contact", {5, 30, 60}}};
+  for (const BenchPlan& bench : benchPlans())
+    if (isExecutable(c.bin(bench.name))) {
+      const auto& t = benchTypical.at(bench.name);
+      plan.emplace_back(bench.name, typical(t[0], t[1], t[2]));
+    }
+  if (c.options.callgrind) plan.emplace_back("callgrind", 300);
+  plan.emplace_back("browser", 8);
+  const Json previous = readJson(c.options.outDir + "/results.json");
+  if (previous.is_object() && previous.value("report", Json::object()).value("budget", "") == budgetName(b))
+    for (auto& [name, seconds] : plan) {
+      const Json* step = nullptr;
+      if (name == "sanity" || name == "diff") step = &previous["cross_validation"][name];
+      else if (previous.contains("benches") && previous["benches"].contains(name)) step = &previous["benches"][name];
+      if (step && step->is_object() && (*step)["seconds"].is_number()) seconds = (*step)["seconds"].get<double>();
+    }
+  return plan;
+}
+
+/// Every step of a run: machine, cross-validation, benches, callgrind.
+Json runSteps(Context& c) {
+  const ReportOptions& options = c.options;
+  if (options.clock == "auto") {
+    const double load = std::atof(loadAverage().c_str());
+    c.clock = load > 0.5 * std::max(1u, std::thread::hardware_concurrency()) ? "cpu" : "wall";
+  } else {
+    c.clock = options.clock == "cpu" ? "cpu" : "wall";
+  }
+  c.plan = stepPlan(c);
+  c.say(std::string("budget ") + budgetName(options.budget) + ", output in " + options.outDir + ", bench clock " + c.clock +
+        " (load average " + loadAverage() + ")");
+  Json results = Json::object();
+  results["report"] = {{"date", utcNow()},          {"budget", budgetName(options.budget)}, {"callgrind", options.callgrind},
+                       {"bench_clock", c.clock},    {"bin_dir", c.options.binDir},          {"source_dir", CRUX_REPORT_SOURCE_DIR}};
+  c.say("machine description");
+  results["machine"] = machineDescription(c.rawDir + "/dpkg");
+  c.say("cross-validation: oracle sanity suite");
+  Json cross = Json::object();
+  cross["sanity"] = sanitySuite(c);
+  c.say("cross-validation: crux diff");
+  cross["diff"] = diffRun(c);
+  if (!cross["diff"].value("available", false)) c.say("crux diff: " + cross["diff"]["reason"].get<std::string>());
+  cross["known_peer_disagreements"] = corpusFiles();
+  results["cross_validation"] = cross;
+  c.say("performance: benches");
+  results["benches"] = benches(c);
+  if (options.callgrind) {
+    c.say("callgrind: instruction counts per backend");
+    results["callgrind"] = callgrind(c);
+  }
+  results["machine"]["load_average_end"] = loadAverage();
+  results["report"]["seconds"] = c.elapsed();
+  results["report"]["failed_steps"] = c.failures;
+  return results;
+}
+
+/// Opens DIR/index.html in headless Chromium (apps/cli/report_browser.mjs, driven by Debian's
+/// node over the DevTools protocol): console errors, the verdict, the charts and their text
+/// measured, and the verdict's screenshot written to DIR/verdict.png. Unavailable without
+/// chromium, node or the script (an installed crux without its source tree).
+Json browserCheck(Context& c, const std::string& outDir) {
+  const std::string chromium = "/usr/bin/chromium", node = "/usr/bin/node";
+  const std::string script = std::string(CRUX_REPORT_SOURCE_DIR) + "/apps/cli/report_browser.mjs";
+  if (!isExecutable(chromium)) return unavailable("chromium is not installed (scripts/setup installs it)");
+  if (!isExecutable(node)) return unavailable("node is not installed (scripts/setup installs it)");
+  if (access(script.c_str(), R_OK) != 0) return unavailable(script + " is not there (no source tree)");
+  const std::string log = c.rawDir + "/browser.log", json = c.rawDir + "/browser.json", png = outDir + "/verdict.png";
+  std::remove(log.c_str());
+  std::remove(json.c_str());
+  std::remove(png.c_str());
+  const std::vector<std::string> argv = {node, script, outDir + "/index.html", "--screenshot", png, "--json", json,
+                                         "--chromium", chromium};
+  c.say("running " + commandLine(argv));
+  c.begin("browser");
+  const RunResult r = runProcess(argv, log, "/dev/null", 90, [&c] { c.draw(); });
+  Json step = {{"available", true}, {"command", commandLine(argv)}, {"exit_status", r.status}, {"seconds", r.seconds},
+               {"log", "raw/browser.log"}};
+  step["data"] = readJson(json);
+  if (r.timedOut) step["error"] = "no answer within 90 s (killed)";
+  if (access(png.c_str(), R_OK) == 0) step["screenshot"] = "verdict.png";
+  c.say("browser: exit " + std::to_string(r.status));
+  return step;
+}
+
 }  // namespace
 
 const char* budgetName(ReportBudget budget) {
@@ -406,37 +632,29 @@ int runReport(const ReportOptions& options, std::ostream& progress) {
     progress << "crux report: cannot create the output directory " << options.outDir << '\n';
     return 2;
   }
-  if (options.clock == "auto") {
-    const double load = std::atof(loadAverage().c_str());
-    c.clock = load > 0.5 * std::max(1u, std::thread::hardware_concurrency()) ? "cpu" : "wall";
-  } else {
-    c.clock = options.clock == "cpu" ? "cpu" : "wall";
+  c.log.open(c.rawDir + "/progress.log", std::ios::app);
+  Json older;
+  if (!options.compareWith.empty()) {
+    older = readJson(options.compareWith);
+    if (!older.is_object()) {
+      progress << "crux report: cannot read " << options.compareWith << " (--compare: a results.json of an earlier run)\n";
+      return 2;
+    }
   }
-  c.say(std::string("budget ") + budgetName(options.budget) + ", output in " + options.outDir + ", bench clock " +
-        c.clock + " (load average " + loadAverage() + ")");
-
-  Json results = Json::object();
-  results["report"] = {{"date", utcNow()}, {"budget", budgetName(options.budget)}, {"callgrind", options.callgrind}, {"bench_clock", c.clock},
-                       {"bin_dir", c.options.binDir}};
-  c.say("machine description");
-  results["machine"] = machineDescription(c.rawDir + "/dpkg");
-
-  c.say("cross-validation: oracle sanity suite");
-  Json cross = Json::object();
-  cross["sanity"] = sanitySuite(c);
-  c.say("cross-validation: crux diff");
-  cross["diff"] = diffRun(c);
-  if (!cross["diff"].value("available", false)) c.say("crux diff: " + cross["diff"]["reason"].get<std::string>());
-  results["cross_validation"] = cross;
-
-  c.say("performance: benches");
-  results["benches"] = benches(c);
-  if (options.callgrind) {
-    c.say("callgrind: instruction counts per backend");
-    results["callgrind"] = callgrind(c);
+  Json results;
+  if (!options.renderFrom.empty()) {
+    results = readJson(options.renderFrom);
+    if (!results.is_object() || !results.contains("report")) {
+      progress << "crux report: cannot read " << options.renderFrom << " (--render: a results.json of crux report)\n";
+      return 2;
+    }
+    c.plan = {{"browser", 8}};
+    c.say("re-rendering " + options.renderFrom);
+    results["report"]["source_dir"] = CRUX_REPORT_SOURCE_DIR;  // the corpus linked is this checkout's
+  } else {
+    results = runSteps(c);
   }
   results["series"] = chartSeries(results);
-
   // Every workload and backend measured, for readers and the test.
   Json workloads = Json::array(), backends = Json::array();
   for (const auto& [id, s] : results["series"].items()) {
@@ -447,20 +665,30 @@ int runReport(const ReportOptions& options, std::ostream& progress) {
   }
   results["workloads"] = workloads;
   results["backends"] = backends;
-  results["machine"]["load_average_end"] = loadAverage();
-  results["report"]["seconds"] = c.elapsed();
-  results["report"]["failed_steps"] = c.failures;
+  results["verdict"] = reportVerdict(results);
+  if (older.is_object()) results["comparison"] = compareResults(older, results);
+  else results.erase("comparison");
+  results.erase("browser");
 
-  c.say("writing results.json, summary.md, index.html");
-  bool ok = writeText(options.outDir + "/results.json", results.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
-  ok = writeText(options.outDir + "/summary.md", renderSummary(results)) && ok;
+  c.say("writing results.json, index.html");
+  const std::string resultsPath = options.outDir + "/results.json";
+  const auto dump = [&results] { return results.dump(1, ' ', false, Json::error_handler_t::replace) + "\n"; };
+  bool ok = writeText(resultsPath, dump());
   ok = writeText(options.outDir + "/index.html", renderHtml(results)) && ok;
+  if (ok) {
+    results["browser"] = browserCheck(c, options.outDir);
+    c.say("writing summary.md");
+    ok = writeText(options.outDir + "/summary.md", renderSummary(results)) && writeText(resultsPath, dump());
+  }
+  c.clearLine();
   if (!ok) {
     progress << "crux report: cannot write the outputs in " << options.outDir << '\n';
     return 2;
   }
-  c.say("done: " + options.outDir + "/index.html, summary.md, results.json" +
-        (c.failures ? " (" + std::to_string(c.failures) + " step(s) failed: see results.json)" : ""));
+  const std::string done = "done: " + options.outDir + "/index.html, summary.md, results.json" +
+                           (c.failures ? " (" + std::to_string(c.failures) + " step(s) failed: see results.json)" : "");
+  c.say(done);
+  if (options.progressLine) progress << "crux report: " << done << " in " << minutes(c.elapsed()) << '\n';
   return c.failures ? 1 : 0;
 }
 

@@ -35,6 +35,15 @@ struct ReportOptions {
   /// Directory holding the bench executables, test_sanity and crux itself; empty: the
   /// directory of the running executable.
   std::string binDir;
+  /// Re-render: read this results.json instead of running anything, recompute the series, the
+  /// verdict (and the comparison) and write the outputs to outDir.
+  std::string renderFrom;
+  /// An older results.json: per workload, its ratios beside today's, changes beyond the measured
+  /// noise flagged (results.json "comparison").
+  std::string compareWith;
+  /// Progress on stderr: a redrawn status line (step, how far, time left). Off when stderr is
+  /// not a terminal; every step is logged to outDir/raw/progress.log either way.
+  bool progressLine = false;
 };
 
 /// Name of a budget ("tiny", "quick", "full").
@@ -50,15 +59,29 @@ struct ChartRef {
 /// results (results["benches"]); pure, so tests and the HTML writer share it.
 nlohmann::json chartSeries(const nlohmann::json& results);
 
-/// index.html: machine, cross-validation, headline table, one section per bench with its
-/// charts (inline SVG; every <svg> carries data-series="id ..." naming its series and every
-/// mark data-series/data-x/data-y) and tables.
+/// The verdict at the top of the report (results.json "verdict"): per peer the workloads where
+/// crux is faster and slower, the geometric mean of peer time / crux time and the worst row;
+/// crux diff's crux-wrong count and per backend its disagreements by cause; machine and build.
+nlohmann::json reportVerdict(const nlohmann::json& results);
+
+/// Per workload, an older report's figures beside today's (crux's time, and each peer's ratio):
+/// change, noise (relative spread of the timed runs, old + new) and a flag ("regression",
+/// "improvement" or "") when the change exceeds the noise (docs/report.md, "Comparing runs").
+nlohmann::json compareResults(const nlohmann::json& older, const nlohmann::json& newer);
+
+/// index.html, self-contained and script-free: the verdict (section#verdict), the comparison
+/// when results["comparison"] is present, the cross-validation grid and the disagreements by
+/// cause, the table of all workloads, one section per bench with its charts (inline SVG; every
+/// <svg class="chart"> carries data-series="id ..." naming its series, every mark
+/// data-series/data-x/data-y) and tables, and the machine and libraries.
 std::string renderHtml(const nlohmann::json& results);
 
-/// summary.md: the headline table and the cross-validation verdicts, for terminals and PRs.
+/// summary.md: the verdict, the comparison's flagged rows and the table of all workloads, for
+/// terminals and PRs; links verdict.png when results["browser"]["screenshot"] names one.
 std::string renderSummary(const nlohmann::json& results);
 
-/// Runs the report; progress lines go to `progress`. Returns 0 when every step that is
+/// Runs the report (or re-renders options.renderFrom); the progress line and errors go to
+/// `progress`. Returns 0 when every step that is
 /// available ran and the outputs were written, 1 when a step failed (the outputs are still
 /// written, with the failure recorded), 2 when the output directory cannot be written.
 int runReport(const ReportOptions& options, std::ostream& progress);

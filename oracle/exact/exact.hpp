@@ -127,4 +127,21 @@ std::vector<ExactContact> contacts(const ConvexShape& a, const Transform& ta, co
 std::vector<ExactContact> contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                                    const Transform& shapePose, double margin);
 
+// ---- casts (exact_cast.cpp) ----
+/// An exact linear cast: hit or miss decided exactly; for polytope pairs (radii 0: boxes,
+/// triangles incl. degenerate ones, hulls) the exact rational time of impact, rounded.
+struct ExactCastResult {
+  bool hit = false;
+  bool timeExact = false;  ///< t is known (polytope pairs); rounded shapes get hit/miss only
+  double t = 0;            ///< the exact TOI rounded to nearest (timeExact)
+  double tLower = 0, tUpper = 0;  ///< doubles enclosing the exact TOI (timeExact)
+};
+/// Linear cast of A (at ta, translated by s·motion, s in [0, 1]) against B (at tb), with the
+/// cores placed as distance() places them. Polytopes: t* = min t such that the cores share a
+/// point, a linear program in the convex weights of the core points and t; rounded shapes: hit
+/// iff the least squared core distance over the motion, a convex quadratic program, is
+/// <= (rA + rB)². Both solved by CGAL's QP solver in exact rationals.
+ExactCastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
+                     const Transform& tb);
+
 }  // namespace crux::exact

@@ -126,7 +126,8 @@ class ExactWorld final : public CollisionWorld {
   /// (exact_distance.hpp: exact signed distances of convex cores, brute force over triangles).
   bool supports(WorldOp op) const override {
     return isContractOp(op) || op == WorldOp::PointInside || isVolumeVariant(op) || op == WorldOp::Contacts ||
-           op == WorldOp::Distance || op == WorldOp::MeshDistance || op == WorldOp::ModelDistance;
+           op == WorldOp::Distance || op == WorldOp::MeshDistance || op == WorldOp::ModelDistance ||
+           op == WorldOp::Cast;  // linear casts (a rigid motion has no rational time: Unsupported)
   }
   WorldTolerance tolerance() const override { return kExactTolerance; }
 
@@ -203,6 +204,46 @@ class ExactWorld final : public CollisionWorld {
     (meshIsA ? w.triangleA : w.triangleB) = d.triangleA;
     return w;
   }
+  /// Linear casts (exact::cast): hit or miss exact; polytopes get the exact t rounded, and the
+  /// points and normal of the exact distance of the shapes placed at that t; rounded shapes the
+  /// hit only (timeKnown false). Against a mesh: every triangle, the smallest t (then index).
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) override {
+    if (motion.end) unsupported(WorldOp::Cast);
+    const ConvexShape sa = convexOf(a);
+    WorldCast w;
+    auto consider = [&](const ConvexShape& sb, const Transform& tb, std::optional<std::uint32_t> triangle) {
+      const ExactCastResult r = exact::cast(sa, a.pose, motion.translation, sb, tb);
+      if (!r.hit) return;
+      if (!r.timeExact) {  // rounded shapes: the first triangle hit says hit
+        if (!w.hit) {
+          w.hit = true;
+          w.timeKnown = false;
+          w.triangleB = triangle;
+        }
+        return;
+      }
+      if (w.hit && w.timeKnown && !(r.t < w.t)) return;
+      w.hit = true;
+      w.t = r.t;
+      w.startsOverlapping = r.tUpper == 0;
+      w.triangleB = triangle;
+      Transform at = a.pose;
+      at.translation += Real(r.t) * motion.translation;
+      const ExactDistance d = exact::distance(sa, at, sb, tb);
+      w.pointA = d.pointA;
+      w.pointB = d.pointB;
+      w.normal = d.normal;
+      w.depth = w.startsOverlapping ? std::max(0.0, -d.distance) : 0.0;
+    };
+    if (!b.isMesh()) {
+      consider(convexOf(b), b.pose, std::nullopt);
+      return w;
+    }
+    const Mesh& m = mesh(std::get<MeshHandle>(b.shape));
+    for (std::uint32_t i = 0; i < m.triangleCount(); ++i) consider(ConvexShape(m.triangle(i)), b.pose, i);
+    return w;
+  }
+
   std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
                                               double maxDistance) override {
     return toWorld(exact::meshDistance(mesh(a), ta, mesh(b), tb, maxDistance));

@@ -141,15 +141,33 @@ FclOperand hullOperand(const ConvexHull& h) {
   return {std::make_shared<fcl::Convexd>(vertices, int(h.faces().size()), faces), identity()};
 }
 
-/// GJK stopping tolerance of FCL's distance requests (DistanceRequest::distance_tolerance,
-/// default 1e-6, an absolute length in libccd's GJK: at that default a hull–sphere distance of 2
-/// comes back 4.6e-7 long with nearest points 7e-4 off). 1e-12 brings both to rounding level on
-/// the sanity cases.
+/// GJK/EPA stopping tolerance of FCL's distance requests (DistanceRequest::distance_tolerance)
+/// for overlapping (and touching) pairs: FCL's default, 1e-6, which FCL's own signed-distance
+/// tests ask for (test_fcl_signed_distance: penetrating sphere–sphere, sphere–capsule,
+/// cylinder–box, box–box). A tighter 1e-12 drove libccd's EPA into its assertions
+/// (isOutsidePolytopeFace) and endless loops on overlapping spheres and capsules, where the
+/// default answers (docs/batch.md "Backends").
+constexpr double kFclPenetrationTolerance = 1e-6;
+/// The same tolerance for separated pairs: 1e-12. libccd's GJK reads the tolerance as a squared
+/// length, so the default leaves distances up to ~sqrt(1e-6)·size off (a tetrahedron 0.02 from
+/// a sphere of radius 0.01: 6.8e-6 long, beyond the fcl world's declared 1e-6; a hull–sphere
+/// distance of 2: nearest points 7e-4 off); at 1e-12 both are at rounding level, and separated
+/// pairs converge.
 constexpr double kFclGjkTolerance = 1e-12;
 
-/// fcl::distance with nearest points (world coordinates) and signed distance requested.
+/// fcl::distance with nearest points (world coordinates) and signed distance requested, at the
+/// tolerance for the pair: kFclPenetrationTolerance when fcl::collide finds them overlapping,
+/// else kFclGjkTolerance. A triangle mesh (BVHModel, also a triangle operand) against an
+/// overlapping convex shape throws: FCL 0.7 answers that pair with a meaningless distance (0,
+/// 8e-323) and nearest points it leaves partly uninitialised (a different answer per run).
 fcl::DistanceResultd signedDistance(const FclOperand& a, const FclOperand& b) {
-  fcl::DistanceRequestd request(true, true, 0.0, 0.0, kFclGjkTolerance);
+  const bool overlapping = collide(*a.geometry, a.pose, *b.geometry, b.pose);
+  const bool meshA = a.geometry->getObjectType() == fcl::OT_BVH, meshB = b.geometry->getObjectType() == fcl::OT_BVH;
+  if (overlapping && meshA != meshB)
+    throw std::runtime_error(
+        "FCL 0.7 has no signed distance for a triangle mesh against an overlapping shape (its answer is 0 with "
+        "uninitialised nearest points)");
+  fcl::DistanceRequestd request(true, true, 0.0, 0.0, overlapping ? kFclPenetrationTolerance : kFclGjkTolerance);
   fcl::DistanceResultd result;
   fcl::distance(a.geometry.get(), a.pose, b.geometry.get(), b.pose, request, result);
   return result;

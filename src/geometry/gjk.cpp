@@ -30,7 +30,10 @@ M3 poseRotation(const Quat& q) {
 }  // namespace
 
 Placed::Placed(const ConvexShape& s, const Transform& pose)
-    : shape(&s), R(poseRotation(pose.rotation)), t(pose.translation.cast<double>()), radius(double(s.radius)) {
+    : Placed(s, poseRotation(pose.rotation), pose.translation.cast<double>()) {}
+
+Placed::Placed(const ConvexShape& s, const M3& rotation, const V3& translation)
+    : shape(&s), R(rotation), t(translation), radius(double(s.radius)) {
   switch (s.kind) {
     case ConvexKind::Sphere: p[0] = R * s.p[0].cast<double>() + t; break;
     case ConvexKind::Capsule:
@@ -353,9 +356,9 @@ V3 touchingNormal(const Placed& A, const Placed& B) {
 
 }  // namespace
 
-/// Core distance + normal + core points: the shared front of distance() and contacts().
-DistanceResult coreQuery(const Placed& A, const Placed& B) {
-  DistanceResult out;
+/// Core distance + normal + core points: the shared front of distance(), contacts() and the casts.
+WideDistance coreQueryWide(const Placed& A, const Placed& B) {
+  WideDistance out;
   V3 pa, pb, n;
   double dcore = 0;
   const double tolAbs = kGjkScaleTolerance * pairScale(A, B);
@@ -395,11 +398,22 @@ DistanceResult coreQuery(const Placed& A, const Placed& B) {
     }
   }
   n.normalize();  // unit to the last ulp (the quotients above are off by a few)
-  const double dist = dcore - A.radius - B.radius;
-  out.distance = static_cast<Real>(dist);
-  out.normal = n.cast<Real>();
-  out.pointA = (pa - n * A.radius).cast<Real>();
-  out.pointB = (pb + n * B.radius).cast<Real>();
+  out.distance = dcore - A.radius - B.radius;
+  out.normal = n;
+  out.pointA = pa - n * A.radius;
+  out.pointB = pb + n * B.radius;
+  return out;
+}
+
+DistanceResult coreQuery(const Placed& A, const Placed& B) {
+  const WideDistance w = coreQueryWide(A, B);
+  DistanceResult out;
+  out.distance = static_cast<Real>(w.distance);
+  out.normal = w.normal.cast<Real>();
+  out.pointA = w.pointA.cast<Real>();
+  out.pointB = w.pointB.cast<Real>();
+  out.iterations = w.iterations;
+  out.status = w.status;
   return out;
 }
 

@@ -22,6 +22,9 @@ struct Placed {
 
   /// Places s at pose (an axis-aligned rotation is applied as its exact signed permutation).
   Placed(const ConvexShape& s, const Transform& pose);
+  /// Places s by the rotation matrix R and translation t, both in double (a pose interpolated in
+  /// double by the casts).
+  Placed(const ConvexShape& s, const M3& rotation, const V3& translation);
   /// World core vertex maximising dot(x, d); index receives the vertex index.
   V3 support(const V3& d, int* index) const;
   /// World core vertex i.
@@ -99,7 +102,18 @@ struct EpaResult {
 /// EPA from GJK's final simplex (origin within tolerance of A - B).
 EpaResult epa(const Placed& A, const Placed& B, const Simplex& start);
 
-/// Signed distance of the placed shapes (GJK, closed form, or EPA): the body of distance().
+/// distance()'s answer in double, before rounding to Real (the casts advance on it).
+struct WideDistance {
+  double distance = 0;  ///< signed: core distance (or -core depth) minus the radii
+  V3 pointA = V3::Zero(), pointB = V3::Zero();  ///< on the rounded surfaces
+  V3 normal = V3::UnitZ();                      ///< unit, from B to A
+  int iterations = 0;
+  GjkStatus status = GjkStatus::Separated;
+};
+
+/// Signed distance of the placed shapes (GJK, closed form, or EPA) in double.
+WideDistance coreQueryWide(const Placed& A, const Placed& B);
+/// coreQueryWide rounded to Real: the body of distance().
 DistanceResult coreQuery(const Placed& A, const Placed& B);
 
 /// Closest points of two segments [p1,q1], [p2,q2] (Ericson RTCD 5.1.9), degenerate segments

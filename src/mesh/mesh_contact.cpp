@@ -11,6 +11,7 @@
 
 #include "mesh_walk.hpp"
 #include "node_tests.hpp"
+#include "shape_bounds.hpp"
 
 #include <algorithm>
 #include <array>
@@ -120,18 +121,8 @@ Real MeshContactManifold::depth() const {
 
 namespace {
 
-/// The shape's AABB in the mesh frame (rel maps shape-local to mesh-local), by six supports.
-Aabb shapeBoundsIn(const ConvexShape& shape, const Transform& rel) {
-  Aabb box = Aabb::empty();
-  const Quat inv = rel.rotation.conjugate();
-  for (int k = 0; k < 3; ++k) {
-    Vec3 e = Vec3::Zero();
-    e[k] = 1;
-    box.grow(rel.apply(support(shape, inv * e)));
-    box.grow(rel.apply(support(shape, inv * (-e))));
-  }
-  return box;
-}
+using mesh_detail::shapeBoundsIn;
+using mesh_detail::boxSlack;
 
 bool boxesOverlap(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
@@ -142,14 +133,6 @@ bool boxesOverlap(const Aabb& a, const Aabb& b) {
 Real boxDistance(const Aabb& a, const Aabb& b) {
   const Vec3 gap = (a.min - b.max).cwiseMax(b.min - a.max).cwiseMax(Vec3::Zero());
   return gap.norm();
-}
-
-/// Conservative slack added to computed boxes so rounding never prunes a triangle the
-/// per-triangle routine would report: 1000 ulps of Real × the coordinates' magnitude.
-Real boxSlack(const Aabb& box) {
-  const Real scale = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff()) +
-                     (box.max - box.min).maxCoeff();
-  return kMeshFeatureRelativeTolerance * scale;
 }
 
 /// "Not reached through a BVH slot" (the brute-force path).

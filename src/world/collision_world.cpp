@@ -21,7 +21,7 @@ constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
     "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
     "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs", "contacts", "distance", "mesh_distance", "model_distance",
     "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume",
-    "mesh_mesh volume", "model_sphere volume", "model_aabb volume", "model_obb volume", "model_triangle volume"};
+    "mesh_mesh volume", "model_sphere volume", "model_aabb volume", "model_obb volume", "model_triangle volume", "cast"};
 
 std::array<WorldOp, kWorldOpCount> makeOpList() {
   std::array<WorldOp, kWorldOpCount> ops{};
@@ -438,6 +438,16 @@ std::vector<WorldContact> CollisionWorld::contacts(const WorldOperand& a, const 
   return guarded(WorldOp::Contacts, [&] { return doContacts(a, b, margin); });
 }
 
+WorldCast CollisionWorld::cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) {
+  validateOperand(a, "a");
+  validateOperand(b, "b");
+  if (a.isMesh())
+    throw InvalidInput("a: a cast moves a convex shape (a mesh cannot be cast; cast the shape against the mesh)");
+  if (motion.end) validateTransform(*motion.end, "end");
+  else validatePoint(motion.translation, "motion");
+  return guarded(WorldOp::Cast, [&] { return doCast(a, motion, b); });
+}
+
 WorldDistance CollisionWorld::distance(const WorldOperand& a, const WorldOperand& b) {
   validateOperand(a, "a");
   validateOperand(b, "b");
@@ -560,6 +570,9 @@ WorldDistance CollisionWorld::doDistance(const WorldOperand&, const WorldOperand
 std::optional<WorldDistance> CollisionWorld::doMeshDistance(MeshHandle, const Transform&, MeshHandle,
                                                             const Transform&, double) {
   unsupported(WorldOp::MeshDistance);
+}
+WorldCast CollisionWorld::doCast(const WorldOperand&, const WorldMotion&, const WorldOperand&) {
+  unsupported(WorldOp::Cast);
 }
 std::optional<WorldDistance> CollisionWorld::doModelDistance(ModelHandle, ModelHandle, double) {
   unsupported(WorldOp::ModelDistance);

@@ -6,6 +6,7 @@
 
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
+#include <crux/mesh/mesh_cast.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 #include <crux/mesh/mesh_volume.hpp>
@@ -233,6 +234,32 @@ class NativeWorld final : public CollisionWorld {
       w.normal = -d.normal.cast<double>();
       w.triangleB = d.triangle;
     }
+    return w;
+  }
+
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) override {
+    const ConvexShape shape = convexOf(a);
+    const RigidMotion rigid{a.pose, motion.end.value_or(a.pose)};
+    std::optional<MeshCastHit> hit;
+    if (b.isMesh()) {
+      const Mesh& m = mesh(std::get<MeshHandle>(b.shape));
+      hit = motion.end ? castClosest(m, b.pose, shape, rigid) : castClosest(m, b.pose, shape, a.pose, motion.translation);
+    } else {
+      const CastResult r = motion.end ? crux::cast(shape, rigid, convexOf(b), b.pose)
+                                      : crux::cast(shape, a.pose, motion.translation, convexOf(b), b.pose);
+      if (r.hit) hit = MeshCastHit{r, 0};
+    }
+    WorldCast w;
+    if (!hit) return w;
+    const CastResult& r = hit->cast;
+    w.hit = true;
+    w.t = double(r.t);
+    w.pointA = r.pointA.cast<double>();
+    w.pointB = r.pointB.cast<double>();
+    w.normal = r.normal.cast<double>();
+    w.startsOverlapping = r.startsOverlapping;
+    w.depth = double(r.depth);
+    if (b.isMesh()) w.triangleB = hit->triangle;
     return w;
   }
 

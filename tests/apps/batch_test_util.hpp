@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -67,6 +68,16 @@ inline std::pair<int, std::string> run(const std::string& command) {
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
+
+/// The whole text of a file ("" when it cannot be read).
+inline std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline bool fileExists(const std::string& path) { return access(path.c_str(), F_OK) == 0; }
 
 /// `s` quoted for a POSIX shell.
 inline std::string shellQuoted(const std::string& s) {

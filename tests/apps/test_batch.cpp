@@ -12,7 +12,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <limits>
@@ -20,6 +23,14 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char** environ;
 
 namespace crux::cli {
 namespace {
@@ -441,10 +452,10 @@ TEST(BatchErrors, SemanticValidationNamesTheField) {
 // ---------------------------------------------------------------------------------------------
 // Unsupported ops and backends.
 
-TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeAndTheFiveNarrowPhaseOps) {
+TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeTheFiveNarrowPhaseOpsAndCast) {
   const auto& ops = protocolOps();
-  EXPECT_EQ(ops.size(), 38u);
-  for (const char* name : {"contacts", "distance", "mesh_distance", "model_distance", "point_inside"})
+  EXPECT_EQ(ops.size(), 39u);
+  for (const char* name : {"contacts", "distance", "mesh_distance", "model_distance", "point_inside", "cast"})
     EXPECT_TRUE(std::binary_search(ops.begin(), ops.end(), std::string_view(name))) << name;
   EXPECT_TRUE(std::is_sorted(ops.begin(), ops.end()));
   for (const char* name : {"closest_point_triangle", "segment_triangle", "mesh", "load_mesh", "mesh_mesh",
@@ -454,7 +465,7 @@ TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeAndTheFiveNarrowPhas
 
 TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   const OpTable& native = opTable(Backend::Native);
-  EXPECT_EQ(native.size(), 38u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
+  EXPECT_EQ(native.size(), 39u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
   for (const char* name : {"mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb",
                            "mesh_plane", "mesh_triangle", "mesh_mesh"})
     EXPECT_EQ(native.count(name), 1u) << name;
@@ -557,6 +568,66 @@ TEST(BatchRun, ThreadsMustBePositiveAndDoNotChangeTheOutput) {
   EXPECT_EQ(runBatch(in4, out4, BatchOptions{Backend::Native, 4}), 0);
   EXPECT_EQ(out1.str(), out4.str());
   EXPECT_EQ(splitLines(out1.str()).size(), 3u);
+}
+
+/// Output that keeps what is written pending until flushed, as a pipe's writer buffers it.
+class PendingOutput : public std::streambuf {
+ public:
+  std::string pending, flushed;
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (c != traits_type::eof()) pending.push_back(char(c));
+    return c;
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    pending.append(s, std::size_t(n));
+    return n;
+  }
+  int sync() override {
+    flushed += pending;
+    pending.clear();
+    return 0;
+  }
+};
+
+/// Input handed over one line at a time, as a driver writing a line and waiting for its answer
+/// does: each time the reader asks for more (it would block on a pipe), what the output had
+/// flushed by then is recorded.
+class LineByLineInput : public std::streambuf {
+ public:
+  LineByLineInput(std::vector<std::string> lines, const PendingOutput& out) : lines_(std::move(lines)), out_(out) {}
+  std::vector<std::string> flushedAtEachWait;
+
+ protected:
+  int_type underflow() override {
+    flushedAtEachWait.push_back(out_.flushed);
+    if (next_ == lines_.size()) return traits_type::eof();
+    current_ = lines_[next_++] + "\n";
+    setg(current_.data(), current_.data(), current_.data() + current_.size());
+    return traits_type::to_int_type(current_[0]);
+  }
+  std::streamsize showmanyc() override { return 0; }  // nothing beyond the line handed over
+
+ private:
+  std::vector<std::string> lines_;
+  std::size_t next_ = 0;
+  std::string current_;
+  const PendingOutput& out_;
+};
+
+TEST(BatchRun, EveryAnswerIsFlushedBeforeWaitingForTheNextLine) {
+  const std::vector<std::string> lines = {
+      op("triangle_plane", "\"triangle\":" + kUnitTriangle + R"(,"plane":{"normal":[0,0,1],"d":0})"), "{}",
+      op("triangle_plane", "\"triangle\":" + kUnitTriangle + R"(,"plane":{"normal":[0,0,1],"d":5})")};
+  PendingOutput outBuf;
+  LineByLineInput inBuf(lines, outBuf);
+  std::istream in(&inBuf);
+  std::ostream out(&outBuf);
+  ASSERT_EQ(runBatch(in, out, BatchOptions{}), 0);
+  ASSERT_EQ(inBuf.flushedAtEachWait.size(), lines.size() + 1);
+  for (std::size_t k = 0; k < inBuf.flushedAtEachWait.size(); ++k)
+    EXPECT_EQ(splitLines(inBuf.flushedAtEachWait[k]).size(), k) << "answers flushed before reading line " << k;
 }
 
 TEST(BatchRun, FailingOutputIsReported) {
@@ -993,6 +1064,195 @@ TEST(BatchThreads, BarrierOps) {
   std::size_t barriers = 0;
   for (const std::string_view name : protocolOps()) barriers += isBarrierOp(name);
   EXPECT_EQ(barriers, 7u);
+}
+
+
+// ---------------------------------------------------------------------------------------------
+// Streaming and isolation: answers are flushed line by line; a peer that aborts, crashes or
+// hangs costs its line only.
+
+/// `crux batch ARGS` with its standard input and output connected to this test, so the test can
+/// wait for an answer before it sends the next line.
+class Interactive {
+ public:
+  explicit Interactive(const std::vector<std::string>& args) {
+    int in[2], out[2];
+    EXPECT_EQ(pipe2(in, O_CLOEXEC), 0);
+    EXPECT_EQ(pipe2(out, O_CLOEXEC), 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, in[0], 0);
+    posix_spawn_file_actions_adddup2(&actions, out[1], 1);
+    std::vector<std::string> argv = {test::cruxExecutable(), "batch"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    std::vector<char*> raw;
+    for (std::string& a : argv) raw.push_back(a.data());
+    raw.push_back(nullptr);
+    EXPECT_EQ(posix_spawn(&pid_, raw[0], &actions, nullptr, raw.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    close(in[0]);
+    close(out[1]);
+    to_ = in[1];
+    from_ = out[0];
+  }
+  ~Interactive() {
+    if (to_ >= 0) close(to_);
+    close(from_);
+    if (pid_ > 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  void send(const std::string& line) {
+    const std::string text = line + "\n";
+    EXPECT_EQ(write(to_, text.data(), text.size()), ssize_t(text.size()));
+  }
+  /// The next answer line, or "" when none came within `seconds`.
+  std::string readLine(double seconds = 20) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    for (;;) {
+      if (const auto eol = buffer_.find('\n'); eol != std::string::npos) {
+        std::string line = buffer_.substr(0, eol);
+        buffer_.erase(0, eol + 1);
+        return line;
+      }
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      pollfd p{from_, POLLIN, 0};
+      if (left.count() <= 0 || poll(&p, 1, int(left.count())) <= 0) return "";
+      char chunk[4096];
+      const ssize_t n = read(from_, chunk, sizeof chunk);
+      if (n <= 0) return "";
+      buffer_.append(chunk, std::size_t(n));
+    }
+  }
+  /// Closes standard input and returns the exit status (-1 when killed by a signal).
+  int finish() {
+    close(to_);
+    to_ = -1;
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    pid_ = 0;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+
+ private:
+  pid_t pid_ = 0;
+  int to_ = -1, from_ = -1;
+  std::string buffer_;
+};
+
+const std::string kTouchingTriangleSphere =
+    R"({"id":"ok1","op":"triangle_sphere","triangle":[[0,0,0],[1,0,0],[0,1,0]],"sphere":{"center":[0.2,0.2,0.1],"radius":0.5}})";
+
+bool backendBuilt(std::string_view name) {
+  return std::find(builtBackends().begin(), builtBackends().end(), name) != builtBackends().end();
+}
+
+TEST(BatchStreaming, EachAnswerIsWrittenBeforeTheNextLineIsRead) {
+  std::vector<std::vector<std::string>> runs = {{}, {"--threads", "2"}};
+  for (const char* peer : {"fcl", "bullet"})
+    if (backendBuilt(peer)) runs.push_back({"--backend", peer});
+  for (const auto& args : runs) {
+    Interactive crux(args);
+    for (int i = 0; i < 3; ++i) {
+      crux.send(kTouchingTriangleSphere);
+      const std::string answer = crux.readLine();
+      ASSERT_FALSE(answer.empty()) << "no answer while the input is still open; args " << ::testing::PrintToString(args);
+      EXPECT_EQ(Json::parse(answer)["hit"], true) << answer;
+    }
+    EXPECT_EQ(crux.finish(), 0);
+  }
+}
+
+TEST(BatchStreaming, AnswersWrittenBeforeTheProcessIsKilledAreKept) {
+  Interactive crux({});
+  crux.send(kTouchingTriangleSphere);
+  crux.send(kTouchingTriangleSphere);
+  EXPECT_FALSE(crux.readLine().empty());
+  EXPECT_FALSE(crux.readLine().empty());
+  // the process dies with no chance to flush anything (~Interactive kills it)
+}
+
+/// runBatch with a worker that fails on demand (tests/apps/fault_worker.sh) for `backend`.
+std::vector<std::string> runWithFaultWorker(const std::string& text, Backend backend, double timeout = 10) {
+  BatchOptions options;
+  options.backend = backend;
+  options.workerExecutable = std::string(CRUX_SOURCE_DIR) + "/tests/apps/fault_worker.sh";
+  options.timeoutSeconds = timeout;
+  std::istringstream in(text);
+  std::ostringstream out;
+  EXPECT_EQ(runBatch(in, out, options), 0);
+  return splitLines(out.str());
+}
+
+TEST(BatchIsolation, APeerThatAbortsOrHangsCostsThatLineOnly) {
+  for (const Backend backend : {Backend::Fcl, Backend::Bullet}) {
+    if (!backendBuilt(backendName(backend))) continue;
+    const std::string name(backendName(backend));
+    const auto lines = runWithFaultWorker(
+        "{\"id\":\"1\",\"op\":\"distance\"}\n{\"id\":\"2\",\"op\":\"distance\",\"x\":\"ABORT\"}\n"
+        "{\"id\":\"3\",\"op\":\"mesh_mesh\",\"x\":\"HANG\"}\n{\"id\":\"4\",\"op\":\"distance\"}\n",
+        backend, 0.5);
+    ASSERT_EQ(lines.size(), 4u);
+    EXPECT_EQ(Json::parse(lines[0])["n"], 1);
+    const Json aborted = Json::parse(lines[1]), hung = Json::parse(lines[2]);
+    EXPECT_EQ(aborted["id"], "2");
+    EXPECT_EQ(errorOf(aborted).rfind(name + " failed on distance: SIGABRT", 0), 0u) << lines[1];
+    EXPECT_EQ(hung["id"], "3");
+    EXPECT_EQ(errorOf(hung).rfind(name + " failed on mesh_mesh: timeout", 0), 0u) << lines[2];
+    EXPECT_EQ(Json::parse(lines[3])["n"], 1);
+  }
+}
+
+// The failure kinds FCL 0.7 (Debian's libfcl0.7, libccd GJK/EPA) shows on overlapping and
+// coincident spheres, through the `crux` executable: each costs its line only.
+TEST(BatchIsolation, FclFailureKindsCostTheirLineOnly) {
+  if (!backendBuilt("fcl")) GTEST_SKIP() << "fcl not built";
+  const std::string lines[] = {
+      kTouchingTriangleSphere,
+      // aborted in libccd's EPA (isOutsidePolytopeFace) at a GJK tolerance of 1e-12; answered at
+      // FCL's default 1e-6
+      R"({"id":"a","op":"distance","a":{"sphere":{"center":[0,0,0],"radius":1}},"b":{"sphere":{"center":[0,-1,0],"radius":0.1}}})",
+      // two equal spheres at one centre: libccd never returns
+      R"({"id":"same","op":"distance","a":{"sphere":{"center":[1,2,3],"radius":0.5}},"b":{"sphere":{"center":[1,2,3],"radius":0.5}}})",
+      // zero-radius spheres at one point: libccd's assertion "A is not in region 1" (doSimplex2)
+      R"({"id":"zero","op":"distance","a":{"sphere":{"center":[1,1,1],"radius":0}},"b":{"sphere":{"center":[1,1,1],"radius":0}}})",
+      R"({"id":"last","op":"distance","a":{"sphere":{"center":[0,0,0],"radius":1}},"b":{"sphere":{"center":[3,0,0],"radius":1}}})"};
+  Interactive crux({"--backend", "fcl", "--timeout", "1"});
+  for (const std::string& line : lines) crux.send(line);
+  std::vector<Json> answers;
+  for (std::size_t i = 0; i < std::size(lines); ++i) {
+    const std::string text = crux.readLine(30);
+    ASSERT_FALSE(text.empty()) << "no answer to line " << i;
+    answers.push_back(Json::parse(text));
+  }
+  EXPECT_EQ(crux.finish(), 0);
+  EXPECT_EQ(answers[0]["hit"], true);
+  ASSERT_TRUE(answers[1].contains("distance")) << answers[1].dump();
+  EXPECT_NEAR(answers[1]["distance"].get<double>(), -0.1, 1e-5);  // FCL's declared tolerance is 1e-6
+  EXPECT_EQ(answers[2]["id"], "same");
+  EXPECT_EQ(errorOf(answers[2]).rfind("fcl failed on distance: timeout", 0), 0u) << answers[2].dump();
+  EXPECT_EQ(answers[3]["id"], "zero");
+  EXPECT_EQ(errorOf(answers[3]).rfind("fcl failed on distance: SIGABRT", 0), 0u) << answers[3].dump();
+  EXPECT_NEAR(answers[4]["distance"].get<double>(), 1.0, 1e-5) << answers[4].dump();
+}
+
+TEST(BatchIsolation, NativeAndExactNeverUseAWorker) {
+  // the fault worker would answer {"op":"echo"}: these backends answer in process
+  for (const Backend backend : {Backend::Native, Backend::Exact}) {
+    if (!backendBuilt(backendName(backend))) continue;
+    const auto lines = runWithFaultWorker(kTouchingTriangleSphere + "\n", backend);
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_EQ(Json::parse(lines[0])["hit"], true) << lines[0];
+  }
+}
+
+TEST(BatchIsolation, TheTimeLimitMustBePositive) {
+  BatchOptions options;
+  options.timeoutSeconds = 0;
+  std::istringstream in("{}\n");
+  std::ostringstream out;
+  EXPECT_THROW(runBatch(in, out, options), InvalidInput);
 }
 
 }  // namespace

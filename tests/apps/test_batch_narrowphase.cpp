@@ -393,5 +393,71 @@ TEST(BatchNarrowPhase, PeersAnswerWhatTheySupportAndAgreeOnClearCases) {
   if (built("fcl")) EXPECT_TRUE(makeWorld("fcl")->supports(WorldOp::MeshDistance));
 }
 
+
+TEST(BatchNarrowPhase, CastsOntoTheCubeAgreeWithTheExactBackend) {
+  // A box of half extents 0.25 centred 2 above the cube's top, dropped by 3: its bottom (at 1.75)
+  // meets the top face (z = 1) after 0.75 of 3, t = 0.25; a box against a box the same.
+  const std::string box = R"({"box":{"center":[0,0,0],"half":[0.25,0.25,0.25],)" + kAxes +
+                          R"(},"transform":{"translation":[0.5,0.5,2]}})";
+  const std::string lines[] = {
+      R"({"op":"cast","a":)" + box + R"(,"motion":[0,0,-3],"b":{"mesh":"cube"}})",
+      R"({"op":"cast","a":)" + box + R"(,"motion":[0,0,-3],"b":{"box":{"center":[0.5,0.5,0.5],"half":[0.5,0.5,0.5],)" +
+          kAxes + "}}}",
+      R"({"op":"cast","a":)" + box + R"(,"motion":[3,0,0],"b":{"mesh":"cube"}})",  // sideways: a miss
+  };
+  std::vector<std::string> backends = {"native"};
+  if (built("exact")) backends.push_back("exact");
+  for (const std::string& name : backends) {
+    Batch b(*parseBackend(name));
+    for (int i = 0; i < 2; ++i) {
+      const Answer a = b.ask(lines[i]);
+      ASSERT_EQ(errorOf(a), "") << name << ": " << a.dump();
+      ASSERT_TRUE(a["hit"].get<bool>()) << name << ": " << a.dump();
+      EXPECT_LE(a["t"].get<double>(), 0.25) << name;
+      EXPECT_NEAR(a["t"].get<double>(), 0.25, 1e-6) << name;
+      EXPECT_FALSE(a["starts_overlapping"].get<bool>());
+      EXPECT_NEAR(a["point_b"][2].get<double>(), 1, 1e-6) << name << ": " << a.dump();
+      // from B (below) to A; a cast's normal is accurate to ~1e-6 (docs/narrowphase.md)
+      EXPECT_NEAR(a["normal"][0].get<double>(), 0, 1e-5) << name << ": " << a.dump();
+      EXPECT_NEAR(a["normal"][1].get<double>(), 0, 1e-5) << name << ": " << a.dump();
+      EXPECT_NEAR(a["normal"][2].get<double>(), 1, 1e-5) << name << ": " << a.dump();
+    }
+    const Answer first = b.ask(lines[0]);
+    EXPECT_TRUE(first["triangle"] == 2 || first["triangle"] == 3) << name << ": " << first.dump();
+    EXPECT_FALSE(b.ask(lines[2])["hit"].get<bool>()) << name;
+  }
+  // A ball (rounded: the exact backend decides hit or miss only, "t": null there) starting in
+  // contact with the cube's top face; a rigid motion (native) turning a capsule into the cube.
+  Batch native;
+  const Answer touching = native.ask(
+      R"({"op":"cast","a":{"sphere":{"center":[0.5,0.5,1.5],"radius":0.5}},"motion":[1,0,0],"b":{"mesh":"cube"}})");
+  ASSERT_EQ(errorOf(touching), "") << touching.dump();
+  EXPECT_EQ(touching["t"].get<double>(), 0);
+  EXPECT_TRUE(touching["starts_overlapping"].get<bool>());
+  const Answer turning = native.ask(
+      R"({"op":"cast","a":{"capsule":{"a":[0,0,0],"b":[0,0,2],"radius":0.1},"transform":{"translation":[2.5,0.5,0]}},)"
+      R"("end":{"rotation":[0.70710678118654752,0,-0.70710678118654752,0],"translation":[2.5,0.5,0]},"b":{"mesh":"cube"}})");
+  ASSERT_EQ(errorOf(turning), "") << turning.dump();
+  EXPECT_TRUE(turning["hit"].get<bool>()) << turning.dump();
+  if (built("exact")) {
+    Batch exact(Backend::Exact);
+    const Answer e = exact.ask(
+        R"({"op":"cast","a":{"sphere":{"center":[0.5,0.5,1.5],"radius":0.5}},"motion":[1,0,0],"b":{"mesh":"cube"}})");
+    ASSERT_EQ(errorOf(e), "") << e.dump();
+    EXPECT_TRUE(e["hit"].get<bool>());
+    EXPECT_TRUE(e["t"].is_null());
+  }
+  // errors name the field
+  EXPECT_EQ(errorOf(native.ask(R"({"op":"cast","a":{"mesh":"cube"},"motion":[1,0,0],"b":{"mesh":"quad"}})")).rfind("a:", 0),
+            0u);
+  EXPECT_EQ(errorOf(native.ask(R"({"op":"cast","a":{"sphere":{"center":[0,0,0],"radius":1}},"b":{"mesh":"quad"}})"))
+                .rfind("motion:", 0),
+            0u);
+  EXPECT_EQ(errorOf(native.ask(
+                        R"({"op":"cast","a":{"sphere":{"center":[0,0,0],"radius":-1}},"motion":[1,0,0],"b":{"mesh":"quad"}})"))
+                .rfind("a.sphere", 0),
+            0u);
+}
+
 }  // namespace
 }  // namespace crux::cli

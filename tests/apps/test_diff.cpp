@@ -11,8 +11,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
+
+#include <unistd.h>
 
 namespace crux::cli {
 namespace {
@@ -116,6 +120,24 @@ TEST(DiffClassify, DegenerateTriangle) {
   EXPECT_EQ(k.cause, "degenerate-triangle");
 }
 
+TEST(DiffClassify, SliverThinnerThanThePeersTolerance) {
+  // found by crux diff (seed 98765, case 1683, sliver family): a corner 5.4e-20 from another;
+  // FCL answers [0,0,1], as for a degenerate triangle
+  DiffRunner runner;
+  const J got = J{{"op", "closest_point_triangle"}, {"point", J::array({0, 0, 1})}};
+  const auto sliver = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[0,0,0],[0,0.025390625,1],[0,0,-5.421010862427522e-20]],"point":[0,0,-2]})",
+      false);
+  auto k = classify(runner, sliver, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "sliver-triangle");
+  // the same answer on a fat triangle stays unexplained
+  const auto fat = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[0,0,0],[0,0.5,1],[0,-0.5,0]],"point":[0,0,-2]})", false);
+  k = classify(runner, fat, "fcl", got);
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+}
+
 TEST(DiffClassify, FlatShapeAndPointSphere) {
   DiffRunner runner;
   const auto box = primitive(
@@ -137,6 +159,38 @@ TEST(DiffClassify, FclNearestPointsInCollision) {
   const auto k = classify(runner, c, "fcl", got);
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "nearest-points-in-collision");
+  // the point on an edge whose exact closest point rounds 2e-15 away from it (a denormal corner;
+  // found by crux diff, seed 98765 case 291), and a point clearly off the triangle
+  const auto onEdge = primitive(
+      R"({"op":"closest_point_triangle","triangle":[[1.401298464324817e-45,-6,-12],[-18,12,-12],[0,0,0]],"point":[-9,3,-12]})",
+      false);
+  const auto k2 = classify(runner, onEdge, "fcl", got);
+  EXPECT_EQ(k2.cause, "nearest-points-in-collision") << describe(k2);
+  const auto off = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,2]})", true);
+  EXPECT_NE(classify(runner, off, "fcl", got).cause, "nearest-points-in-collision");
+}
+
+TEST(DiffClassify, ScenePairsProbeMovesAModelOfTheDifferingPair) {
+  // found by crux diff (seed 98765, case 1286, shrunk): n0 and n2 share the vertex (-1,6,0)
+  // after their quarter turns; FCL and Bullet, on float-rounded quaternions, report no pair.
+  // The probe must move n2 (of the differing pair), not n3 (the last model added, in no pair).
+  DiffRunner runner;
+  DiffCase c;
+  c.op = "scene_pairs";
+  c.setup = {R"({"op":"mesh","name":"m0","vertices":[[0,0,0],[3,-1,2],[0,0,1]],"triangles":[[0,1,2]]})",
+             R"({"op":"mesh","name":"m1","vertices":[[2,1,-1],[0,0,0],[0,0,-1]],"triangles":[[0,1,2]]})",
+             R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[-4,4,-1]}})",
+             R"({"op":"add_model","name":"n2","mesh":"m1","transform":{"rotation":[0.7071067811865476,0,0,0.7071067811865476],"translation":[0,4,1]}})",
+             R"({"op":"add_model","name":"n3","mesh":"m0","transform":{"rotation":[0,1,0,0],"translation":[0,0,0]}})"};
+  c.query = R"({"op":"scene_pairs"})";
+  const J none = J{{"op", "scene_pairs"}, {"pairs", J::array()}};
+  ASSERT_EQ(runner.run(c, "exact")["pairs"], J::parse(R"([["n0","n2"]])"));
+  const auto k = classify(runner, c, "fcl", none);
+  EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+  const auto moved = translatedCase(c, Vec3d(1, 0, 0), "n2");
+  ASSERT_TRUE(moved);
+  EXPECT_NE(moved->setup[3], c.setup[3]);
+  EXPECT_EQ(moved->setup[4], c.setup[4]);
 }
 
 TEST(DiffClassify, NumericWithinAndBeyondTolerance) {
@@ -243,9 +297,28 @@ TEST(DiffClassify, ErrorsAndUnsupported) {
   const auto c = primitive(kSeparated, true);
   J unsupported = J{{"op", "triangle_sphere"}, {"error", "unsupported: triangle_sphere on fcl"}};
   EXPECT_EQ(classify(runner, c, "fcl", unsupported).verdict, Verdict::Unsupported);
-  J error = J{{"op", "triangle_sphere"}, {"error", "fcl failed on triangle_sphere: boom"}};
+  J error = J{{"op", "triangle_sphere"}, {"error", "invalid answer"}};
   EXPECT_EQ(classify(runner, c, "fcl", error).verdict, Verdict::Error);
   EXPECT_EQ(classify(runner, c, "native", error).verdict, Verdict::CruxWrong);
+}
+
+TEST(DiffClassify, PeerFailuresAreNamedByKind) {
+  DiffRunner runner;
+  const auto c = primitive(kSeparated, true);
+  const std::pair<const char*, const char*> kinds[] = {
+      {"fcl failed on triangle_sphere: boom", "exception"},
+      {"fcl failed on triangle_sphere: SIGABRT (peer.cpp:1: Assertion failed)", "crash"},
+      {"fcl failed on triangle_sphere: the worker exited with status 3", "crash"},
+      {"fcl failed on triangle_sphere: timeout (no answer within 2 s; the worker was killed)", "timeout"},
+      {"setup: fcl failed on mesh: SIGSEGV", "crash"}};
+  for (const auto& [text, cause] : kinds) {
+    const auto k = classify(runner, c, "fcl", J{{"op", "triangle_sphere"}, {"error", text}});
+    EXPECT_EQ(k.verdict, Verdict::PeerFailed) << text;
+    EXPECT_EQ(k.cause, cause) << text;
+  }
+  // another backend's failure text is not this peer's failure
+  EXPECT_EQ(classify(runner, c, "bullet", J{{"op", "triangle_sphere"}, {"error", "fcl failed on x: boom"}}).verdict,
+            Verdict::Error);
 }
 
 TEST(DiffClassify, TriangleNearPlaneWithinBulletTolerance) {
@@ -317,8 +390,8 @@ TEST(DiffRun, SameSeedSameSummary) {
   o.seed = 11;
   o.cases = 40;
   o.backends = {"native", "fcl"};
-  // issue 5's ops: FCL's narrow phase runs in child processes (it aborts or loops on some
-  // pairs), which costs seconds per stuck case; DiffNarrowPhase covers those ops
+  // issue 5's ops: FCL's narrow phase aborts or loops on some pairs, and this runner answers
+  // in process (no worker executable); DiffNarrowPhase covers those ops
   o.ops = {"triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_triangle", "closest_point_triangle",
            "mesh_sphere", "mesh_mesh", "model_sphere", "scene_pairs"};
   std::ostringstream err;
@@ -603,6 +676,198 @@ TEST(DiffNarrowPhase, ShortRunFindsNoCruxWrong) {
   ASSERT_TRUE(s.table.count("model_distance") && s.table.at("model_distance").count("native"));
   const auto& md = s.table.at("model_distance").at("native");
   EXPECT_GE(md.count("agree") ? md.at("agree") : 0u, 20u);
+}
+
+
+// ---- peers in worker processes, and campaigns in shards ------------------------------------------
+
+/// Path of the `crux` executable, built next to this test.
+std::string cruxExecutable() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof(self) - 1);
+  std::string path(self, std::size_t(std::max<ssize_t>(n, 0)));
+  return path.substr(0, path.rfind('/') + 1) + "crux";
+}
+
+std::vector<std::string> peersBuilt() {
+  std::vector<std::string> out;
+  for (const auto b : builtBackends())
+    if (b == "fcl" || b == "bullet") out.emplace_back(b);
+  return out;
+}
+
+TEST(DiffRunner, PeersInWorkerProcessesAnswerAsInProcess) {
+  DiffGenerator g;
+  g.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  DiffRunner inProcess, isolated(cruxExecutable(), 30);
+  int compared = 0;
+  for (const auto family : diffFamilies()) {
+    for (std::uint64_t i = 0; i < 4; ++i) {
+      const auto c = generateCase(family, 31, i, g);
+      ASSERT_TRUE(c);
+      // FCL 0.7's narrow phase may abort in process (the reason for the workers)
+      if (c->op == "distance" || c->op == "contacts" || c->op == "mesh_distance" || c->op == "model_distance") continue;
+      for (const std::string& peer : peersBuilt()) {
+        EXPECT_EQ(isolated.run(*c, peer), inProcess.run(*c, peer)) << peer << " " << family << " " << i;
+        ++compared;
+      }
+    }
+  }
+  if (!peersBuilt().empty()) EXPECT_GT(compared, 40);
+}
+
+/// A summary without what differs between equal runs: the times and the campaign's shard list.
+J comparable(J summary) {
+  for (const char* key : {"seconds", "shards", "missing_cases"}) summary.erase(key);
+  return summary;
+}
+
+DiffOptions campaignOptions() {
+  DiffOptions o;
+  o.seed = 1;
+  o.backends = peersBuilt();
+  o.backends.push_back("native");
+  o.meshDir = std::string(CRUX_SOURCE_DIR) + "/data/meshes";
+  o.workerExecutable = cruxExecutable();
+  o.quiet = true;
+  o.shrinkPerKind = 1;
+  return o;
+}
+
+TEST(DiffCampaign, MergedShardsEqualTheSerialRun) {
+  const std::string root = testing::TempDir() + "/diff_campaign";
+  std::filesystem::remove_all(root);
+  DiffOptions serial = campaignOptions();
+  serial.cases = 60;
+  std::ostringstream out, err;
+  const J whole = runDiff(serial, err).toJson();
+  std::vector<std::string> dirs;
+  for (const auto& [first, count] : {std::pair{0, 17}, std::pair{17, 30}, std::pair{47, 13}}) {
+    DiffOptions shard = campaignOptions();
+    shard.firstCase = std::uint64_t(first);
+    shard.cases = std::uint64_t(count);
+    shard.shardDir = root + "/shard-" + std::to_string(first);
+    dirs.push_back(shard.shardDir);
+    runDiffCommand(shard, out, err);
+    EXPECT_TRUE(std::filesystem::exists(shard.shardDir + "/summary.json"));
+  }
+  std::reverse(dirs.begin(), dirs.end());  // the order of the directories does not matter
+  const MergedCampaign merged = mergeShards(dirs);
+  EXPECT_TRUE(merged.complete());
+  EXPECT_EQ(comparable(merged.toJson()), comparable(whole));
+  EXPECT_EQ(merged.summary.cases, 60u);
+  // not a trivial equality: the run has findings and error examples to join
+  EXPECT_FALSE(merged.summary.findings.empty());
+  EXPECT_FALSE(merged.summary.exampleErrors.empty());
+  // a shard given twice is merged once
+  dirs.push_back(dirs.front());
+  EXPECT_EQ(comparable(mergeShards(dirs).toJson()), comparable(whole));
+}
+
+TEST(DiffCampaign, MergeKeepsTheFirstFindingsPerKindAndTheFirstErrorExample) {
+  // two hand-made shard summaries: shard b (cases 10..19) holds a finding of a kind shard a
+  // (0..9) already holds twice, one of a new kind, and an earlier error example of a key
+  const std::string root = testing::TempDir() + "/diff_campaign_kinds";
+  std::filesystem::remove_all(root);
+  auto shard = [&](const std::string& name, std::uint64_t first, const std::vector<std::pair<int, std::string>>& found,
+                   const std::map<std::string, std::uint64_t>& examples) {
+    DiffSummary s;
+    s.seed = 3;
+    s.firstCase = first;
+    s.requestedCases = 10;
+    s.cases = 10;
+    s.shrinkPerKind = 2;
+    s.table["distance"]["fcl"]["agree"] = 10 - found.size();
+    s.table["distance"]["fcl"]["peer_wrong"] = found.size();
+    for (const auto& [index, kind] : found) {
+      s.findings.push_back(J{{"name", kind + ".3-" + std::to_string(index)}, {"kind", kind}, {"index", index}});
+      ++s.peerCauses["fcl"][kind];
+    }
+    for (const auto& [where, index] : examples) {
+      s.exampleErrors[where] = "case " + std::to_string(index);
+      s.exampleErrorCases[where] = index;
+    }
+    std::filesystem::create_directories(root + "/" + name);
+    writeJsonFile(root + "/" + name + "/summary.json", s.toJson());
+    return root + "/" + name;
+  };
+  const std::string b = shard("b", 10, {{11, "k1"}, {12, "k2"}}, {{"fcl.distance", 13}, {"bullet.contacts", 19}});
+  const std::string a = shard("a", 0, {{2, "k1"}, {5, "k1"}}, {{"fcl.distance", 4}});
+  const MergedCampaign merged = mergeShards({b, a});
+  ASSERT_TRUE(merged.complete());
+  std::vector<std::string> names;
+  for (const J& f : merged.summary.findings) names.push_back(f["name"].get<std::string>());
+  EXPECT_EQ(names, (std::vector<std::string>{"k1.3-2", "k1.3-5", "k2.3-12"}));
+  EXPECT_EQ(merged.summary.exampleErrors.at("fcl.distance"), "case 4");
+  EXPECT_EQ(merged.summary.exampleErrors.at("bullet.contacts"), "case 19");
+  EXPECT_EQ(merged.summary.table.at("distance").at("fcl").at("peer_wrong"), 4u);
+  EXPECT_EQ(merged.summary.peerCauses.at("fcl").at("k1"), 3u);
+  EXPECT_EQ(merged.summary.cases, 20u);
+}
+
+TEST(DiffCampaign, MissingAndFailedShardsAreNamedAndARerunCompletesTheCampaign) {
+  const std::string root = testing::TempDir() + "/diff_campaign_failed";
+  std::filesystem::remove_all(root);
+  std::ostringstream out, err;
+  std::vector<std::string> dirs;
+  for (int first : {0, 6, 12}) {
+    DiffOptions shard = campaignOptions();
+    shard.firstCase = std::uint64_t(first);
+    shard.cases = 6;
+    shard.shardDir = root + "/shard-" + std::to_string(first);
+    dirs.push_back(shard.shardDir);
+    runDiffCommand(shard, out, err);
+  }
+  // shard 6 was cancelled: it started, wrote no summary
+  std::filesystem::remove(root + "/shard-6/summary.json");
+  dirs.push_back(root + "/shard-18");  // never started
+  MergedCampaign merged = mergeShards(dirs);
+  EXPECT_FALSE(merged.complete());
+  ASSERT_EQ(merged.shards.size(), 4u);
+  EXPECT_EQ(merged.shards[1].status, "failed");
+  EXPECT_EQ(merged.shards[3].status, "missing");
+  EXPECT_EQ(merged.missingRanges, std::vector<std::string>{"6..11"});
+  std::ostringstream text;
+  merged.print(text);
+  EXPECT_NE(text.str().find("shard failed: " + root + "/shard-6 (cases 6..11"), std::string::npos) << text.str();
+  EXPECT_NE(text.str().find("shard missing: " + root + "/shard-18"), std::string::npos) << text.str();
+  EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", "", true, out), 3);
+  // rerun the failed shard alone: the three shards now equal a serial run of 18 cases
+  DiffOptions rerun = campaignOptions();
+  rerun.firstCase = 6;
+  rerun.cases = 6;
+  rerun.shardDir = root + "/shard-6";
+  runDiffCommand(rerun, out, err);
+  dirs.pop_back();
+  merged = mergeShards(dirs);
+  EXPECT_TRUE(merged.complete());
+  DiffOptions serial = campaignOptions();
+  serial.cases = 18;
+  EXPECT_EQ(comparable(merged.toJson()), comparable(runDiff(serial, err).toJson()));
+  EXPECT_EQ(runMergeCommand(dirs, root + "/merged.json", root + "/findings", true, out), 0);
+  EXPECT_EQ(comparable(J::parse(std::ifstream(root + "/merged.json"))), comparable(merged.toJson()));
+}
+
+TEST(DiffCampaign, ShardsOfDifferentRunsAreRefused) {
+  const std::string root = testing::TempDir() + "/diff_campaign_mixed";
+  std::filesystem::remove_all(root);
+  std::ostringstream out, err;
+  DiffOptions a = campaignOptions();
+  a.backends = {"native"};
+  a.cases = 3;
+  a.shardDir = root + "/a";
+  runDiffCommand(a, out, err);
+  DiffOptions b = a;
+  b.seed = 7;
+  b.firstCase = 3;
+  b.shardDir = root + "/b";
+  runDiffCommand(b, out, err);
+  EXPECT_THROW(mergeShards({a.shardDir, b.shardDir}), InvalidInput);
+  DiffOptions c = a;
+  c.firstCase = 2;
+  c.shardDir = root + "/c";
+  runDiffCommand(c, out, err);
+  EXPECT_THROW(mergeShards({a.shardDir, c.shardDir}), InvalidInput);  // 0..2 and 2..4 overlap
 }
 
 }  // namespace

@@ -29,19 +29,14 @@ namespace {
 
 using Json = nlohmann::json;
 
-std::string readFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using crux::cli::test::readFile;
 
 std::string binDir() {
   const std::string crux = crux::cli::test::cruxExecutable();
   return crux.substr(0, crux.rfind('/'));
 }
 
-bool exists(const std::string& path) { return access(path.c_str(), F_OK) == 0; }
+bool exists(const std::string& path) { return crux::cli::test::fileExists(path); }
 
 std::string unescapeHtml(std::string s) {
   const std::pair<const char*, const char*> entities[] = {{"&lt;", "<"}, {"&gt;", ">"}, {"&quot;", "\""}, {"&amp;", "&"}};
@@ -113,15 +108,33 @@ std::string ReportRun::out_;
 int ReportRun::status_ = -1;
 Json ReportRun::results_;
 
-TEST_F(ReportRun, WritesTheThreeOutputsAndShowsProgress) {
-  EXPECT_TRUE(status_ == 0 || status_ == 1) << "exit status " << status_ << "; progress:\n" << readFile(out_ + "/progress.txt");
+TEST_F(ReportRun, WritesTheThreeOutputsAndStaysQuietOffATerminal) {
+  EXPECT_TRUE(status_ == 0 || status_ == 1) << "exit status " << status_ << "; progress:\n" << readFile(out_ + "/raw/progress.log");
   ASSERT_FALSE(results_.is_discarded()) << "results.json does not parse";
   EXPECT_TRUE(exists(out_ + "/index.html"));
   EXPECT_TRUE(exists(out_ + "/summary.md"));
-  const std::string progress = readFile(out_ + "/progress.txt");
+  // stderr is a file here: no progress line on it, every step in raw/progress.log.
+  EXPECT_EQ(readFile(out_ + "/progress.txt"), "");
+  const std::string progress = readFile(out_ + "/raw/progress.log");
   EXPECT_NE(progress.find("crux report ["), std::string::npos) << progress;
   EXPECT_NE(progress.find("bench_mesh"), std::string::npos) << progress;
   EXPECT_EQ(results_["report"]["budget"], "tiny");
+}
+
+TEST_F(ReportRun, ScreenshotsTheVerdictWhenChromiumIsInstalled) {
+  ASSERT_FALSE(results_.is_discarded());
+  const Json& browser = results_["browser"];
+  if (!exists("/usr/bin/chromium")) {
+    EXPECT_FALSE(browser.value("available", true)) << browser.dump();
+    GTEST_SKIP() << "chromium is not installed (scripts/setup installs it)";
+  }
+  ASSERT_TRUE(browser.value("available", false)) << browser.dump();
+  EXPECT_EQ(browser["exit_status"], 0) << readFile(out_ + "/raw/browser.log");
+  EXPECT_EQ(browser.value("screenshot", ""), "verdict.png");
+  EXPECT_GT(readFile(out_ + "/verdict.png").size(), 1000u);
+  EXPECT_NE(readFile(out_ + "/summary.md").find("](verdict.png)"), std::string::npos);
+  ASSERT_TRUE(browser["data"].is_object());
+  EXPECT_EQ(browser["data"]["console_errors"], Json::array()) << browser["data"]["console_errors"].dump(1);
 }
 
 TEST_F(ReportRun, DescribesTheMachine) {
@@ -212,6 +225,21 @@ TEST_F(ReportRun, EveryChartDrawsOnlySeriesAndPointsOfResultsJson) {
   // Every ratio chart (every bench, memory included) is drawn, and the memory-vs-size lines.
   for (const auto& [id, s] : series.items())
     if (s["kind"] == "bar" || id.rfind("bench_scaling.memory.scaling.", 0) == 0) EXPECT_EQ(drawn.count(id), 1u) << id;
+}
+
+TEST_F(ReportRun, VerdictComesFirstAndCountsWhatTheRunMeasured) {
+  ASSERT_FALSE(results_.is_discarded());
+  const Json& v = results_["verdict"];
+  ASSERT_TRUE(v.is_object());
+  EXPECT_EQ(v["correctness"]["crux_wrong"], results_["cross_validation"]["diff"].value("data", Json::object()).value("crux_wrong", 0));
+  for (const Json& p : v["performance"])
+    EXPECT_EQ(p["crux_faster"].get<int>() + p["crux_slower"].get<int>(), p["workloads"].get<int>()) << p.dump();
+  const std::string html = readFile(out_ + "/index.html");
+  const auto verdict = html.find("<section id=\"verdict\">"), cross = html.find("<section id=\"cross-validation\">");
+  ASSERT_NE(verdict, std::string::npos);
+  ASSERT_NE(cross, std::string::npos);
+  EXPECT_LT(verdict, cross);
+  EXPECT_LT(verdict, html.find("<svg"));
 }
 
 TEST_F(ReportRun, SummaryHoldsTheHeadlineTable) {
@@ -365,6 +393,202 @@ TEST(ReportViews, HandMadeChartsReferenceOnlyTheirSeriesAndTheSummaryListsThem) 
   EXPECT_NE(md.find("box-box: distance"), std::string::npos) << md;
   EXPECT_NE(md.find("40 bytes/triangle"), std::string::npos) << md;
   EXPECT_NE(md.find("5.00x"), std::string::npos) << md;  // FCL's memory: 200 / 40
+}
+
+/// bench_mesh's workload format with one peer: `runs` per engine, crux first.
+Json meshWorkload(const std::string& key, double crux, double peer, const std::string& peerName,
+                  const std::vector<double>& cruxRuns = {}, const std::vector<double>& peerRuns = {},
+                  const std::string& agreement = "agree") {
+  Json engines = Json::array();
+  engines.push_back({{"name", "crux"}, {"config", ""}, {"wall_seconds_per_query_median", crux},
+                     {"wall_seconds_per_query_runs", cruxRuns}, {"agreement", "ref"}});
+  engines.push_back({{"name", peerName}, {"config", ""}, {"wall_seconds_per_query_median", peer},
+                     {"wall_seconds_per_query_runs", peerRuns}, {"agreement", agreement}});
+  return {{"key", key}, {"title", key + " queries"}, {"unit", "query"}, {"engines", engines}};
+}
+
+Json withMeshWorkloads(Json r, const Json& workloads) {
+  r["benches"]["bench_mesh"]["data"]["workloads"] = workloads;
+  r["benches"]["bench_mesh"]["data"]["reported_clock"] = "wall";
+  return r;
+}
+
+TEST(ReportVerdict, CountsWinsAndLossesWithTheGeometricMeanAndTheWorstRowPerPeer) {
+  // Embree: 4x slower than crux on a, 2x faster on b, 2x slower on c; a disagreeing row is not timed.
+  const Json r = withMeshWorkloads(handMadeResults(), Json::array({meshWorkload("a", 1e-6, 4e-6, "Embree"),
+                                                                   meshWorkload("b", 1e-6, 0.5e-6, "Embree"),
+                                                                   meshWorkload("c", 1e-6, 2e-6, "Embree"),
+                                                                   meshWorkload("d", 1e-6, 9e-6, "Embree", {}, {}, "DISAGREE")}));
+  const Json v = crux::cli::reportVerdict(r);
+  const Json* embree = nullptr;
+  for (const Json& p : v["performance"])
+    if (p["peer"] == "embree") embree = &p;
+  ASSERT_NE(embree, nullptr) << v.dump(1);
+  EXPECT_EQ((*embree)["workloads"], 3);
+  EXPECT_EQ((*embree)["crux_faster"], 2);
+  EXPECT_EQ((*embree)["crux_slower"], 1);
+  EXPECT_EQ((*embree)["answers_differ"], 1);
+  EXPECT_NEAR((*embree)["geomean"].get<double>(), std::cbrt(4.0 * 0.5 * 2.0), 1e-12);
+  EXPECT_EQ((*embree)["worst"]["workload"], "bench_mesh/b");
+  EXPECT_DOUBLE_EQ((*embree)["worst"]["ratio"].get<double>(), 0.5);
+  // bench_mesh's memory row (Embree 1.5x crux's bytes) is not a timed workload: 3, not 4.
+  const std::string md = crux::cli::renderSummary(r);
+  EXPECT_NE(md.find("| Embree | 2 of 3 | 1 of 3 | 1.59x | bench_mesh: b queries, 1000 triangles: 0.50x (1 more with different answers, not counted) |"), std::string::npos)
+      << md;
+}
+
+Json diffData() {
+  Json table = {{"ray_triangle", {{"native", {{"agree", 90}, {"within_tolerance", 2}}},
+                                  {"bullet", {{"agree", 80}, {"peer_wrong", 12}}},
+                                  {"fcl", {{"unsupported", 92}}}}},
+                {"distance", {{"native", {{"agree", 40}}}, {"fcl", {{"agree", 30}, {"peer_wrong", 7}, {"error", 3}}}}}};
+  Json finding = {{"name", "fcl.sphere-local-point.distance.1-7"}, {"family", "general"}, {"seed", 1}, {"index", 7},
+                  {"op", "distance"}, {"backend", "fcl"}, {"verdict", "peer_wrong"}, {"cause", "sphere-local-point"},
+                  {"exact_grid", false},
+                  {"lines", Json::array({R"({"id":"q","op":"distance","a":{"sphere":{"center":[1,2,3],"radius":1}},"b":{"sphere":{"center":[5,2,3],"radius":1}}})"})},
+                  {"answers", {{"exact", {{"id", "q"}, {"distance", 2.0}, {"point_a", {2.0, 2.0, 3.0}}}},
+                               {"fcl", {{"id", "q"}, {"distance", 2.0}, {"point_a", {1.0, 0.0, 0.0}}}}}}};
+  return {{"cases", 92}, {"crux_wrong", 0}, {"table", table},
+          {"peer_causes", {{"bullet", {{"margin", 9}, {"touching", 3}}}, {"fcl", {{"sphere-local-point", 7}}}}},
+          {"within_tolerance_causes", {{"native", {{"boundary", 2}}}}}, {"findings", Json::array({finding})}};
+}
+
+TEST(ReportVerdict, PutsTheCruxWrongCountFirstAndPeerDisagreementsByCause) {
+  Json r = handMadeResults();
+  r["cross_validation"]["diff"] = {{"available", true}, {"exit_status", 0}, {"command", "crux diff"}, {"data", diffData()}};
+  const Json c = crux::cli::reportVerdict(r)["correctness"];
+  EXPECT_EQ(c["crux_wrong"], 0);
+  EXPECT_EQ(c["diff_cases"], 92);
+  EXPECT_EQ(c["backends"]["bullet"]["peer_wrong"], 12);
+  EXPECT_EQ(c["backends"]["fcl"]["error"], 3);
+  EXPECT_EQ(c["backends"]["fcl"]["peer_wrong_causes"]["sphere-local-point"], 7);
+  const std::string md = crux::cli::renderSummary(r);
+  EXPECT_NE(md.find("**0 crux-wrong answers** in 92 generated crux diff cases"), std::string::npos) << md;
+  EXPECT_NE(md.find("- Bullet: 12 wrong (margin 9, touching 3), 0 within tolerance, 0 errors, of 92 answers compared"), std::string::npos) << md;
+  const std::string html = crux::cli::renderHtml(r);
+  // The grid: one row per op, a cell per backend with its counts spelled out.
+  EXPECT_NE(html.find("<table class=\"grid\">"), std::string::npos);
+  EXPECT_NE(html.find("12 peer wrong &middot; 80 agree"), std::string::npos);
+  EXPECT_NE(html.find("7 peer wrong &middot; 3 error &middot; 30 agree"), std::string::npos);
+  // The finding: vectors as [x, y, z], a copyable crux batch line, the corpus linked.
+  EXPECT_NE(html.find("point_a: [1, 0, 0]"), std::string::npos);
+  EXPECT_NE(html.find("point_a: [2, 2, 3]"), std::string::npos);
+  EXPECT_NE(html.find("| crux batch --backend fcl</pre>"), std::string::npos);
+  EXPECT_NE(html.find("oracle/known-peer-disagreements/"), std::string::npos);
+  EXPECT_EQ(html.find("<table><tr><th></th>"), std::string::npos) << "a raw JSON table is back";
+}
+
+TEST(ReportVerdict, ACruxWrongFindingTurnsTheVerdictRedAndIsListedFirst) {
+  Json r = handMadeResults();
+  Json data = diffData();
+  data["crux_wrong"] = 1;
+  data["table"]["distance"]["native"] = {{"agree", 39}, {"crux_wrong", 1}};
+  Json wrong = data["findings"][0];
+  wrong["name"] = "native.crux-wrong.distance.1-9";
+  wrong["backend"] = "native";
+  wrong["verdict"] = "crux_wrong";
+  wrong["cause"] = "beyond-tolerance";
+  data["findings"].push_back(wrong);  // after the peer finding in the file
+  r["cross_validation"]["diff"] = {{"available", true}, {"exit_status", 1}, {"command", "crux diff"}, {"data", data}};
+  const std::string html = crux::cli::renderHtml(r);
+  EXPECT_NE(html.find("<div class=\"card bad\"><h2>Is crux right?</h2>"), std::string::npos);
+  EXPECT_NE(html.find(">1 crux-wrong answer<"), std::string::npos);
+  const auto cruxWrong = html.find("<h4>CRUX WRONG"), peer = html.find("<h4>FCL");
+  ASSERT_NE(cruxWrong, std::string::npos);
+  ASSERT_NE(peer, std::string::npos);
+  EXPECT_LT(cruxWrong, peer);
+  EXPECT_NE(html.find("| crux batch --backend native</pre>"), std::string::npos);
+}
+
+TEST(ReportViews, ScalingSeriesCarryTheirLogLogSlope) {
+  const Json series = crux::cli::chartSeries(handMadeResults());
+  // crux's build time grows 10x from 1k to 10k triangles, Bullet's too: slope 1.
+  ASSERT_TRUE(series.contains("bench_scaling.build.scaling.crux-binned-sah")) << series.dump(1);
+  EXPECT_NEAR(series["bench_scaling.build.scaling.crux-binned-sah"]["slope"].get<double>(), 1.0, 1e-12);
+  // Bullet's bytes per triangle are flat: slope 0.
+  EXPECT_NEAR(series["bench_scaling.memory.scaling.bullet-bvh"]["slope"].get<double>(), 0.0, 1e-12);
+  Json r = handMadeResults();
+  r["series"] = series;
+  EXPECT_NE(crux::cli::renderHtml(r).find("crux [binned SAH] (slope 1.00)"), std::string::npos);
+}
+
+TEST(ReportViews, LongChartTitlesWrapIntoLinesNarrowerThanTheChart) {
+  Json r = handMadeResults();
+  r["benches"]["bench_mesh"]["data"]["workloads"] = Json::array(
+      {meshWorkload("long", 1e-6, 2e-6, "Embree")});
+  r["benches"]["bench_mesh"]["data"]["workloads"][0]["title"] =
+      "a workload title long enough to run well past the right edge of any chart that draws it on one line, twice over";
+  r["series"] = crux::cli::chartSeries(r);
+  const std::string html = crux::cli::renderHtml(r);
+  const std::regex svg("<svg[^>]*viewBox=\"0 0 ([0-9.]+) [0-9.]+\"[^>]*data-series=\"bench_mesh.long.ratio\"");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(html, m, svg));
+  const double width = std::stod(m[1].str());
+  const auto at = html.find("data-series=\"bench_mesh.long.ratio\"");
+  const std::regex title("<text class=\"title\"[^>]*>([^<]*)</text>");
+  std::size_t lines = 0;
+  const std::string chart = html.substr(at, html.find("</svg>", at) - at);
+  for (auto it = std::sregex_iterator(chart.begin(), chart.end(), title); it != std::sregex_iterator(); ++it) {
+    ++lines;
+    // 0.66 em per character at 12.5 px: the renderer's estimate for bold text.
+    EXPECT_LT(double((*it)[1].str().size()) * 12.5 * 0.66, width - 20) << (*it)[1].str();
+  }
+  EXPECT_GE(lines, 2u);
+  EXPECT_NE(chart.find("class=\"better\""), std::string::npos) << "the chart does not say what is better";
+}
+
+TEST(ReportCompare, FlagsOnlyChangesBeyondTheNoiseTheRunsMeasured) {
+  // Old: Embree/crux 4.0 on a, 2.0 on b, crux's runs spread 2 %, Embree's 2 %: noise 4 % per run.
+  const Json older = withMeshWorkloads(handMadeResults(), Json::array({meshWorkload("a", 1e-6, 4e-6, "Embree", {0.99e-6, 1e-6, 1.01e-6}, {3.96e-6, 4e-6, 4.04e-6}),
+                                                                      meshWorkload("b", 1e-6, 2e-6, "Embree", {0.99e-6, 1e-6, 1.01e-6}, {1.98e-6, 2e-6, 2.02e-6}),
+                                                                      meshWorkload("c", 1e-6, 2e-6, "Embree")}));
+  // New: a's ratio falls to 3.0 (-25 %, beyond 8 %), b's to 1.9 (-5 %, within), c unmeasured.
+  const Json newer = withMeshWorkloads(handMadeResults(), Json::array({meshWorkload("a", 1e-6, 3e-6, "Embree", {0.99e-6, 1e-6, 1.01e-6}, {2.97e-6, 3e-6, 3.03e-6}),
+                                                                      meshWorkload("b", 1e-6, 1.9e-6, "Embree", {0.99e-6, 1e-6, 1.01e-6}, {1.881e-6, 1.9e-6, 1.919e-6}),
+                                                                      meshWorkload("c", 1e-6, 1e-6, "Embree")}));
+  const Json c = crux::cli::compareResults(older, newer);
+  std::map<std::string, Json> byRow;
+  for (const Json& row : c["rows"]) byRow[row["workload"].get<std::string>() + " " + row["peer"].get<std::string>()] = row;
+  ASSERT_EQ(byRow.count("bench_mesh/a embree"), 1u) << c.dump(1);
+  EXPECT_EQ(byRow["bench_mesh/a embree"]["flag"], "regression");
+  EXPECT_NEAR(byRow["bench_mesh/a embree"]["change"].get<double>(), -0.25, 1e-12);
+  EXPECT_NEAR(byRow["bench_mesh/a embree"]["noise"].get<double>(), 0.08, 1e-9);
+  EXPECT_EQ(byRow["bench_mesh/b embree"]["flag"], "");
+  EXPECT_EQ(byRow["bench_mesh/a crux"]["flag"], "");  // crux's own time did not move
+  // c has no runs: it takes the median measured noise of its report, marked as estimated.
+  EXPECT_FALSE(byRow["bench_mesh/c embree"]["noise_measured"].get<bool>());
+  EXPECT_EQ(byRow["bench_mesh/c embree"]["flag"], "regression");  // -50 % beyond the estimated 8 %
+  EXPECT_EQ(c["regressions"], 2);
+  Json r = newer;
+  r["comparison"] = c;
+  EXPECT_NE(crux::cli::renderSummary(r).find("- **regression**: bench_mesh: a queries, Embree / crux: 4.00x -> 3.00x (-25.0%, noise 8.0%)"),
+            std::string::npos)
+      << crux::cli::renderSummary(r);
+  EXPECT_NE(crux::cli::renderHtml(r).find("<section id=\"comparison\">"), std::string::npos);
+}
+
+TEST(ReportCommand, RendersAnEarlierResultsJsonAndComparesWithIt) {
+  char pattern[] = "/tmp/crux_test_report_render_XXXXXX";
+  const char* dir = mkdtemp(pattern);
+  ASSERT_NE(dir, nullptr);
+  const std::string out = dir;
+  Json r = withMeshWorkloads(handMadeResults(), Json::array({meshWorkload("a", 1e-6, 4e-6, "Embree")}));
+  {
+    std::ofstream(out + "/old.json") << r.dump();
+  }
+  const auto [status, text] = crux::cli::test::run(crux::cli::test::cruxExecutable() + " report --render " + out +
+                                                   "/old.json --compare " + out + "/old.json --out " + out + "/new 2>&1");
+  EXPECT_EQ(status, 0) << text;
+  const Json rendered = Json::parse(readFile(out + "/new/results.json"), nullptr, false);
+  ASSERT_TRUE(rendered.is_object());
+  EXPECT_TRUE(rendered["series"].contains("bench_mesh.a.ratio"));
+  EXPECT_EQ(rendered["comparison"]["regressions"], 0);
+  EXPECT_NE(readFile(out + "/new/index.html").find("<section id=\"verdict\">"), std::string::npos);
+  const auto [bad, message] = crux::cli::test::run(crux::cli::test::cruxExecutable() + " report --render " + out +
+                                                   "/absent.json --out " + out + "/new 2>&1");
+  EXPECT_EQ(bad, 2);
+  EXPECT_NE(message.find("absent.json"), std::string::npos) << message;
+  std::system(("rm -rf " + out).c_str());
 }
 
 }  // namespace

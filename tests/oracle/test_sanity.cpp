@@ -805,6 +805,7 @@ TEST_F(OracleSanity, UnsupportedOpsSaySo) {
           [&] { w->overlapsVolume(model, Aabb{}); },
           [&] { w->overlapsVolume(model, Obb{}); },
           [&] { w->overlapsVolume(model, T); },
+          [&] { w->cast({Sphere{}, Transform{}}, WorldMotion{}, {cube, Transform{}}); },
       };
       static_assert(std::size(calls) == kWorldOpCount, "one call per op");
       try {

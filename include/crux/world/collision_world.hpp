@@ -99,10 +99,12 @@ enum class WorldOp : std::uint8_t {
   ModelAabbVolume,     ///< model_aabb with "volume": true
   ModelObbVolume,      ///< model_obb with "volume": true
   ModelTriangleVolume, ///< model_triangle with "volume": true
+  // shape casts (continuous collision; docs/narrowphase.md "Shape casts")
+  Cast,
 };
 
 /// Number of WorldOp values.
-inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::ModelTriangleVolume) + 1;
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::Cast) + 1;
 /// The ops of the original protocol contract (closest_point_triangle ... scene_pairs); those after
 /// it are the narrow-phase and volume extensions of docs/batch.md.
 inline constexpr bool isContractOp(WorldOp op) { return op <= WorldOp::ScenePairs; }
@@ -287,6 +289,28 @@ struct WorldDistance {
   std::optional<std::uint32_t> triangleA, triangleB;
 };
 
+/// How a cast moves its operand a over t in [0, 1]: by a translation, or (when `end` is set) from
+/// its pose to the pose `end`, rotation by slerp and translation linearly (RigidMotion, cast.hpp).
+struct WorldMotion {
+  Vec3 translation = Vec3::Zero();
+  std::optional<Transform> end;
+};
+
+/// The first time of impact of a cast (cast.hpp's CastResult in double), world space.
+struct WorldCast {
+  bool hit = false;
+  /// Whether t, the points and the normal are known: false when the backend decides hit or miss
+  /// only (the exact backend's rounded shapes, whose time of impact is irrational).
+  bool timeKnown = true;
+  double t = 0;
+  Vec3d pointA = Vec3d::Zero();
+  Vec3d pointB = Vec3d::Zero();
+  Vec3d normal = Vec3d::UnitZ();  ///< unit, from B to A
+  bool startsOverlapping = false;
+  double depth = 0;               ///< penetration depth at t = 0 (startsOverlapping)
+  std::optional<std::uint32_t> triangleB;  ///< the mesh triangle hit (b a mesh)
+};
+
 /// A world of meshes, models and a scene, answering every query of the batch protocol through
 /// one collision library. Changes are exclusive; queries may run on several threads at once only
 /// when concurrentQueries() says so (the native world), otherwise one world per thread.
@@ -440,6 +464,10 @@ class CollisionWorld {
   bool overlapsVolume(ModelHandle model, const Obb& b);
   bool overlapsVolume(ModelHandle model, const Triangle& t);
 
+  /// cast: the first time at which the convex operand a, moved by `motion`, touches b (a convex
+  /// shape or a mesh, staying at its pose). a being a mesh: InvalidInput.
+  WorldCast cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b);
+
   // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
 
   /// mesh_<shape> with "triangles": true: the ascending indices of the mesh's triangles the
@@ -545,6 +573,9 @@ class CollisionWorld {
   virtual bool doOverlapsVolume(ModelHandle model, const Aabb& b);
   virtual bool doOverlapsVolume(ModelHandle model, const Obb& b);
   virtual bool doOverlapsVolume(ModelHandle model, const Triangle& t);
+
+  /// cast; a is convex, operands and motion validated.
+  virtual WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b);
 
   /// Extensions; the defaults return nothing (triangles not listed).
   virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);

@@ -1,0 +1,49 @@
+#pragma once
+/// @file bindings.hpp  The objects the Python module wraps and the functions that bind them.
+
+#include <crux/mesh/mesh.hpp>
+#include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_volume.hpp>
+
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <mutex>
+
+namespace crux::python {
+
+namespace py = pybind11;
+
+/// A Python `crux.Mesh`: an immutable crux::Mesh (shared with the scenes it is added to) plus the
+/// per-mesh structures some queries need, built on first use and kept: the solid view
+/// (closedness checked once) and the edge adjacency of contact queries.
+class PyMesh {
+ public:
+  explicit PyMesh(std::shared_ptr<const Mesh> mesh) : mesh_(std::move(mesh)) {}
+  const Mesh& mesh() const { return *mesh_; }
+  const std::shared_ptr<const Mesh>& shared() const { return mesh_; }
+  /// The mesh as a solid; throws InvalidInput (crux's message) when it is not closed.
+  const MeshVolume& volume() const;
+  /// Whether the mesh is closed (crux::isClosed, computed once).
+  bool closed() const;
+  /// The edge adjacency of contacts(), built once.
+  const MeshAdjacency& adjacency() const;
+
+ private:
+  std::shared_ptr<const Mesh> mesh_;
+  mutable std::mutex lock_;
+  mutable int closed_ = -1;  // unknown, 0, 1
+  mutable std::unique_ptr<MeshVolume> volume_;
+  mutable std::unique_ptr<MeshAdjacency> adjacency_;
+};
+
+/// Named tuple types of the answers, made once at import.
+struct ResultTypes {
+  py::object rayHits, rayHitsAll, closestPoints, meshDistance, contacts, sceneRayHits, regionHits;
+};
+const ResultTypes& resultTypes();
+
+void bindMesh(py::module_& m);
+void bindScene(py::module_& m);
+
+}  // namespace crux::python

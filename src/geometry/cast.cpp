@@ -1,0 +1,182 @@
+// Shape casts by conservative advancement on the GJK distance (cast.hpp): one loop, driven by a
+// motion (linear or rigid) that places A at time t and bounds its approach speed along a normal.
+
+#include <crux/geometry/cast.hpp>
+
+#include <cmath>
+
+#include "geometry/gjk_internal.hpp"
+
+namespace crux {
+namespace {
+
+using detail::Placed;
+using detail::V3;
+
+/// The placed shape moved by the translation s (double, exact placement of A(t) = A(0) + s).
+Placed shifted(const Placed& p, const V3& s) {
+  Placed q = p;
+  q.t += s;
+  switch (p.shape->kind) {
+    case ConvexKind::Sphere:
+    case ConvexKind::Box: q.p[0] += s; break;
+    case ConvexKind::Capsule:
+      q.p[0] += s;
+      q.p[1] += s;
+      break;
+    case ConvexKind::Triangle:
+      for (V3& v : q.p) v += s;
+      break;
+    case ConvexKind::Hull: break;  // hull vertices are placed by R and t on demand
+  }
+  return q;
+}
+
+/// Pure translation: A(t) = A(0) shifted by t·v; approach speed along -n is -n·v.
+class LinearMover {
+ public:
+  LinearMover(const ConvexShape& a, const Transform& ta, const Vec3& motion)
+      : start_(a, ta), v_(motion.cast<double>()) {}
+  Placed at(double t) const { return t == 0 ? start_ : shifted(start_, t * v_); }
+  double bound(const V3& n) const { return -n.dot(v_); }
+  double length() const { return v_.norm(); }
+  const Placed& start() const { return start_; }
+
+ private:
+  Placed start_;
+  V3 v_;
+};
+
+/// Rigid motion: A(t) at poseAt(motion, t); approach speed along -n at most
+/// -n·(t1 - t0) + θ·r_max (θ the rotation angle, r_max the shape's size about its origin).
+class RigidMover {
+ public:
+  RigidMover(const ConvexShape& a, const RigidMotion& m)
+      : shape_(a), motion_(m), start_(a, m.start),
+        v_((m.end.translation - m.start.translation).cast<double>()), q0_(m.start.rotation.cast<double>()),
+        q1_(m.end.rotation.cast<double>()) {
+    // q0⁻¹q1 turns by θ about a body axis u; the world angular velocity θ·R0·u is constant.
+    Eigen::Quaterniond rel = q0_.conjugate() * q1_;
+    if (rel.w() < 0) rel.coeffs() = -rel.coeffs();
+    theta_ = 2 * std::atan2(rel.vec().norm(), rel.w());
+    if (rel.vec().squaredNorm() > 0) axis_ = q0_ * rel.vec().normalized();
+    rmax_ = double(a.size());
+  }
+  /// The pose at t interpolated in double (poseAt's rule), so the advancement is not limited by
+  /// float rotations; the ends are the given poses.
+  Placed at(double t) const {
+    if (t == 0) return start_;
+    if (t >= 1) return Placed(shape_, motion_.end);
+    const Eigen::Quaterniond q = q0_.slerp(t, q1_).normalized();
+    const V3 c = (1 - t) * motion_.start.translation.cast<double>() + t * motion_.end.translation.cast<double>();
+    return Placed(shape_, q.toRotationMatrix(), c);
+  }
+  /// A point r (from the origin) turns at θ·u × r, whose component along n is θ·r·(n × u):
+  /// at most θ·|n × u|·r_max.
+  double bound(const V3& n) const { return -n.dot(v_) + theta_ * n.cross(axis_).norm() * rmax_; }
+  double length() const { return v_.norm() + theta_ * rmax_; }
+  const Placed& start() const { return start_; }
+
+ private:
+  const ConvexShape& shape_;
+  RigidMotion motion_;
+  Placed start_;
+  V3 v_;
+  Eigen::Quaterniond q0_, q1_;
+  V3 axis_ = V3::UnitZ();  // world rotation axis (unit)
+  double theta_ = 0, rmax_ = 0;
+};
+
+/// Rounds a time down to Real (never later than the double one).
+Real roundDown(double t) {
+  Real r = Real(t);
+  if (double(r) > t) r = std::nextafter(r, Real(0));
+  return r;
+}
+
+/// The advancement loop shared by every cast (cast.hpp).
+template <class Mover>
+CastResult advance(const Mover& mover, const ConvexShape& b, const Transform& tb, const CastOptions& options) {
+  const Placed B(b, tb);
+  const Placed& A0 = mover.start();
+  const double scale = detail::pairScale(A0, B) + mover.length();
+  const double delta = kCastRelativeTolerance * scale;
+  CastResult out;
+  out.t = 1;
+  double t = 0;
+  for (int it = 1; it <= kCastMaxIterations; ++it) {
+    out.iterations = it;
+    const detail::WideDistance d = detail::coreQueryWide(mover.at(t), B);
+    const double dist = d.distance;
+    if (dist <= delta || it == kCastMaxIterations) {
+      out.hit = true;
+      out.capped = dist > delta;
+      out.t = roundDown(t);
+      out.pointA = d.pointA.cast<Real>();
+      out.pointB = d.pointB.cast<Real>();
+      out.normal = d.normal.cast<Real>();
+      if (t == 0) {
+        out.startsOverlapping = true;
+        out.depth = Real(std::max(0.0, -d.distance));
+      }
+      return out;
+    }
+    if (t >= 1) break;
+    const double mu = mover.bound(d.normal);
+    if (!(mu > 0)) break;  // a plane separates A from B for the rest of the motion
+    // past the end: check the end itself (within δ there: a hit)
+    const double next = std::min(t + (dist - delta / 2) / mu, 1.0);
+    if (roundDown(next) > options.earlyOut) break;
+    t = next;
+  }
+  out.hit = false;
+  return out;
+}
+
+}  // namespace
+
+Transform poseAt(const RigidMotion& motion, Real t) {
+  if (t <= 0) return motion.start;
+  if (t >= 1) return motion.end;
+  Transform p;
+  p.rotation = motion.start.rotation.slerp(t, motion.end.rotation).normalized();
+  p.translation = (1 - t) * motion.start.translation + t * motion.end.translation;
+  return p;
+}
+
+CastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
+                const Transform& tb, const CastOptions& options) {
+  return advance(LinearMover(a, ta, motion), b, tb, options);
+}
+
+CastResult cast(const ConvexShape& a, const RigidMotion& motion, const ConvexShape& b, const Transform& tb,
+                const CastOptions& options) {
+  return advance(RigidMover(a, motion), b, tb, options);
+}
+
+bool castAny(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
+             const Transform& tb) {
+  return cast(a, ta, motion, b, tb).hit;
+}
+
+bool castAny(const ConvexShape& a, const RigidMotion& motion, const ConvexShape& b, const Transform& tb) {
+  return cast(a, motion, b, tb).hit;
+}
+
+void validate(const ConvexShape& shape, const std::string& name) {
+  switch (shape.kind) {
+    case ConvexKind::Sphere: validate(Sphere{shape.p[0], shape.radius}, name); break;
+    case ConvexKind::Capsule: validate(Capsule{shape.p[0], shape.p[1], shape.radius}, name); break;
+    case ConvexKind::Box: validate(Obb{shape.p[0], shape.p[1], shape.axes}, name); break;
+    case ConvexKind::Triangle: validate(Triangle{shape.p[0], shape.p[1], shape.p[2]}, name); break;
+    case ConvexKind::Hull:
+      if (!shape.hull || shape.hull->vertices().empty()) throw InvalidInput(name + ": the hull has no points");
+      break;
+  }
+}
+
+void validateMotion(const Vec3& motion, const std::string& name) {
+  validatePoint(motion, name);
+}
+
+}  // namespace crux

@@ -1,0 +1,69 @@
+// Shape casts against scenes (src/scene/scene_cast.cpp): the broad-phase path against the brute
+// force (identical answers) on every broad phase, for linear and rigid motions and for pure
+// rotations (no path: the ball query); any-hit against closest.
+
+#include <crux/scene/scene_cast.hpp>
+
+#include <gtest/gtest.h>
+
+#include <support/scene_fixtures.hpp>
+
+#include <memory>
+#include <optional>
+#include <random>
+
+namespace crux {
+namespace {
+
+using Rng = std::mt19937_64;
+
+bool same(const std::optional<SceneCastHit>& a, const std::optional<SceneCastHit>& b) {
+  if (a.has_value() != b.has_value()) return false;
+  if (!a) return true;
+  return a->model == b->model && a->hit.triangle == b->hit.triangle && a->hit.cast.t == b->hit.cast.t &&
+         a->hit.cast.pointA == b->hit.cast.pointA && a->hit.cast.normal == b->hit.cast.normal;
+}
+
+class SceneCast : public ::testing::TestWithParam<BroadPhaseKind> {};
+
+TEST_P(SceneCast, BroadPhaseEqualsBruteForce) {
+  Rng rng(99);
+  Scene scene(GetParam());
+  crux::test::populate(scene, crux::test::bumpySphere(6, 8), 4, rng);
+  std::uniform_real_distribution<double> u(-10, 10), r(0.1, 0.6);
+  const Obb box{Vec3::Zero(), Vec3(Real(0.3), Real(0.2), Real(0.5)), Mat3::Identity()};
+  const Capsule capsule{Vec3(-1, 0, 0), Vec3(1, 0, 0), Real(0.2)};
+  int hits = 0;
+  const int n = 40;
+  for (int i = 0; i < n; ++i) {
+    const ConvexShape shape = i % 2 ? ConvexShape(box) : ConvexShape(capsule);
+    const Transform start = crux::test::randomPose(rng, 12);
+    // aim near a model (noise of ±2.5: about half the casts hit something)
+    const std::vector<ModelId> ids = scene.models().ids();
+    const ModelId target = ids[std::size_t(i) % ids.size()];
+    const Vec3 aim = scene.placed(target).world.translation + Vec3(Real(u(rng)), Real(u(rng)), Real(u(rng))) / 4;
+    const Vec3 motion = (aim - start.translation) * Real(1.3);
+    const auto fast = castClosest(scene, shape, start, motion);
+    const auto brute = castClosest(scene, shape, start, motion, ScenePath::BruteForce);
+    ASSERT_TRUE(same(fast, brute)) << i;
+    EXPECT_EQ(castAny(scene, shape, start, motion), brute.has_value()) << i;
+    hits += brute.has_value();
+    if (brute) {  // the model cast of the model hit agrees
+      const auto own = castClosest(scene.placed(brute->model), shape, start, motion);
+      ASSERT_TRUE(own.has_value());
+      EXPECT_EQ(own->cast.t, brute->hit.cast.t);
+    }
+    RigidMotion rigid{start, crux::test::randomPose(rng, 10)};
+    if (i % 4 == 0) rigid.end.translation = rigid.start.translation;  // a pure rotation
+    ASSERT_TRUE(same(castClosest(scene, shape, rigid), castClosest(scene, shape, rigid, ScenePath::BruteForce))) << i;
+  }
+  EXPECT_GT(hits, n / 5);
+  EXPECT_LT(hits, n - n / 5);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllBroadPhases, SceneCast,
+                         ::testing::Values(BroadPhaseKind::BruteForce, BroadPhaseKind::Octree,
+                                           BroadPhaseKind::DynamicAabbTree));
+
+}  // namespace
+}  // namespace crux
