@@ -104,6 +104,7 @@ class TriangleRayTest {
   /// The reported hit of a candidate (the same as raycast(ray, triangle) but for a parameter
   /// certified by the filter stage alone).
   MeshRayHit hit(const Candidate& c, std::uint32_t tri) const {
+    // (never empty: the candidate's t was formed by the same rule and checked against maxDistance)
     const std::optional<RayHit> h = geometry_detail::rayHitAt(ray_, c.crossing, options_.maxDistance);
     return {h->t, h->point, h->normal, tri};
   }
