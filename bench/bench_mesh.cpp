@@ -14,6 +14,7 @@
 
 #include "bench_output.hpp"
 #include "peers/bench_types.hpp"
+#include "ray_work.hpp"
 #if CRUX_BENCH_HAVE_EMBREE
 #include "peers/embree_peer.hpp"
 #endif
@@ -775,25 +776,6 @@ int main(int argc, char** argv) {
   }
   const crux::Mesh& mesh = *in.mesh;
   const std::size_t nt = mesh.triangleCount();
-  // the same mesh in the wide layout (BvhBuildOptions::wide: + the 4-wide BVH), shown beside
-  crux::BvhBuildOptions wideOptions;
-  wideOptions.wide = true;
-  const crux::Mesh wideMesh(in.vertices, in.triangles, mesh.name(), wideOptions);
-  // Work per ray of each crux layout (RayQueryCounters), printed as a workload note.
-  auto rayCounters = [&](const crux::Mesh& m, const std::vector<RayQuery>& q, bool any) {
-    crux::RayQueryCounters c;
-    crux::RayQueryOptions o;
-    o.counters = &c;
-    for (const RayQuery& r : q) {
-      const crux::Ray ray{vec(r.origin), vec(r.dir)};
-      if (any) crux::raycastAny(m, ray, o);
-      else crux::raycastClosest(m, ray, o);
-    }
-    const double n = double(q.size()), t = double(std::max<std::uint64_t>(c.triangles, 1));
-    return fmt("%.1f", double(c.nodes) / n) + " nodes, " + fmt("%.1f", double(c.triangles) / n) +
-           " triangles per ray; " + fmt("%.1f", 100.0 * double(c.certified) / t) + "% of the triangles certified by the float filter, " +
-           fmt("%.2f", 100.0 * double(c.exactPath) / t) + "% on the exact path";
-  };
   std::cout << "   mesh: " << s.meshPath << ": " << nt << " triangles, " << mesh.vertexCount()
             << " vertices, bounding radius R = " << fmt("%.4g", in.radius) << "\n";
 
@@ -874,10 +856,8 @@ int main(int argc, char** argv) {
       e.pass = [run, out] { return timeIt([&] { run(out); }); };
       w.engines.push_back(std::move(e));
     };
-    add("crux", "BVH, watertight", [&](RayAnswer* out) { cruxRays(mesh, rays, out); });
-    add("crux", "wide BVH, watertight", [&](RayAnswer* out) { cruxRays(wideMesh, rays, out); });
-    w.notes.push_back("crux work, binary BVH (default): " + rayCounters(mesh, rays, false));
-    w.notes.push_back("crux work, wide BVH (BvhBuildOptions::wide): " + rayCounters(wideMesh, rays, false));
+    add("crux", "4-wide BVH, watertight", [&](RayAnswer* out) { cruxRays(mesh, rays, out); });
+    w.notes.push_back("crux work: " + measureRayWork(mesh, rays.data(), rays.size(), false).text());
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](RayAnswer* out) { embreeR->closestHits(rays.data(), rays.size(), out); });
     add("embree", embreeDefault.label(), [&](RayAnswer* out) { embreeD->closestHits(rays.data(), rays.size(), out); });
@@ -937,10 +917,8 @@ int main(int argc, char** argv) {
     std::vector<std::vector<std::uint8_t>> answers;
     answers.reserve(4);
     auto add = makeAdder(w, answers);
-    add("crux", "BVH, raycastAny", [&](std::uint8_t* out) { cruxAnyRays(mesh, rays, out); });
-    add("crux", "wide BVH, raycastAny", [&](std::uint8_t* out) { cruxAnyRays(wideMesh, rays, out); });
-    w.notes.push_back("crux work, binary BVH (default): " + rayCounters(mesh, rays, true));
-    w.notes.push_back("crux work, wide BVH (BvhBuildOptions::wide): " + rayCounters(wideMesh, rays, true));
+    add("crux", "4-wide BVH, raycastAny", [&](std::uint8_t* out) { cruxAnyRays(mesh, rays, out); });
+    w.notes.push_back("crux work: " + measureRayWork(mesh, rays.data(), rays.size(), true).text());
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->anyHits(rays.data(), rays.size(), out); });
     add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->anyHits(rays.data(), rays.size(), out); });
@@ -970,8 +948,7 @@ int main(int argc, char** argv) {
     std::vector<std::vector<std::uint8_t>> answers;
     answers.reserve(4);
     auto add = makeAdder(w, answers);
-    add("crux", "BVH, exact predicates", [&](std::uint8_t* out) { cruxSegments(mesh, segments, out); });
-    add("crux", "wide BVH, exact predicates", [&](std::uint8_t* out) { cruxSegments(wideMesh, segments, out); });
+    add("crux", "4-wide BVH, exact predicates", [&](std::uint8_t* out) { cruxSegments(mesh, segments, out); });
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->segmentHits(segments.data(), segments.size(), out); });
     add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->segmentHits(segments.data(), segments.size(), out); });
@@ -1212,10 +1189,7 @@ int main(int argc, char** argv) {
   memory.emplace_back("crux_bytes_per_triangle", cruxBytesPerTri);
   memory.emplace_back("crux_bvh_nodes", double(mesh.bvh().nodes.size()));
   std::cout << "\n== memory (bytes per triangle)\n";
-  std::printf("   %-8s %-44s %10.1f\n", "crux", "vertices + indices + BVH (Mesh::memoryBytes)", cruxBytesPerTri);
-  const double wideBytesPerTri = double(wideMesh.memoryBytes()) / double(nt);
-  memory.emplace_back("crux_wide_bytes_per_triangle", wideBytesPerTri);
-  std::printf("   %-8s %-44s %10.1f\n", "crux", "the same + wide BVH (BvhBuildOptions::wide)", wideBytesPerTri);
+  std::printf("   %-8s %-44s %10.1f\n", "crux", "vertices + indices + 4-wide BVH (Mesh::memoryBytes)", cruxBytesPerTri);
 #if CRUX_BENCH_HAVE_EMBREE
   {
     const double meshBytes = double(in.arrays.positions.size() * sizeof(float) + in.arrays.indices.size() * 4);

@@ -60,6 +60,7 @@ Answer toJson(const MeshReport& r) {
   Answer bvh = Answer::object();
   bvh["nodes"] = r.bvh.nodes;
   bvh["leaves"] = r.bvh.leaves;
+  bvh["mean_lanes"] = r.bvh.meanLanes;
   bvh["depth"] = r.bvh.depth;
   bvh["mean_leaf_depth"] = r.bvh.meanLeafDepth;
   bvh["mean_leaf_size"] = r.bvh.meanLeafSize;
@@ -96,7 +97,8 @@ void writeText(std::ostream& out, const MeshReport& r) {
   out << std::fixed << std::setprecision(6);
   row("load time") << r.loadSeconds << " s (BVH build " << r.buildSeconds << " s)\n";
   out << std::setprecision(2);
-  row("BVH") << r.bvh.nodes << " nodes, " << r.bvh.leaves << " leaves, depth " << r.bvh.depth
+  row("BVH") << r.bvh.nodes << " 4-wide nodes (" << r.bvh.meanLanes << " lanes used on average), " << r.bvh.leaves
+             << " leaves, depth " << r.bvh.depth
              << " (mean leaf depth " << r.bvh.meanLeafDepth << "), leaf size mean " << r.bvh.meanLeafSize
              << " max " << r.bvh.maxLeafSize << '\n';
   row("memory") << r.memoryBytes << " bytes (" << r.bytesPerTriangle << " bytes/triangle)\n";
@@ -108,27 +110,31 @@ void writeText(std::ostream& out, const MeshReport& r) {
 
 }  // namespace
 
-BvhShape bvhShape(const Bvh& bvh) {
+BvhShape bvhShape(const WideBvh& bvh) {
   BvhShape shape;
   shape.nodes = bvh.nodes.size();
   if (bvh.nodes.empty()) return shape;
-  std::size_t leafDepthSum = 0, leafSizeSum = 0;
+  std::size_t leafDepthSum = 0, leafSizeSum = 0, lanes = 0;
   std::vector<std::pair<std::uint32_t, std::size_t>> stack = {{0u, 0u}};  // node, depth
   while (!stack.empty()) {
     const auto [index, depth] = stack.back();
     stack.pop_back();
-    const BvhNode& node = bvh.nodes[index];
-    if (node.isLeaf()) {
+    const WideBvhNode& node = bvh.nodes[index];
+    for (int i = 0; i < 4; ++i) {
+      if (!node.used(i)) continue;
+      ++lanes;
+      if (node.count[i] == 0) {
+        stack.emplace_back(node.child[i], depth + 1);
+        continue;
+      }
       ++shape.leaves;
       shape.depth = std::max(shape.depth, depth);
-      shape.maxLeafSize = std::max<std::size_t>(shape.maxLeafSize, node.count);
+      shape.maxLeafSize = std::max<std::size_t>(shape.maxLeafSize, node.count[i]);
       leafDepthSum += depth;
-      leafSizeSum += node.count;
-    } else {
-      stack.emplace_back(node.first, depth + 1);
-      stack.emplace_back(node.first + 1, depth + 1);
+      leafSizeSum += node.count[i];
     }
   }
+  shape.meanLanes = double(lanes) / double(shape.nodes);
   shape.meanLeafDepth = double(leafDepthSum) / double(shape.leaves);
   shape.meanLeafSize = double(leafSizeSum) / double(shape.leaves);
   return shape;

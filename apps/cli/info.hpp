@@ -12,18 +12,20 @@
 
 namespace crux::cli {
 
-/// Shape of a BVH, from one pass over its node array.
+/// Shape of a mesh's 4-wide BVH, from one pass over its node array.
 struct BvhShape {
-  std::size_t nodes = 0;
-  std::size_t leaves = 0;
-  std::size_t depth = 0;          ///< edges from the root to the deepest leaf (a lone root leaf: 0)
+  std::size_t nodes = 0;          ///< wide nodes
+  std::size_t leaves = 0;         ///< leaf lanes
+  double meanLanes = 0;           ///< mean used lanes per node (2 to 4)
+  std::size_t depth = 0;          ///< wide nodes above the deepest leaf, the root's not counted
+                                  ///< (leaves in the root's own lanes: 0)
   double meanLeafDepth = 0;       ///< mean over leaves of their depth
   double meanLeafSize = 0;        ///< mean primitives per leaf
   std::size_t maxLeafSize = 0;    ///< most primitives in one leaf
 };
 
 /// Walks the node array from the root with an explicit stack (no recursion).
-BvhShape bvhShape(const Bvh& bvh);
+BvhShape bvhShape(const WideBvh& bvh);
 
 /// Options of one `crux info` run.
 struct InfoOptions {

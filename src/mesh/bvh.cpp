@@ -522,10 +522,6 @@ void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
   refitBinary(bvh, [&](std::uint32_t k) -> const Aabb& { return primBounds[bvh.primIndices[k]]; });
 }
 
-void refitBvhSlots(Bvh& bvh, const std::vector<Aabb>& slotBounds) {
-  checkRefitCount(bvh, slotBounds.size());
-  refitBinary(bvh, [&](std::uint32_t k) -> const Aabb& { return slotBounds[k]; });
-}
 
 WideBvh widenBvh(const Bvh& bvh) {
   WideBvh wide;
@@ -591,28 +587,27 @@ WideBvh widenBvh(const Bvh& bvh) {
     wide.nodes[index] = node;
   }
   wide.nodes.shrink_to_fit();
+  wide.primIndices = bvh.primIndices;
   return wide;
 }
 
+WideBvh buildWideBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  return widenBvh(buildBvh(primBounds, options));
+}
+
+Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id) {
+  if (id != 0) return bvh.nodes[(id - 1) >> 2].laneBounds(int((id - 1) & 3));
+  Aabb box = Aabb::empty();
+  for (int i = 0; i < 4; ++i)
+    if (bvh.nodes[0].used(i)) box.grow(bvh.nodes[0].laneBounds(i));
+  return box;
+}
+
 void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds) {
-  for (std::size_t n = bvh.nodes.size(); n-- > 0;) {
-    WideBvhNode& node = bvh.nodes[n];
-    for (int i = 0; i < 4; ++i) {
-      if (node.child[i] == WideBvhNode::kEmpty) continue;
-      Aabb box = Aabb::empty();
-      if (node.count[i] > 0) {
-        for (std::uint32_t k = node.child[i], e = node.child[i] + node.count[i]; k < e; ++k) box.grow(slotBounds[k]);
-      } else {
-        const WideBvhNode& c = bvh.nodes[node.child[i]];
-        for (int j = 0; j < 4; ++j) {
-          if (c.child[j] == WideBvhNode::kEmpty) continue;
-          box.grow(Aabb{Vec3(c.minX[j], c.minY[j], c.minZ[j]), Vec3(c.maxX[j], c.maxY[j], c.maxZ[j])});
-        }
-      }
-      node.minX[i] = box.min.x(), node.minY[i] = box.min.y(), node.minZ[i] = box.min.z();
-      node.maxX[i] = box.max.x(), node.maxY[i] = box.max.y(), node.maxZ[i] = box.max.z();
-    }
-  }
+  if (slotBounds.size() != bvh.primIndices.size())
+    throw InvalidInput("refitWideBvh: expected " + std::to_string(bvh.primIndices.size()) + " slot bounds, got " +
+                       std::to_string(slotBounds.size()));
+  refitWideBvhSlots(bvh, [&](std::uint32_t k) -> const Aabb& { return slotBounds[k]; });
 }
 
 }  // namespace crux

@@ -132,14 +132,14 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, s
 
   const auto start = std::chrono::steady_clock::now();
   try {
-    bvh_ = buildBvh(triangleBounds(), options);
+    bvh_ = buildWideBvh(triangleBounds(), options);
   } catch (const InvalidInput& e) {  // bad build options
     throw InvalidInput(name_ + ": " + e.what());
   }
   geometryId_ = nextGeometryId();
   slotTriangles_.resize(triangles_.size());
   for (std::size_t k = 0; k < triangles_.size(); ++k) slotTriangles_[k] = triangles_[bvh_.primIndices[k]];
-  if (options.wide) wide_ = widenBvh(bvh_);
+  updateBounds();
   buildSeconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -149,12 +149,14 @@ void Mesh::setVertices(std::vector<Vec3> vertices) {
                        std::to_string(vertices_.size()));
   requireFiniteVertices(vertices, name_);
   vertices_ = std::move(vertices);
-  // the triangles' boxes in slot order (no index gather), then both trees from them
-  std::vector<Aabb> slotBounds(slotTriangles_.size());
-  for (std::size_t k = 0; k < slotBounds.size(); ++k) slotBounds[k] = crux::bounds(slotTriangle(std::uint32_t(k)));
-  refitBvhSlots(bvh_, slotBounds);
-  if (!wide_.empty()) refitWideBvh(wide_, slotBounds);
+  refitWideBvhSlots(bvh_, [&](std::uint32_t k) { return crux::bounds(slotTriangle(k)); });
+  updateBounds();
   geometryId_ = nextGeometryId();
+}
+
+void Mesh::updateBounds() {
+  bounds_ = wideSubtreeBounds(bvh_, 0);
+  scale_ = std::max(bounds_.min.cwiseAbs().maxCoeff(), bounds_.max.cwiseAbs().maxCoeff());
 }
 
 void requireCurrentGeometry(const Mesh& mesh, std::uint64_t builtFrom, const char* object) {
@@ -210,7 +212,7 @@ MeshStats Mesh::stats() const {
 
 std::size_t Mesh::memoryBytes() const {
   return vertices_.capacity() * sizeof(Vec3) + (triangles_.capacity() + slotTriangles_.capacity()) * sizeof(TriangleIndices) +
-         bvh_.memoryBytes() + wide_.memoryBytes();
+         bvh_.memoryBytes();
 }
 
 }  // namespace crux

@@ -1,8 +1,10 @@
 /// @file mesh_cast.cpp  Shape casts against a mesh (mesh_cast.hpp): the pair cast per triangle,
-/// through traverseBvhSlots with the swept bounds' entry time as the key.
+/// through the mesh's wide BVH (mesh_detail::walkOrdered) with the swept bounds' entry time as
+/// the key.
 
 #include <crux/mesh/mesh_cast.hpp>
 
+#include "mesh_walk.hpp"
 #include "node_tests.hpp"
 #include "shape_bounds.hpp"
 
@@ -61,12 +63,16 @@ class Search {
   Search(const Mesh& mesh, const CastTriangle& castTriangle, const SweptBox& box, bool stopAtFirst)
       : mesh_(mesh), castTriangle_(castTriangle), box_(box), stopAtFirst_(stopAtFirst) {}
 
-  // ---- the traversal visitor (traverseBvhSlots) ----
-  bool enter(const BvhNode& node, Real& key) const { return box_.enter(node.bounds, key) && keep(key); }
+  // ---- the walk's visitor (mesh_detail::walkOrdered) ----
+  bool entry(const Aabb& box, Real& key) const { return box_.enter(box, key) && keep(key); }
   /// A node entered at s may hold a triangle whose reported t (rounded down to Real, the entry
   /// being a lower bound of the double t) ties the best: kept up to an ulp past it.
   bool keep(Real key) const { return !found_ || double(key) <= double(best_.cast.t) + 2 * kEpsReal; }
-  bool slot(std::uint32_t k) { return consider(mesh_.slotTriangle(k), mesh_.bvh().primIndices[k]); }
+  bool leaf(std::uint32_t first, std::uint32_t count) {
+    for (std::uint32_t k = first; k < first + count; ++k)
+      if (!consider(mesh_.slotTriangle(k), mesh_.bvh().primIndices[k])) return false;
+    return true;
+  }
 
   /// Casts against one triangle; false stops the search (any-hit mode, after a hit).
   bool consider(const Triangle& tri, std::uint32_t index) {
@@ -104,7 +110,7 @@ std::optional<MeshCastHit> run(const Mesh& mesh, const CastTriangle& castTriangl
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
       if (!search.consider(mesh.triangle(i), i)) break;
   } else {
-    traverseBvhSlots(mesh.bvh(), search);
+    mesh_detail::walkOrdered(mesh, search);
   }
   return search.result();
 }

@@ -260,31 +260,23 @@ void bruteForce(const Mesh& a, const Mesh& b, const Relative& rel, Best& best) {
   }
 }
 
-/// Simultaneous descent of both BVHs (RTCD 6.3.2: descend the larger node, or both when their
-/// sizes are within kSplitBothRatio), best-first with dives: a pair popped from a fixed-capacity
+/// Simultaneous descent of both 4-wide BVHs by subtree (wideSubtree; RTCD 6.3.2: split the
+/// larger subtree into its node's lanes), best-first with dives: a pair popped from a fixed-capacity
 /// min-heap keyed by the lower bound is followed down its nearest surviving child pair while the
 /// others are queued (fewer heap operations, and a tight upper bound early); the search ends when
 /// the smallest pending bound exceeds the best distance (overflow pairs are searched
-/// depth-first, nearest child pair first). With both accelerators the 2 or 4 child pairs of an
+/// depth-first, nearest child pair first). With both accelerators the up to 4 child pairs of an
 /// expansion get their first bound together in SIMD lanes (mesh_detail::obbPairOffsets). Leaf
 /// pairs map b's triangles in chunks, bound each of a's triangles against four of b's at once
 /// (box gap and separating axes, mesh_detail::quadBounds) and call closestPoints on the pairs
 /// within the best distance, nearest bound first.
 void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistanceAccel* accelA,
              const MeshDistanceAccel* accelB, Best& best) {
-  const Bvh& ba = a.bvh();
-  const Bvh& bb = b.bvh();
-  const Real scale = std::max(mesh_detail::maxAbs(ba.nodes[0].bounds),
-                              mesh_detail::maxAbs(bb.nodes[0].bounds) + rel.t.cwiseAbs().maxCoeff());
+  const WideBvh& ba = a.bvh();
+  const WideBvh& bb = b.bvh();
+  const Real scale = std::max(a.scale(), b.scale() + rel.t.cwiseAbs().maxCoeff());
   const Real pad = mesh_detail::kNodeBoxPad * scale;
-  // Node size for the split rule: the box's summed extents (oriented with both accelerators).
-  auto size = [](const auto& n) {
-    if constexpr (std::is_same_v<std::decay_t<decltype(n)>, BvhNode>) return (n.bounds.max - n.bounds.min).sum();
-    else return 2 * n.half.sum();
-  };
-  // Both nodes of a pair are split when neither is this many times the other's size (2: with
-  // the child pairs bounded in 4 SIMD lanes, four pairs cost what two do; 1.5 before).
-  constexpr Real kSplitBothRatio = 2;
+  constexpr int kMaxChildPairs = 4;
   // With both accelerators, the Euclidean box gaps refine a pair's line-of-centres gap only
   // when the boxes' summed radii on that line exceed this fraction of the centre distance
   // (tuned on bunny00 after the session-6 SIMD step: 0.3 / 0.4 / 0.55 / 0.7 / 0.85 / 1 give
@@ -396,28 +388,28 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   };
   auto nodeBound = [&](std::uint32_t ia, std::uint32_t ib) {
     Real bound = -kNoLimit;
-    const BvhNode& na = ba.nodes[ia];
-    const BvhNode& nb = bb.nodes[ib];
+    const WideSubtree na = wideSubtree(ba, ia), nb = wideSubtree(bb, ib);
+    const Aabb boxA = wideSubtreeBounds(ba, ia), boxB = wideSubtreeBounds(bb, ib);
     {
-      bound = boxBoxLowerBound(na.bounds, nb.bounds, rel, pad);
+      bound = boxBoxLowerBound(boxA, boxB, rel, pad);
       if (bound > best.limit) return bound;  // refine only survivors
     }
     if (obbA || obbB) {
       // One side's oriented box (MeshDistanceAccel) and the other's axis-aligned box projected
       // on the line of their centres.
-      const Vec3 ca = obbA ? obbA[ia].center : na.bounds.center();
-      const Vec3 u = rel.map(obbB ? obbB[ib].center : nb.bounds.center()) - ca;
+      const Vec3 ca = obbA ? obbA[ia].center : boxA.center();
+      const Vec3 u = rel.map(obbB ? obbB[ib].center : boxB.center()) - ca;
       const Real len = u.norm();
       if (len > 0) {
         const Vec3 ub = rel.R.transpose() * u;
-        const Real ra = obbA ? obbA[ia].half.dot((obbA[ia].axes.transpose() * u).cwiseAbs()) : na.bounds.half().dot(u.cwiseAbs());
-        const Real rb = obbB ? obbB[ib].half.dot((obbB[ib].axes.transpose() * ub).cwiseAbs()) : nb.bounds.half().dot(ub.cwiseAbs());
+        const Real ra = obbA ? obbA[ia].half.dot((obbA[ia].axes.transpose() * u).cwiseAbs()) : boxA.half().dot(u.cwiseAbs());
+        const Real rb = obbB ? obbB[ib].half.dot((obbB[ib].axes.transpose() * ub).cwiseAbs()) : boxB.half().dot(ub.cwiseAbs());
         bound = std::max(bound, len - (ra + rb) / len - pad);
         if (bound > best.limit) return bound;
       }
     }
     if (!na.isLeaf() && !nb.isLeaf()) return bound;
-    const Vec3 u = rel.map(nb.bounds.center()) - na.bounds.center();
+    const Vec3 u = rel.map(boxB.center()) - boxA.center();
     const Real len = u.norm();
     if (!(len > 0)) return bound;
     const Vec3 ub = rel.R.transpose() * u;
@@ -429,7 +421,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         hiA = std::max({hiA, u.dot(t.a), u.dot(t.b), u.dot(t.c)});
       }
     } else {
-      hiA = u.dot(na.bounds.center()) + na.bounds.half().dot(u.cwiseAbs());
+      hiA = u.dot(boxA.center()) + boxA.half().dot(u.cwiseAbs());
     }
     if (nb.isLeaf()) {
       loB = kNoLimit;
@@ -438,11 +430,10 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         loB = std::min({loB, ub.dot(t.a), ub.dot(t.b), ub.dot(t.c)});
       }
     } else {
-      loB = ub.dot(nb.bounds.center()) - nb.bounds.half().dot(ub.cwiseAbs());
+      loB = ub.dot(boxB.center()) - boxB.half().dot(ub.cwiseAbs());
     }
     return std::max(bound, (loB + u.dot(rel.t) - hiA) / len - pad);
   };
-  // All triangle pairs of two leaves (slot ranges [firstA, +countA) and [firstB, +countB)).
   // All triangle pairs of two leaves (slot ranges [firstA, +countA) and [firstB, +countB)): the
   // pairs passing the box-gap and separating-axis bounds are offered nearest bound first, so
   // the best pair of the leaf pair tends to come first and prunes the others.
@@ -502,13 +493,12 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     std::uint32_t a, b;
     Real bound;
   };
-  // The child pairs of a node pair within the limit, with their bounds, the nearest first
-  // (returns how many; pairs beyond the limit are dropped): both
-  // nodes are split when they are of similar size (the four pairs share the frame products),
-  // else the larger one (RTCD 6.3.2).
+  // The child pairs of a subtree pair within the limit, with their bounds, the nearest first
+  // (returns how many; pairs beyond the limit are dropped): the larger subtree is split into its
+  // node's lanes (RTCD 6.3.2), so the up to four pairs share the other side and, with both
+  // accelerators, get their first bound together in the four SIMD lanes. (Splitting both when
+  // of similar size, up to 16 pairs, was 5–30% slower on bunny00 at every gap.)
   auto children = [&](const Pair& p, Pair* out) -> int {
-    std::uint32_t as[2] = {p.a, p.a}, bs[2] = {p.b, p.b};
-    int nA = 1, nB = 1;
     bool leafA, leafB;
     std::uint32_t firstA, firstB;
     Real sa, sb;
@@ -517,52 +507,48 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       const Node& nb = obbB[p.b];
       leafA = na.child == MeshDistanceAccel::kLeaf, leafB = nb.child == MeshDistanceAccel::kLeaf;
       firstA = na.child, firstB = nb.child;
-      sa = size(na), sb = size(nb);
+      sa = 2 * na.half.sum(), sb = 2 * nb.half.sum();
     } else {
-      const BvhNode& na = ba.nodes[p.a];
-      const BvhNode& nb = bb.nodes[p.b];
+      const WideSubtree na = wideSubtree(ba, p.a), nb = wideSubtree(bb, p.b);
       leafA = na.isLeaf(), leafB = nb.isLeaf();
       firstA = na.first, firstB = nb.first;
-      sa = size(na), sb = size(nb);
+      const Aabb boxA = wideSubtreeBounds(ba, p.a), boxB = wideSubtreeBounds(bb, p.b);
+      sa = (boxA.max - boxA.min).sum(), sb = (boxB.max - boxB.min).sum();
     }
-    if (!leafA && (leafB || sa >= kSplitBothRatio * sb)) {
-      as[0] = firstA, as[1] = firstA + 1, nA = 2;
-    } else if (!leafB && (leafA || sb >= kSplitBothRatio * sa)) {
-      bs[0] = firstB, bs[1] = firstB + 1, nB = 2;
-    } else {
-      as[0] = firstA, as[1] = firstA + 1, nA = 2;
-      bs[0] = firstB, bs[1] = firstB + 1, nB = 2;
+    const bool splitA = !leafA && (leafB || sa >= sb);
+    const WideBvhNode& node = splitA ? ba.nodes[firstA] : bb.nodes[firstB];
+    std::uint32_t as[4], bs[4];
+    unsigned used = 0;
+    for (int l = 0; l < 4; ++l) {
+      as[l] = splitA ? wideLaneId(firstA, l) : p.a;
+      bs[l] = splitA ? p.b : wideLaneId(firstB, l);
+      used |= unsigned(node.used(l)) << l;
     }
-    const int n = nA * nB;
     int kept = 0;
     if (both) {
-      // The n = 2 or 4 pairs' centre offsets together, pair q = i·nB + j in lane q (lanes n..3
-      // repeat lanes 0..n−1), then the rest of the bound only for pairs not already beyond
-      // the limit, taken by a mask rather than by one unpredictable branch per pair.
+      // The four pairs' centre offsets together (an unused lane's box is a zero placeholder,
+      // masked out), then the rest of the bound only for pairs not already beyond the limit,
+      // taken by a mask rather than by one unpredictable branch per pair.
       const Node* laneA[4];
       const Node* laneB[4];
-      for (int l = 0; l < 4; ++l) {
-        const int q = l & (n - 1);
-        laneA[l] = obbA + as[q >> (nB - 1)], laneB[l] = obbB + bs[q & (nB - 1)];
-      }
+      for (int l = 0; l < 4; ++l) laneA[l] = obbA + as[l], laneB[l] = obbB + bs[l];
       mesh_detail::ObbPairOffsets o;
       mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
       unsigned live = 0;
       for (int l = 0; l < 4; ++l) live |= unsigned(o.bound[l] != kNoLimit) << l;
-      live &= (1u << n) - 1;
+      live &= used;
       while (live) {
         const int l = lowestBit(live);
         live &= live - 1;
-        const std::uint32_t ia = std::uint32_t(laneA[l] - obbA), ib = std::uint32_t(laneB[l] - obbB);
-        out[kept] = {ia, ib, obbBound(ia, ib, o, l)};
+        out[kept] = {as[l], bs[l], obbBound(as[l], bs[l], o, l)};
         kept += out[kept].bound <= best.limit;
       }
     } else {
-      for (int i = 0; i < nA; ++i)
-        for (int j = 0; j < nB; ++j) {
-          out[kept] = {as[i], bs[j], nodeBound(as[i], bs[j])};
-          kept += out[kept].bound <= best.limit;
-        }
+      for (int l = 0; l < 4; ++l) {
+        if (!(used >> l & 1u)) continue;
+        out[kept] = {as[l], bs[l], nodeBound(as[l], bs[l])};
+        kept += out[kept].bound <= best.limit;
+      }
     }
     // The nearest pair first (the first of equals), the others in pair order.
     int m = 0;
@@ -570,45 +556,44 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     std::swap(out[0], out[m]);
     return kept;
   };
-  // Starts loading the children of a pair's nodes (and their boxes) while other work proceeds.
+  // Starts loading the children of a pair's subtrees (and their boxes) while other work proceeds.
   auto prefetch = [&](const Pair& p) {
+    auto lanes = [](const Node* obb, std::uint32_t node) {
+      for (int l = 0; l < 4; ++l) __builtin_prefetch(obb + wideLaneId(node, l));
+    };
     if (both) {
       const Node& na = obbA[p.a];
       const Node& nb = obbB[p.b];
-      if (na.child != MeshDistanceAccel::kLeaf)
-        __builtin_prefetch(&obbA[na.child]), __builtin_prefetch(&obbA[na.child + 1]);
-      if (nb.child != MeshDistanceAccel::kLeaf)
-        __builtin_prefetch(&obbB[nb.child]), __builtin_prefetch(&obbB[nb.child + 1]);
+      if (na.child != MeshDistanceAccel::kLeaf) lanes(obbA, na.child);
+      if (nb.child != MeshDistanceAccel::kLeaf) lanes(obbB, nb.child);
       return;
     }
-    const BvhNode& na = ba.nodes[p.a];
-    const BvhNode& nb = bb.nodes[p.b];
+    const WideSubtree na = wideSubtree(ba, p.a), nb = wideSubtree(bb, p.b);
     if (!na.isLeaf()) {
       __builtin_prefetch(&ba.nodes[na.first]);
-      if (obbA) __builtin_prefetch(&obbA[na.first]), __builtin_prefetch(&obbA[na.first + 1]);
+      if (obbA) lanes(obbA, na.first);
     }
     if (!nb.isLeaf()) {
       __builtin_prefetch(&bb.nodes[nb.first]);
-      if (obbB) __builtin_prefetch(&obbB[nb.first]), __builtin_prefetch(&obbB[nb.first + 1]);
+      if (obbB) lanes(obbB, nb.first);
     }
   };
   auto visitLeaves = [&](const Pair& p) {
     if (both) {
       leafPair(rangeA[p.a].first, rangeA[p.a].count, rangeB[p.b].first, rangeB[p.b].count);
     } else {
-      const BvhNode& na = ba.nodes[p.a];
-      const BvhNode& nb = bb.nodes[p.b];
+      const WideSubtree na = wideSubtree(ba, p.a), nb = wideSubtree(bb, p.b);
       leafPair(na.first, na.count, nb.first, nb.count);
     }
   };
   auto isLeafPair = [&](const Pair& p) {
     return both ? obbA[p.a].child == MeshDistanceAccel::kLeaf && obbB[p.b].child == MeshDistanceAccel::kLeaf
-                : ba.nodes[p.a].isLeaf() && bb.nodes[p.b].isLeaf();
+                : wideSubtree(ba, p.a).isLeaf() && wideSubtree(bb, p.b).isLeaf();
   };
 
   // Depth-first from one pair, nearest child pair first, the others deferred on a fixed stack
-  // (each step defers at most three pairs per level of either tree).
-  Pair stack[3 * 2 * kBvhMaxDepth + 4];
+  // (each step defers at most three pairs and descends one level of either tree).
+  Pair stack[2 * kWideBvhStackSize];
   auto depthFirst = [&](Pair cur) {
     int top = 0;
     for (;;) {
@@ -617,7 +602,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         visitLeaves(cur);
         if (best.done) return;
       } else {
-        Pair c[4];
+        Pair c[kMaxChildPairs];
         const int n = children(cur, c);
         if (n > 0) {
           for (int k = n - 1; k > 0; --k) stack[top++] = c[k];
@@ -699,7 +684,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         visitLeaves(p);
         break;
       }
-      Pair c[4];
+      Pair c[kMaxChildPairs];
       const int n = children(p, c);
       if (n == 0) break;
       prefetch(c[0]);
@@ -719,49 +704,57 @@ void validateDistanceBound(Real value, const char* field) {
 }  // namespace
 
 MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
-  const Bvh& bvh = mesh.bvh();
-  nodes_.resize(bvh.nodes.size());
+  const WideBvh& bvh = mesh.bvh();
+  const std::size_t ids = wideSubtreeCount(bvh.nodes.size());
+  nodes_.assign(ids, Node{});
+  ranges_.assign(ids, Range{});
   corners_ = mesh.slotCorners();
   geometryId_ = mesh.geometryId();
   std::vector<std::uint32_t> stack;
-  // Calls f(corner) for every corner of every triangle under node n (in double).
-  auto corners = [&](std::uint32_t n, auto&& f) {
-    stack.assign(1, n);
+  // Calls f(corner) for every corner of every triangle under subtree id (in double).
+  auto corners = [&](std::uint32_t id, auto&& f) {
+    stack.assign(1, id);
     while (!stack.empty()) {
-      const BvhNode& node = bvh.nodes[stack.back()];
+      const WideSubtree sub = wideSubtree(bvh, stack.back());
       stack.pop_back();
-      if (node.isLeaf()) {
-        for (std::uint32_t k = node.first, e = node.first + node.count; k < e; ++k) {
+      if (sub.isLeaf()) {
+        for (std::uint32_t k = sub.first, e = sub.first + sub.count; k < e; ++k) {
           const Triangle t = mesh.slotTriangle(k);
           f(t.a.cast<double>());
           f(t.b.cast<double>());
           f(t.c.cast<double>());
         }
       } else {
-        stack.push_back(node.first);
-        stack.push_back(node.first + 1);
+        for (int l = 0; l < 4; ++l)
+          if (bvh.nodes[sub.first].used(l)) stack.push_back(wideLaneId(sub.first, l));
       }
     }
   };
   constexpr double kPad = 8 * double(std::numeric_limits<Real>::epsilon());
-  for (std::uint32_t n = 0; n < bvh.nodes.size(); ++n) {
+  for (std::uint32_t id = 0; id < ids; ++id) {
+    Node& box = nodes_[id];
+    if (id != 0 && !bvh.nodes[(id - 1) >> 2].used(int((id - 1) & 3))) {
+      box.child = kUnused;  // a placeholder: zero box, never entered
+      continue;
+    }
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     std::size_t count = 0;
-    corners(n, [&](const Eigen::Vector3d& p) { sum += p, ++count; });
+    corners(id, [&](const Eigen::Vector3d& p) { sum += p, ++count; });
     const Eigen::Vector3d mean = sum / double(std::max<std::size_t>(count, 1));
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    corners(n, [&](const Eigen::Vector3d& p) { cov += (p - mean) * (p - mean).transpose(); });
+    corners(id, [&](const Eigen::Vector3d& p) { cov += (p - mean) * (p - mean).transpose(); });
     Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     if (eig.info() == Eigen::Success && eig.eigenvectors().allFinite()) axes = eig.eigenvectors();
     // The box is fitted to the axes as stored (rounded to Real), so it holds every corner exactly
     // as the query projects it, up to the query's own rounding pad.
-    Node& box = nodes_[n];
-    box.child = bvh.nodes[n].isLeaf() ? kLeaf : bvh.nodes[n].first;
+    const WideSubtree sub = wideSubtree(bvh, id);
+    box.child = sub.isLeaf() ? kLeaf : sub.first;
+    if (sub.isLeaf()) ranges_[id] = {sub.first, sub.count};
     box.axes = axes.cast<Real>();
     const Eigen::Matrix3d used = box.axes.cast<double>();
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    corners(n, [&](const Eigen::Vector3d& p) {
+    corners(id, [&](const Eigen::Vector3d& p) {
       const Eigen::Vector3d q = used.transpose() * p;
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
@@ -771,13 +764,10 @@ MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
     // Half extents measured from the rounded centre, grown by a few ulps of the magnitudes.
     const Eigen::Vector3d c = box.center.cast<double>();
     Eigen::Vector3d half = Eigen::Vector3d::Zero();
-    corners(n, [&](const Eigen::Vector3d& p) { half = half.cwiseMax((used.transpose() * (p - c)).cwiseAbs()); });
+    corners(id, [&](const Eigen::Vector3d& p) { half = half.cwiseMax((used.transpose() * (p - c)).cwiseAbs()); });
     const double grow = kPad * (c.cwiseAbs().maxCoeff() + half.maxCoeff());
     box.half = (half.array() + grow).matrix().cast<Real>();
   }
-  ranges_.assign(bvh.nodes.size(), Range{});
-  for (std::size_t n = 0; n < bvh.nodes.size(); ++n)
-    if (bvh.nodes[n].isLeaf()) ranges_[n] = {bvh.nodes[n].first, bvh.nodes[n].count};
 }
 
 MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb,
@@ -787,11 +777,12 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
   // A foreign accelerator (another node or triangle count) would be read out of range.
   auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh,
                        const char* label) {
-    if (accel && (accel->nodes().size() != m.bvh().nodes.size() || accel->corners().size() != 3 * m.triangleCount()))
+    const std::size_t ids = wideSubtreeCount(m.bvh().nodes.size());
+    if (accel && (accel->nodes().size() != ids || accel->corners().size() != 3 * m.triangleCount()))
       throw InvalidInput(std::string("mesh distance options.") + field + " was not built from mesh " + mesh + " (" +
                          std::to_string(accel->nodes().size()) + " nodes and " +
                          std::to_string(accel->corners().size() / 3) + " triangles, mesh has " +
-                         std::to_string(m.bvh().nodes.size()) + " and " + std::to_string(m.triangleCount()) + ")");
+                         std::to_string(ids) + " and " + std::to_string(m.triangleCount()) + ")");
     if (accel) requireCurrentGeometry(m, accel->geometryId(), label);
   };
   checkAccel(options.accelA, a, "accelA", "a", "mesh distance options.accelA");

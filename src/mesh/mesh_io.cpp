@@ -59,18 +59,25 @@ MeshMemoryEstimate estimateMeshMemory(std::size_t vertices, std::size_t triangle
   e.vertices = vertices;
   e.triangles = triangles;
   const std::size_t nodes = triangles == 0 ? 0 : mul(2, triangles) - 1;
+  // A wide node has at least two lanes, so there are fewer wide nodes than binary leaves.
+  const std::size_t wideNodes = triangles;
   const std::size_t vertexBytes = mul(vertices, sizeof(Vec3));
   const std::size_t indexBytes = mul(triangles, sizeof(TriangleIndices));
   const std::size_t nodeBytes = mul(nodes, sizeof(BvhNode));
+  const std::size_t wideBytes = mul(wideNodes, sizeof(WideBvhNode));
   const std::size_t primIndexBytes = mul(triangles, sizeof(std::uint32_t));
-  // Built: vertices, triangles, slotTriangles, nodes, primIndices.
-  e.meshBytes = add(add(add(vertexBytes, mul(2, indexBytes)), nodeBytes), primIndexBytes);
+  // Built: vertices, triangles, slotTriangles, wide nodes, primIndices.
+  e.meshBytes = add(add(add(vertexBytes, mul(2, indexBytes)), wideBytes), primIndexBytes);
   // During buildBvh: vertices, triangles, triangleBounds(), the builder's prims and
-  // primIndices, and the node arrays twice (per-task arrays + the final one). slotTriangles is
-  // allocated after the temporaries are freed, in less space than they took.
+  // primIndices, and the node arrays twice (per-task arrays + the final one); then, while the
+  // binary tree is widened: vertices, triangles, the binary tree and the wide one with its copy
+  // of primIndices. slotTriangles is allocated after the temporaries are freed, in less space
+  // than they took.
   const std::size_t buildTemporaries = add(mul(triangles, sizeof(Aabb)), mul(triangles, kBuildPrimBytes));
   e.peakBytes =
       add(add(add(add(vertexBytes, indexBytes), buildTemporaries), primIndexBytes), mul(2, nodeBytes));
+  const std::size_t widening = add(add(add(vertexBytes, indexBytes), add(nodeBytes, wideBytes)), mul(2, primIndexBytes));
+  e.peakBytes = std::max(e.peakBytes, widening);
   e.peakBytes = std::max(e.peakBytes, e.meshBytes);
   return e;
 }

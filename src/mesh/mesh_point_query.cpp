@@ -4,6 +4,8 @@
 
 #include <crux/geometry/closest_point.hpp>
 
+#include "mesh_walk.hpp"
+
 #include <cmath>
 
 namespace crux {
@@ -17,13 +19,14 @@ struct ClosestPointVisitor {
   MeshClosestPoint best{};
 
   bool within(Real key) const { return key <= best2 + best2 * kMeshPointPruneSlack; }
-  bool enter(const BvhNode& node, Real& key) const {
-    key = squaredDistance(node.bounds, p);
+  // (the walk's visitor: mesh_detail::walkOrdered, nearest box first)
+  bool entry(const Aabb& box, Real& key) const {
+    key = squaredDistance(box, p);
     return within(key);
   }
   bool keep(Real key) const { return within(key); }
-  bool slot(std::uint32_t k) {
-    visit(mesh.slotTriangle(k), mesh.bvh().primIndices[k]);
+  bool leaf(std::uint32_t first, std::uint32_t count) {
+    for (std::uint32_t k = first; k < first + count; ++k) visit(mesh.slotTriangle(k), mesh.bvh().primIndices[k]);
     return true;
   }
   void visit(const Triangle& t, std::uint32_t tri) {
@@ -46,7 +49,7 @@ MeshClosestPoint closestPoint(const Mesh& mesh, const Vec3& p, Real maxDistance,
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i) v.visit(mesh.triangle(i), i);
   } else {
-    traverseBvhSlots(mesh.bvh(), v);
+    mesh_detail::walkOrdered(mesh, v);
   }
   if (v.best.found) v.best.distance = std::sqrt(v.best.distance);
   return v.best;

@@ -3,7 +3,7 @@
 /// Every query has one per-triangle decision (the geometry layer's exact test) shared by the
 /// BVH path and the brute-force path; the BVH path only adds node culling, which is
 /// conservative (node_tests.hpp), so both paths give identical answers. Ray queries traverse
-/// front to back (traverseBvh with the entry distance as key) and prune subtrees that start
+/// front to back (mesh_detail::walkOrdered with the entry distance as key) and prune subtrees that start
 /// beyond the best hit. Closest, any and boolean queries allocate nothing.
 
 #include <crux/mesh/mesh_query.hpp>
@@ -26,8 +26,6 @@ namespace {
 
 using mesh_detail::kNodeBoxPad;
 using mesh_detail::maxAbs;
-
-Real meshScale(const Mesh& mesh) { return mesh.bvh().empty() ? Real(0) : maxAbs(mesh.bvh().nodes[0].bounds); }
 
 // ---- rays ------------------------------------------------------------------------------------
 
@@ -125,7 +123,7 @@ bool before(Real t, std::uint32_t tri, Real bestT, std::uint32_t bestTri) {
 }
 
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
-  const Real scale = std::max(meshScale(mesh), ray.origin.cwiseAbs().maxCoeff());
+  const Real scale = std::max(mesh.scale(), ray.origin.cwiseAbs().maxCoeff());
   return mesh_detail::RayBoxTest(ray.origin, ray.dir, scale);
 }
 
@@ -254,7 +252,7 @@ bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, cons
 /// Coordinate scale of a query (the node pads scale with it): the largest magnitude among the
 /// mesh bounds and the query shape's coordinates.
 Real shapeScale(const Mesh& mesh, std::initializer_list<Real> magnitudes) {
-  Real s = meshScale(mesh);
+  Real s = mesh.scale();
   for (Real m : magnitudes) s = std::max(s, m);
   return s;
 }
@@ -312,7 +310,7 @@ bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::u
 }
 
 bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<std::uint32_t>* out) {
-  const Real scale = meshScale(mesh);
+  const Real scale = mesh.scale();
   auto node = [&](const Aabb& b) { return mesh_detail::planeTouchesBox(p.normal, p.d, b, kNodeBoxPad, scale); };
   auto tri = [&](const Triangle& t) { return overlaps(t, p); };
   return shapeQuery(mesh, path, node, tri, out);
@@ -374,41 +372,40 @@ bool meshMeshBrute(const Mesh& a, const Mesh& b, const RelativeFrame& frame, Pai
   return any;
 }
 
-/// Simultaneous descent of both BVHs (RTCD 6.3.2: descend the larger node; node pairs as an
-/// AABB of a against b's node box mapped into a's frame, an OBB, RTCD 4.4.1). Leaf pairs map b's
-/// triangles in chunks into a fixed buffer. Explicit fixed stack: each step pushes at most one
-/// deferred pair per level of either tree.
+/// Simultaneous descent of both wide BVHs (RTCD 6.3.2: descend the larger subtree, its four
+/// lanes tested at once; subtree pairs as an AABB of a against b's box mapped into a's frame, an
+/// OBB, RTCD 4.4.1). Leaf pairs map b's triangles in chunks into a fixed buffer. Explicit fixed
+/// stack of subtree ids (wideSubtree): each step pushes at most three more pairs than it pops,
+/// per level of either tree.
 bool meshMeshBvh(const Mesh& a, const Mesh& b, const RelativeFrame& frame, PairList* out) {
-  const Bvh& ba = a.bvh();
-  const Bvh& bb = b.bvh();
+  const WideBvh& ba = a.bvh();
+  const WideBvh& bb = b.bvh();
   if (ba.empty() || bb.empty()) return false;
-  const Real scale =
-      std::max(maxAbs(ba.nodes[0].bounds), maxAbs(bb.nodes[0].bounds) + frame.transform().translation.cwiseAbs().maxCoeff());
+  const Real scale = std::max(a.scale(), b.scale() + frame.transform().translation.cwiseAbs().maxCoeff());
   const Real pad = kNodeBoxPad * scale;
 
   const mesh_detail::ObbBoxTest obb(frame.rotation(), pad);
-  // b's node box placed in a's frame: an OBB.
-  using Placed = mesh_detail::ObbBoxTest::Placed;
-  auto place = [&](const BvhNode& nb) { return obb.place(frame.mapPoint(nb.bounds.center()), nb.bounds.half()); };
-  auto nodesTouch = [&](const BvhNode& na, const BvhNode& nb, const Placed& pb) {
-    if (frame.identity()) return mesh_detail::boxTouchesBox(na.bounds, nb.bounds, 0);
-    return obb.touches(pb, na.bounds);
+  // b's box placed in a's frame: an OBB.
+  auto place = [&](const Aabb& boxB) { return obb.place(frame.mapPoint(boxB.center()), boxB.half()); };
+  auto touches = [&](const Aabb& boxA, const Aabb& boxB) {
+    if (frame.identity()) return mesh_detail::boxTouchesBox(boxA, boxB, 0);
+    return obb.touches(place(boxB), boxA);
   };
-  // Which node to descend: the larger (sum of extents; nodes are never empty).
-  auto size = [](const BvhNode& n) { return (n.bounds.max - n.bounds.min).sum(); };
+  // Which subtree to descend: the larger (sum of extents; subtrees are never empty).
+  auto size = [](const Aabb& box) { return (box.max - box.min).sum(); };
 
   constexpr std::uint32_t kChunk = 16;
   Triangle mapped[kChunk];
   Aabb mappedBox[kChunk];
-  auto leafPair = [&](const BvhNode& na, const BvhNode& nb) {
+  auto leafPair = [&](const WideSubtree& sa, const WideSubtree& sb) {
     bool any = false;
-    for (std::uint32_t j0 = nb.first, je = nb.first + nb.count; j0 < je; j0 += kChunk) {
+    for (std::uint32_t j0 = sb.first, je = sb.first + sb.count; j0 < je; j0 += kChunk) {
       const std::uint32_t m = std::min(kChunk, je - j0);
       for (std::uint32_t k = 0; k < m; ++k) {
         mapped[k] = frame.map(b.slotTriangle(j0 + k));
         mappedBox[k] = bounds(mapped[k]);
       }
-      for (std::uint32_t i = na.first, ie = na.first + na.count; i < ie; ++i) {
+      for (std::uint32_t i = sa.first, ie = sa.first + sa.count; i < ie; ++i) {
         const Triangle ta = a.slotTriangle(i);
         const Aabb boxA = bounds(ta);
         for (std::uint32_t k = 0; k < m; ++k) {
@@ -425,32 +422,34 @@ bool meshMeshBvh(const Mesh& a, const Mesh& b, const RelativeFrame& frame, PairL
   struct Pair {
     std::uint32_t a, b;
   };
-  Pair stack[2 * kBvhMaxDepth + 2];
+  Pair stack[2 * kWideBvhStackSize];
   int top = 0;
   bool any = false;
-  if (!nodesTouch(ba.nodes[0], bb.nodes[0], frame.identity() ? Placed{} : place(bb.nodes[0]))) return false;
+  if (!touches(a.bounds(), b.bounds())) return false;
   stack[top++] = {0, 0};
   while (top > 0) {
     const Pair p = stack[--top];
-    const BvhNode& na = ba.nodes[p.a];
-    const BvhNode& nb = bb.nodes[p.b];
-    if (na.isLeaf() && nb.isLeaf()) {
-      if (leafPair(na, nb)) {
+    const WideSubtree sa = wideSubtree(ba, p.a), sb = wideSubtree(bb, p.b);
+    if (sa.isLeaf() && sb.isLeaf()) {
+      if (leafPair(sa, sb)) {
         any = true;
         if (!out) return true;
       }
       continue;
     }
-    // Push the second child first so the first child is visited first.
-    if (nb.isLeaf() || (!na.isLeaf() && size(na) >= size(nb))) {
-      const Placed pb = frame.identity() ? Placed{} : place(nb);  // once for both children of a
-      for (std::uint32_t c = 2; c-- > 0;)
-        if (nodesTouch(ba.nodes[na.first + c], nb, pb)) stack[top++] = {na.first + c, p.b};
+    const Aabb boxA = wideSubtreeBounds(ba, p.a), boxB = wideSubtreeBounds(bb, p.b);
+    // Push the last lane first so the first lane is visited first.
+    if (sb.isLeaf() || (!sa.isLeaf() && size(boxA) >= size(boxB))) {
+      const WideBvhNode& node = ba.nodes[sa.first];
+      const unsigned lanes = frame.identity()
+                                 ? mesh_detail::eachLane(node, [&](const Aabb& box) { return mesh_detail::boxTouchesBox(box, boxB, 0); })
+                                 : obb.touches4(place(boxB), node);  // b's box placed once for a's four lanes
+      for (int i = 4; i-- > 0;)
+        if (lanes >> i & 1u) stack[top++] = {wideLaneId(sa.first, i), p.b};
     } else {
-      for (std::uint32_t c = 2; c-- > 0;) {
-        const BvhNode& child = bb.nodes[nb.first + c];
-        if (nodesTouch(na, child, frame.identity() ? Placed{} : place(child))) stack[top++] = {p.a, nb.first + c};
-      }
+      const WideBvhNode& node = bb.nodes[sb.first];
+      for (int i = 4; i-- > 0;)
+        if (node.used(i) && touches(boxA, node.laneBounds(i))) stack[top++] = {p.a, wideLaneId(sb.first, i)};
     }
   }
   if (out) std::sort(out->begin(), out->end());

@@ -9,6 +9,7 @@
 #include <crux/geometry/predicates.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
+#include "mesh_walk.hpp"
 #include "relative_frame.hpp"
 
 #include <algorithm>
@@ -274,11 +275,7 @@ bool MeshVolume::onSurface(const Vec3& p) const {
     Vec3 p;
     WVec3 wp;
     bool found = false;
-    bool enter(const BvhNode& node, Real& key) {
-      key = 0;
-      return boxContains(node.bounds, p);
-    }
-    bool keep(Real) { return true; }
+    bool touches(const Aabb& box) const { return boxContains(box, p); }
     bool slot(std::uint32_t k) {
       const Triangle t = mesh.slotTriangle(k);
       if (!boxContains(bounds(t), p)) return true;
@@ -286,7 +283,7 @@ bool MeshVolume::onSurface(const Vec3& p) const {
       return !found;
     }
   } visitor{*mesh_, p, wide(p)};
-  traverseBvhSlots(mesh_->bvh(), visitor);
+  mesh_detail::walkSlots(*mesh_, visitor);
   return visitor.found;
 }
 
@@ -298,11 +295,7 @@ bool MeshVolume::contains(const Vec3& p) const {
     WVec3 p, d;
     std::size_t crossings = 0;
     bool degenerate = false;
-    bool enter(const BvhNode& node, Real& key) {
-      key = 0;
-      return rayMayHitBox(node.bounds, p, d);
-    }
-    bool keep(Real) { return true; }
+    bool touches(const Aabb& box) const { return rayMayHitBox(box, p, d); }
     bool slot(std::uint32_t k) {
       const RayEvent e = rayEvent(relative(mesh.slotTriangle(k), p), d);
       if (e == RayEvent::Degenerate) {
@@ -320,7 +313,7 @@ bool MeshVolume::contains(const Vec3& p) const {
   std::size_t crossings = 0;
   for (std::uint64_t k = 0; k < maxTries; ++k) {
     Visitor v{*mesh_, wp, direction(k)};
-    traverseBvhSlots(mesh_->bvh(), v);
+    mesh_detail::walkSlots(*mesh_, v);
     crossings = v.crossings;
     if (!v.degenerate) break;
   }

@@ -1,12 +1,9 @@
 #pragma once
-/// @file mesh_walk.hpp  Internal: the mesh queries' walk over a mesh's BVH in the layout it keeps.
+/// @file mesh_walk.hpp  Internal: the mesh queries' walks over a mesh's 4-wide BVH.
 ///
-/// A Mesh always keeps its binary BVH and, when built with BvhBuildOptions::wide, the same tree
-/// collapsed 4-wide (Mesh::wideBvh). A query states its node test once, on one box, and may add
-/// a four-lane form for wide nodes; these walkers run it over the wide tree when there is one,
-/// else over the binary tree. Both visit the same slots (unordered walks: in the same order;
-/// ordered walks: nearest first in each tree's own grouping), so a query's answer does not depend
-/// on the layout (tested against the brute-force paths in both layouts).
+/// A query states its node test once, on one box, and may add a four-lane form for wide nodes
+/// (SIMD over the node's coordinate arrays); these walkers run it over Mesh::bvh(). A query's
+/// answer never depends on the walk's order (tested against the brute-force paths).
 
 #include <crux/mesh/bvh.hpp>
 #include <crux/mesh/mesh.hpp>
@@ -38,24 +35,15 @@ struct HasEntry4<V, std::void_t<decltype(std::declval<const V&>().entry4(std::de
 /// Returns false when the visitor stopped it.
 template <class V>
 bool walkSlots(const Mesh& mesh, V& v) {
-  if (!mesh.wideBvh().empty()) {
-    struct Wide {
-      V& v;
-      unsigned enter(const WideBvhNode& n) const {
-        if constexpr (HasTouches4<V>::value) return v.touches4(n);
-        else return eachLane(n, [&](const Aabb& b) { return v.touches(b); });
-      }
-      bool slot(std::uint32_t k) { return v.slot(k); }
-    } w{v};
-    return traverseWideBvhSlots(mesh.wideBvh(), w);
-  }
-  struct Binary {
+  struct Wide {
     V& v;
-    bool enter(const BvhNode& n, Real& key) const { return key = 0, v.touches(n.bounds); }
-    bool keep(Real) const { return true; }
+    unsigned enter(const WideBvhNode& n) const {
+      if constexpr (HasTouches4<V>::value) return v.touches4(n);
+      else return eachLane(n, [&](const Aabb& b) { return v.touches(b); });
+    }
     bool slot(std::uint32_t k) { return v.slot(k); }
-  } b{v};
-  return traverseBvhSlots(mesh.bvh(), b);
+  } w{v};
+  return traverseWideBvhSlots(mesh.bvh(), w);
 }
 
 /// Nearest first: subtrees in increasing key, deferred ones dropped when the visitor no longer
@@ -65,31 +53,22 @@ bool walkSlots(const Mesh& mesh, V& v) {
 /// (the slots of one leaf; false stops the walk). Returns false when the visitor stopped it.
 template <class V>
 bool walkOrdered(const Mesh& mesh, V& v) {
-  if (!mesh.wideBvh().empty()) {
-    struct Wide {
-      V& v;
-      unsigned enter(const WideBvhNode& n, Real (&keys)[4]) const {
-        if constexpr (HasEntry4<V>::value) {
-          return v.entry4(n, keys);
-        } else {
-          unsigned bits = 0;
-          for (int i = 0; i < 4; ++i)
-            if (n.used(i) && v.entry(n.laneBounds(i), keys[i])) bits |= 1u << i;
-          return bits;
-        }
-      }
-      bool keep(Real key) const { return v.keep(key); }
-      bool leaf(std::uint32_t first, std::uint32_t count) { return v.leaf(first, count); }
-    } w{v};
-    return traverseWideBvhOrdered(mesh.wideBvh(), w);
-  }
-  struct Binary {
+  struct Wide {
     V& v;
-    bool enter(const BvhNode& n, Real& key) const { return v.entry(n.bounds, key); }
+    unsigned enter(const WideBvhNode& n, Real (&keys)[4]) const {
+      if constexpr (HasEntry4<V>::value) {
+        return v.entry4(n, keys);
+      } else {
+        unsigned bits = 0;
+        for (int i = 0; i < 4; ++i)
+          if (n.used(i) && v.entry(n.laneBounds(i), keys[i])) bits |= 1u << i;
+        return bits;
+      }
+    }
     bool keep(Real key) const { return v.keep(key); }
     bool leaf(std::uint32_t first, std::uint32_t count) { return v.leaf(first, count); }
-  } b{v};
-  return traverseBvhSlots(mesh.bvh(), b);
+  } w{v};
+  return traverseWideBvhOrdered(mesh.bvh(), w);
 }
 
 }  // namespace crux::mesh_detail

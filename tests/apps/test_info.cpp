@@ -27,7 +27,7 @@ BvhNode leaf(std::uint32_t first, std::uint32_t count) { return {Aabb{}, first, 
 BvhNode inner(std::uint32_t firstChild) { return {Aabb{}, firstChild, 0}; }
 
 TEST(InfoBvhShape, EmptyAndSingleLeaf) {
-  const BvhShape empty = bvhShape(Bvh{});
+  const BvhShape empty = bvhShape(WideBvh{});
   EXPECT_EQ(empty.nodes, 0u);
   EXPECT_EQ(empty.leaves, 0u);
   EXPECT_EQ(empty.depth, 0u);
@@ -35,27 +35,39 @@ TEST(InfoBvhShape, EmptyAndSingleLeaf) {
   Bvh one;
   one.nodes = {leaf(0, 3)};
   one.primIndices = {0, 1, 2};
-  const BvhShape s = bvhShape(one);
+  const BvhShape s = bvhShape(widenBvh(one));  // one node, its one lane the leaf
   EXPECT_EQ(s.nodes, 1u);
   EXPECT_EQ(s.leaves, 1u);
+  EXPECT_DOUBLE_EQ(s.meanLanes, 1.0);
   EXPECT_EQ(s.depth, 0u);
   EXPECT_EQ(s.maxLeafSize, 3u);
   EXPECT_DOUBLE_EQ(s.meanLeafSize, 3.0);
   EXPECT_DOUBLE_EQ(s.meanLeafDepth, 0.0);
 }
 
-TEST(InfoBvhShape, UnbalancedTree) {
-  // root(0) -> leaf(1) [1 prim], inner(2) -> leaf(3) [2 prims], leaf(4) [4 prims]
+TEST(InfoBvhShape, CountsLanesLeavesAndDepthOfTheWideTree) {
+  // binary: root(0) -> inner(1), inner(2); inner(1) -> leaf(3) [1], inner(4); inner(2) ->
+  // leaf(5) [2], leaf(6) [1]; inner(4) -> leaf(7) [2], inner(8); inner(8) -> leaf(9) [1],
+  // leaf(10) [1]. Widened, the root takes four lanes (leaf 3, inner 4, leaf 5, leaf 6), inner 4
+  // a node of three (leaf 7, leaf 9, leaf 10): 2 nodes, 7 lanes, 6 leaves, 3 at depth 1.
   Bvh bvh;
-  bvh.nodes = {inner(1), leaf(0, 1), inner(3), leaf(1, 2), leaf(3, 4)};
-  bvh.primIndices = {0, 1, 2, 3, 4, 5, 6};
-  const BvhShape s = bvhShape(bvh);
-  EXPECT_EQ(s.nodes, 5u);
-  EXPECT_EQ(s.leaves, 3u);
-  EXPECT_EQ(s.depth, 2u);
-  EXPECT_EQ(s.maxLeafSize, 4u);
-  EXPECT_DOUBLE_EQ(s.meanLeafSize, 7.0 / 3.0);
-  EXPECT_DOUBLE_EQ(s.meanLeafDepth, 5.0 / 3.0);
+  bvh.nodes = {inner(1), inner(3), inner(5), leaf(0, 1), inner(7), leaf(1, 2), leaf(3, 1),
+               leaf(4, 2), inner(9), leaf(6, 1), leaf(7, 1)};
+  for (std::uint32_t k = 0; k < 8; ++k) bvh.primIndices.push_back(k);
+  // areas decide which inner lane opens first: inner 1, then inner 2 (then the root is full)
+  const auto cube = [](Real side) { return Aabb{Vec3(0, 0, 0), Vec3(side, side, side)}; };
+  bvh.nodes[1].bounds = cube(3);
+  bvh.nodes[2].bounds = cube(2);
+  bvh.nodes[4].bounds = cube(1);
+  bvh.nodes[8].bounds = cube(Real(0.5));
+  const BvhShape s = bvhShape(widenBvh(bvh));
+  EXPECT_EQ(s.nodes, 2u);
+  EXPECT_EQ(s.leaves, 6u);
+  EXPECT_DOUBLE_EQ(s.meanLanes, 3.5);
+  EXPECT_EQ(s.depth, 1u);
+  EXPECT_EQ(s.maxLeafSize, 2u);
+  EXPECT_DOUBLE_EQ(s.meanLeafSize, 8.0 / 6.0);
+  EXPECT_DOUBLE_EQ(s.meanLeafDepth, 3.0 / 6.0);
 }
 
 /// An OFF file in the temporary directory, removed at the end of the test.
@@ -114,6 +126,7 @@ TEST(Info, ClosedCube) {
   const BvhShape shape = bvhShape(mesh.bvh());
   EXPECT_EQ(j["bvh"]["nodes"], mesh.bvh().nodes.size());
   EXPECT_EQ(j["bvh"]["leaves"], shape.leaves);
+  EXPECT_EQ(j["bvh"]["mean_lanes"], shape.meanLanes);
   EXPECT_EQ(j["bvh"]["depth"], shape.depth);
   EXPECT_EQ(j["bvh"]["max_leaf_size"], shape.maxLeafSize);
   EXPECT_GE(j["bvh"]["leaves"].get<std::size_t>(), 3u);  // 12 triangles, at most 4 per leaf
@@ -232,7 +245,9 @@ TEST(InfoExecutable, BunnyAndAMissingFile) {
   EXPECT_TRUE(bad.contains("error"));
   EXPECT_EQ(good["path"], bunny);
   EXPECT_EQ(good["triangles"], 75408);
-  EXPECT_GT(good["bvh"]["nodes"].get<std::size_t>(), 75408u / 4);
+  // leaves of at most 4 triangles, nodes of at most 4 lanes
+  EXPECT_GE(good["bvh"]["leaves"].get<std::size_t>(), 75408u / 4);
+  EXPECT_GT(good["bvh"]["nodes"].get<std::size_t>(), good["bvh"]["leaves"].get<std::size_t>() / 4);
   EXPECT_GT(good["bytes_per_triangle"].get<double>(), 0.0);
   std::ifstream errIn(errFile);
   std::stringstream errText;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -279,6 +280,8 @@ TEST(Bvh, RefitEqualsFittedBoundsAfterMotion) {
   }
 }
 
+int checkWide(const Bvh& bvh, const WideBvh& wide);
+
 TEST(Bvh, MeshRefitAfterSetVerticesIsFitted) {
   // Through Mesh: deforming the vertices refits its BVH to the new triangles.
   std::mt19937_64 rng(42);
@@ -289,11 +292,43 @@ TEST(Bvh, MeshRefitAfterSetVerticesIsFitted) {
   std::uniform_int_distribution<std::uint32_t> pick(0, 299);
   for (int i = 0; i < 500; ++i) tris.push_back({pick(rng), pick(rng), pick(rng)});
   Mesh mesh(v, tris, "deforming");
+  auto triangleBounds = [&] {
+    std::vector<Aabb> prims;
+    for (std::uint32_t i = 0; i < mesh.triangleCount(); ++i) prims.push_back(bounds(mesh.triangle(i)));
+    return prims;
+  };
+  // The mesh's tree is the binary build of its triangles collapsed 4-wide (checkWide: same
+  // lanes, same boxes bit for bit, same slots). After setVertices it keeps that topology, and
+  // every lane's box is the union of the new boxes of the triangles under it, computed here from
+  // the triangles (not from the lanes).
+  const Bvh binary = buildBvh(triangleBounds());
+  checkWide(binary, mesh.bvh());
+  const WideBvh before = mesh.bvh();
   for (Vec3& p : v) p = p * Real(1.5) + Vec3(u(rng), 0, 0) * Real(0.1);
   mesh.setVertices(v);
-  std::vector<Aabb> prims;
-  for (std::uint32_t i = 0; i < mesh.triangleCount(); ++i) prims.push_back(bounds(mesh.triangle(i)));
-  checkBvh(mesh.bvh(), prims, {});
+  const std::vector<Aabb> moved = triangleBounds();
+  const WideBvh& after = mesh.bvh();
+  ASSERT_EQ(after.nodes.size(), before.nodes.size());
+  EXPECT_EQ(after.primIndices, binary.primIndices);
+  // the box of every triangle under lane i of node n
+  std::function<Aabb(std::uint32_t, int)> fitted = [&](std::uint32_t n, int i) {
+    const WideBvhNode& node = after.nodes[n];
+    Aabb box = Aabb::empty();
+    if (node.count[i] > 0) {
+      for (std::uint32_t k = node.child[i]; k < node.child[i] + node.count[i]; ++k) box.grow(moved[after.primIndices[k]]);
+    } else {
+      for (int c = 0; c < 4; ++c)
+        if (after.nodes[node.child[i]].used(c)) box.grow(fitted(node.child[i], c));
+    }
+    return box;
+  };
+  for (std::uint32_t n = 0; n < before.nodes.size(); ++n)
+    for (int i = 0; i < 4; ++i) {
+      ASSERT_EQ(after.nodes[n].child[i], before.nodes[n].child[i]);
+      ASSERT_EQ(after.nodes[n].count[i], before.nodes[n].count[i]);
+      if (after.nodes[n].used(i)) EXPECT_TRUE(sameBox(after.nodes[n].laneBounds(i), fitted(n, i))) << "node " << n << " lane " << i;
+    }
+  EXPECT_FALSE(sameBox(after.nodes[0].laneBounds(0), before.nodes[0].laneBounds(0))) << "the vertices moved";
 }
 
 /// The lanes of every wide node are binary nodes (the root's children, an inner child replaced by

@@ -62,28 +62,34 @@ Aabb boundsOf(const std::vector<Vec3>& v) {
 
 bool sameBox(const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; }
 
-/// Every node's box is exactly the union of its children's (inner) or its triangles' (leaf)
-/// boxes, and every triangle is referenced once.
+/// Every lane's box is exactly the union of its node's lanes (inner) or its triangles' (leaf)
+/// boxes, every triangle is referenced once, and the mesh's bounds are the root lanes' union.
 void expectBvhFitsMesh(const Mesh& mesh) {
-  const Bvh& bvh = mesh.bvh();
+  const WideBvh& bvh = mesh.bvh();
   ASSERT_FALSE(bvh.empty());
   std::vector<int> referenced(mesh.triangleCount(), 0);
   for (std::size_t i = 0; i < bvh.nodes.size(); ++i) {
-    const BvhNode& node = bvh.nodes[i];
-    Aabb expected = Aabb::empty();
-    if (node.isLeaf()) {
-      for (std::uint32_t k = node.first; k < node.first + node.count; ++k) {
-        const std::uint32_t prim = bvh.primIndices[k];
-        ++referenced[prim];
-        expected.grow(bounds(mesh.triangle(prim)));
+    const WideBvhNode& node = bvh.nodes[i];
+    for (int lane = 0; lane < 4; ++lane) {
+      if (!node.used(lane)) continue;
+      Aabb expected = Aabb::empty();
+      if (node.count[lane] > 0) {
+        for (std::uint32_t k = node.child[lane]; k < node.child[lane] + node.count[lane]; ++k) {
+          const std::uint32_t prim = bvh.primIndices[k];
+          ++referenced[prim];
+          expected.grow(bounds(mesh.triangle(prim)));
+        }
+      } else {
+        const WideBvhNode& child = bvh.nodes[node.child[lane]];
+        for (int c = 0; c < 4; ++c)
+          if (child.used(c)) expected.grow(child.laneBounds(c));
       }
-    } else {
-      expected = bvh.nodes[node.first].bounds;
-      expected.grow(bvh.nodes[node.first + 1].bounds);
+      EXPECT_TRUE(sameBox(node.laneBounds(lane), expected)) << "node " << i << " lane " << lane;
     }
-    EXPECT_TRUE(sameBox(node.bounds, expected)) << "node " << i;
   }
   for (std::size_t i = 0; i < referenced.size(); ++i) EXPECT_EQ(referenced[i], 1) << "triangle " << i;
+  EXPECT_TRUE(sameBox(mesh.bounds(), wideSubtreeBounds(bvh, 0)));
+  EXPECT_EQ(mesh.scale(), std::max(mesh.bounds().min.cwiseAbs().maxCoeff(), mesh.bounds().max.cwiseAbs().maxCoeff()));
 }
 
 // ---- validation ------------------------------------------------------------------------------
@@ -409,7 +415,7 @@ TEST(Mesh, SetVerticesRejectsBadInputAndKeepsTheMesh) {
 TEST(Mesh, MemoryBytesCountsVertexIndexAndBvhArrays) {
   const Mesh mesh = gridMesh(50);
   const std::size_t arrays = mesh.vertexCount() * sizeof(Vec3) + mesh.triangleCount() * sizeof(TriangleIndices) +
-                             mesh.bvh().nodes.size() * sizeof(BvhNode) +
+                             mesh.bvh().nodes.size() * sizeof(WideBvhNode) +
                              mesh.bvh().primIndices.size() * sizeof(std::uint32_t);
   EXPECT_GE(mesh.memoryBytes(), arrays);
   EXPECT_LE(mesh.memoryBytes(), 2 * arrays);  // capacity slack, not a second copy

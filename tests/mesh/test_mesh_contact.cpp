@@ -613,58 +613,6 @@ TEST(MeshContact, AdjacencyBuiltBeforeSetVerticesIsRefusedForEveryShape) {
   }
 }
 
-// A mesh in the wide layout (BvhBuildOptions::wide) walks its 4-wide BVH: the same leaves in the
-// same order as the binary tree (each lane's subtree before the next; a box's node test on four
-// lanes at once, touches4), so every shape's manifold is the binary layout's bit for bit, with
-// and without the adjacency, and so is the shape–mesh distance.
-TEST(MeshContact, WideLayoutGivesTheBinaryLayoutsManifoldsAndDistancesBitForBit) {
-  const std::string path = std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off";
-  BvhBuildOptions wideOptions;
-  wideOptions.wide = true;
-  const Mesh binary = loadMesh(path), wide = loadMesh(path, wideOptions);
-  ASSERT_FALSE(wide.wideBvh().empty());
-  const MeshAdjacency adjBinary(binary), adjWide(wide);
-  const Real diag = (binary.bounds().max - binary.bounds().min).norm();
-  std::mt19937 rng(24);
-  std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(binary.triangleCount() - 1));
-  std::uniform_real_distribution<double> lift(-0.03, 0.02), size(0.005, 0.08);
-  int hits = 0;
-  const int trials = test::scaledCases(300, 45);
-  for (int trial = 0; trial < trials; ++trial) {
-    const Triangle t = binary.triangle(pick(rng));
-    const Vec3 n = (t.b - t.a).cross(t.c - t.a).normalized();
-    if (!n.allFinite()) continue;
-    const Real r = Real(size(rng)) * diag;
-    const ConvexShape shapes[] = {Sphere{Vec3::Zero(), r}, Capsule{Vec3(-r, 0, 0), Vec3(r, 0, 0), r / 2},
-                                  Obb{Vec3::Zero(), Vec3(r, r / 2, r / 3), Mat3::Identity()}};
-    Transform meshPose;
-    meshPose.rotation = randomRotation(rng);
-    const Transform shapePose{randomRotation(rng), meshPose.apply((t.a + t.b + t.c) / 3 + Real(lift(rng)) * diag * n)};
-    const Real margin = Real(0.002) * diag;
-    for (const ConvexShape& shape : shapes) {
-      for (const bool withAdjacency : {false, true}) {
-        MeshContactManifold a, b;
-        contacts(wide, meshPose, shape, shapePose, margin, a, withAdjacency ? &adjWide : nullptr);
-        contacts(binary, meshPose, shape, shapePose, margin, b, withAdjacency ? &adjBinary : nullptr);
-        ASSERT_EQ(a.count, b.count) << "trial " << trial;
-        for (int i = 0; i < a.count; ++i) {
-          const MeshContactPoint &p = a.points[i], &q = b.points[i];
-          ASSERT_TRUE(p.pointA == q.pointA && p.pointB == q.pointB && p.normal == q.normal &&
-                      p.separation == q.separation && p.triangle == q.triangle && p.featureB == q.featureB)
-              << "trial " << trial << " point " << i;
-        }
-        hits += a.count > 0;
-      }
-      const MeshDistanceResult da = distance(wide, meshPose, shape, shapePose, diag);
-      const MeshDistanceResult db = distance(binary, meshPose, shape, shapePose, diag);
-      ASSERT_TRUE(da.found == db.found && da.distance == db.distance && da.triangle == db.triangle &&
-                  da.pointA == db.pointA && da.pointB == db.pointB)
-          << "trial " << trial;
-    }
-  }
-  EXPECT_GT(hits, trials);
-}
-
 // The sphere's internal-edge correction takes the features a point lies on from the sphere
 // routine's Voronoi region (correctSphere); every other shape runs the generic per-edge tests.
 // A capsule whose segment is a point is that same sphere through the generic path: both

@@ -630,13 +630,14 @@ TEST(MeshDistance, BatchedNodePairOffsetsAreBitIdenticalToAScalarEvaluation) {
 }  // namespace
 TEST(MeshDistance, AcceleratorLayoutMirrorsTheBvhAndTheMesh) {
   // The query with accelerators on both sides reads only the accelerator: its child links, leaf
-  // ranges and corner copy must be the BVH's and the mesh's exactly, and every node's box must
-  // hold its corners (else pairs would be pruned or triangles misread).
+  // ranges and corner copy must be the BVH's and the mesh's exactly, and every subtree's box
+  // must hold the corners under it (else pairs would be pruned or triangles misread).
   const Mesh blob = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/blob.off");
   const MeshDistanceAccel acc(blob);
-  const Bvh& bvh = blob.bvh();
-  ASSERT_EQ(acc.nodes().size(), bvh.nodes.size());
-  ASSERT_EQ(acc.leafRanges().size(), bvh.nodes.size());
+  const WideBvh& bvh = blob.bvh();
+  const std::size_t ids = wideSubtreeCount(bvh.nodes.size());
+  ASSERT_EQ(acc.nodes().size(), ids);
+  ASSERT_EQ(acc.leafRanges().size(), ids);
   ASSERT_EQ(acc.corners().size(), 3 * blob.triangleCount());
   if (sizeof(Real) == 4) EXPECT_EQ(sizeof(MeshDistanceAccel::Node), 64u);
   for (std::uint32_t k = 0; k < blob.triangleCount(); ++k) {
@@ -645,28 +646,49 @@ TEST(MeshDistance, AcceleratorLayoutMirrorsTheBvhAndTheMesh) {
     EXPECT_EQ(acc.corners()[3 * k + 1], t.b) << "slot " << k;
     EXPECT_EQ(acc.corners()[3 * k + 2], t.c) << "slot " << k;
   }
-  const Aabb& root = bvh.nodes[0].bounds;
-  const double scale = double(root.max.cwiseAbs().cwiseMax(root.min.cwiseAbs()).maxCoeff());
-  for (std::uint32_t n = 0; n < bvh.nodes.size(); ++n) {
-    const BvhNode& node = bvh.nodes[n];
-    const MeshDistanceAccel::Node& box = acc.nodes()[n];
-    if (node.isLeaf()) {
-      EXPECT_EQ(box.child, MeshDistanceAccel::kLeaf) << "node " << n;
-      EXPECT_EQ(acc.leafRanges()[n].first, node.first) << "node " << n;
-      EXPECT_EQ(acc.leafRanges()[n].count, node.count) << "node " << n;
-      for (std::uint32_t k = node.first; k < node.first + node.count; ++k)
-        for (const Vec3& p : {acc.corners()[3 * k], acc.corners()[3 * k + 1], acc.corners()[3 * k + 2]}) {
-          const Eigen::Vector3d q = box.axes.cast<double>().transpose() * (p - box.center).cast<double>();
-          // The query pads every bound by 64 ulps × scale: the box may miss a corner by less.
-          const Eigen::Vector3d slack =
-              box.half.cast<double>().array() + 64 * double(std::numeric_limits<Real>::epsilon()) * scale;
-          EXPECT_TRUE((q.cwiseAbs().array() <= slack.array()).all())
-              << "node " << n << " slot " << k << " local " << q.transpose() << " half " << box.half.transpose();
-        }
-    } else {
-      EXPECT_EQ(box.child, node.first) << "node " << n;
+  const double scale = double(blob.scale());
+  // The slots under subtree id (its leaves' ranges, collected by walking the tree).
+  auto slotsUnder = [&](std::uint32_t id) {
+    std::vector<std::uint32_t> slots, stack{id};
+    while (!stack.empty()) {
+      const WideSubtree sub = wideSubtree(bvh, stack.back());
+      stack.pop_back();
+      if (sub.isLeaf()) {
+        for (std::uint32_t k = sub.first; k < sub.first + sub.count; ++k) slots.push_back(k);
+      } else {
+        for (int l = 0; l < 4; ++l)
+          if (bvh.nodes[sub.first].used(l)) stack.push_back(wideLaneId(sub.first, l));
+      }
     }
+    return slots;
+  };
+  std::size_t unused = 0;
+  for (std::uint32_t id = 0; id < ids; ++id) {
+    const MeshDistanceAccel::Node& box = acc.nodes()[id];
+    if (id != 0 && !bvh.nodes[(id - 1) / 4].used(int((id - 1) % 4))) {
+      EXPECT_EQ(box.child, MeshDistanceAccel::kUnused) << "subtree " << id;
+      ++unused;
+      continue;
+    }
+    const WideSubtree sub = wideSubtree(bvh, id);
+    if (sub.isLeaf()) {
+      EXPECT_EQ(box.child, MeshDistanceAccel::kLeaf) << "subtree " << id;
+      EXPECT_EQ(acc.leafRanges()[id].first, sub.first) << "subtree " << id;
+      EXPECT_EQ(acc.leafRanges()[id].count, sub.count) << "subtree " << id;
+    } else {
+      EXPECT_EQ(box.child, sub.first) << "subtree " << id;
+    }
+    for (const std::uint32_t k : slotsUnder(id))
+      for (const Vec3& p : {acc.corners()[3 * k], acc.corners()[3 * k + 1], acc.corners()[3 * k + 2]}) {
+        const Eigen::Vector3d q = box.axes.cast<double>().transpose() * (p - box.center).cast<double>();
+        // The query pads every bound by 64 ulps × scale: the box may miss a corner by less.
+        const Eigen::Vector3d slack =
+            box.half.cast<double>().array() + 64 * double(std::numeric_limits<Real>::epsilon()) * scale;
+        EXPECT_TRUE((q.cwiseAbs().array() <= slack.array()).all())
+            << "subtree " << id << " slot " << k << " local " << q.transpose() << " half " << box.half.transpose();
+      }
   }
+  EXPECT_LT(unused, ids / 2) << "most lanes are used";
 }
 
 }  // namespace crux

@@ -8,6 +8,7 @@
 #include <crux/geometry/shapes.hpp>
 
 #include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -29,11 +30,6 @@ struct BvhBuildOptions {
   std::uint32_t maxLeafSize = 4;  ///< leaf size cap (a leaf never holds more)
   std::uint32_t bins = 16;        ///< SAH bins per axis
   Real traversalCost = 2;         ///< SAH cost of visiting a node, relative to one primitive test
-  /// A Mesh also keeps its BVH collapsed 4-wide (Mesh::wideBvh, widenBvh), which rays,
-  /// segments, shape overlaps, shape–mesh contacts and distances then walk with four-lane node
-  /// tests: faster rays for ~22 more bytes per triangle (docs/bench.md has both figures). Off by
-  /// default, which keeps mesh + BVH within 64 bytes per triangle. (buildBvh ignores it.)
-  bool wide = false;
 };
 
 /// A flat BVH: node 0 is the root (absent for zero primitives); each primitive is referenced
@@ -58,9 +54,6 @@ Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options
 /// Refits every node's bounds bottom-up to new primitive bounds (same primitive count and
 /// topology), e.g. after a deforming mesh moved its vertices. O(nodes), no rebuild.
 void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds);
-/// refitBvh with the bounds given in slot order (slotBounds[k]: the primitive in leaf slot k,
-/// primIndices[k]), as refitWideBvh takes them: one array serves both trees.
-void refitBvhSlots(Bvh& bvh, const std::vector<Aabb>& slotBounds);
 
 /// Deepest tree buildBvh makes (it falls back to balanced median splits below this depth),
 /// so traversal stacks of kBvhMaxDepth + 1 entries never overflow.
@@ -157,26 +150,77 @@ struct alignas(64) WideBvhNode {
   bool used(int i) const { return child[i] != kEmpty; }
 };
 
-/// A flat 4-wide BVH; node 0 is the root (absent for an empty BVH). Leaf slots are the binary
-/// BVH's, so slot-ordered data (Mesh::slotTriangle) serves both.
+/// A flat 4-wide BVH; node 0 is the root (absent for an empty BVH). A leaf lane covers slots
+/// [child, child + count) of primIndices, the binary BVH's it was collapsed from, so each
+/// primitive is referenced exactly once and slot-ordered data (Mesh::slotTriangle) serves both.
+/// The tree of every Mesh (Mesh::bvh).
 struct WideBvh {
   std::vector<WideBvhNode> nodes;
+  std::vector<std::uint32_t> primIndices;
   bool empty() const { return nodes.empty(); }
-  std::size_t memoryBytes() const { return nodes.capacity() * sizeof(WideBvhNode); }
+  std::size_t memoryBytes() const {
+    return nodes.capacity() * sizeof(WideBvhNode) + primIndices.capacity() * sizeof(std::uint32_t);
+  }
 };
+
+/// Subtrees of a WideBvh by number, for traversals that hold subtrees rather than nodes (the
+/// simultaneous descent of two trees, per-subtree side data such as MeshDistanceAccel's boxes):
+/// 0 is the whole tree, 4n + i + 1 is lane i of node n. A subtree is a leaf (slots [first,
+/// first + count) of primIndices, count > 0) or inner (its lanes are node `first`'s).
+struct WideSubtree {
+  std::uint32_t first = 0, count = 0;
+  bool isLeaf() const { return count != 0; }
+};
+/// Number of subtree ids of a WideBvh with `nodes` nodes (0 .. 4·nodes).
+inline std::size_t wideSubtreeCount(std::size_t nodes) { return 4 * nodes + 1; }
+/// The id of lane i of node n.
+inline std::uint32_t wideLaneId(std::uint32_t node, int lane) { return 4 * node + std::uint32_t(lane) + 1; }
+/// Subtree `id` of a non-empty WideBvh (its lane must be used).
+inline WideSubtree wideSubtree(const WideBvh& bvh, std::uint32_t id) {
+  if (id == 0) return {0, 0};
+  const WideBvhNode& n = bvh.nodes[(id - 1) >> 2];
+  return {n.child[(id - 1) & 3], n.count[(id - 1) & 3]};
+}
+/// The box of subtree `id` (the root's: the union of node 0's lanes).
+Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id);
 
 /// Entries of a wide traversal's fixed stack: the wide tree is at most kBvhMaxDepth + 1 deep
 /// (each level descends at least one binary level), each node pops one entry and pushes at most
 /// four, and a branch-free push writes all four lanes past the top.
 inline constexpr int kWideBvhStackSize = 3 * (kBvhMaxDepth + 2) + 4;
 
-/// Collapses a binary BVH into a WideBvh (O(nodes)).
+/// Collapses a binary BVH into a WideBvh (O(nodes)); primIndices are copied.
 WideBvh widenBvh(const Bvh& bvh);
 
-/// Refits a WideBvh in place to new primitive bounds given in slot order (slotBounds[k]: the
-/// primitive in leaf slot k), same topology: one reverse sweep (children follow their parents in
-/// widenBvh's order), a leaf lane the union of its slots' boxes, an inner lane the union of its
-/// node's lanes. No allocation.
+/// Builds a WideBvh: buildBvh, then widenBvh (the binary tree is a build step only).
+WideBvh buildWideBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options = {});
+
+/// Refits a WideBvh in place, same topology, to new primitive bounds: slotBox(k) is the box of
+/// the primitive in leaf slot k (so a mesh reads its slot-ordered triangles, no index gather).
+/// One reverse sweep (children follow their parents in widenBvh's order): a leaf lane is the
+/// union of its slots' boxes, an inner lane the union of its node's lanes. No allocation.
+template <class SlotBox>
+void refitWideBvhSlots(WideBvh& bvh, const SlotBox& slotBox) {
+  for (std::size_t n = bvh.nodes.size(); n-- > 0;) {
+    WideBvhNode& node = bvh.nodes[n];
+    for (int i = 0; i < 4; ++i) {
+      if (node.child[i] == WideBvhNode::kEmpty) continue;
+      Aabb box = Aabb::empty();
+      if (node.count[i] > 0) {
+        for (std::uint32_t k = node.child[i], e = node.child[i] + node.count[i]; k < e; ++k) box.grow(slotBox(k));
+      } else {
+        const WideBvhNode& c = bvh.nodes[node.child[i]];
+        for (int j = 0; j < 4; ++j)
+          if (c.used(j)) box.grow(c.laneBounds(j));
+      }
+      node.minX[i] = box.min.x(), node.minY[i] = box.min.y(), node.minZ[i] = box.min.z();
+      node.maxX[i] = box.max.x(), node.maxY[i] = box.max.y(), node.maxZ[i] = box.max.z();
+    }
+  }
+}
+
+/// refitWideBvhSlots with the boxes given in slot order (slotBounds[k]); throws InvalidInput
+/// unless there is one per primitive.
 void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds);
 
 /// Depth-first traversal of a WideBvh, visiting the leaves in the order traverseBvhSlots visits
@@ -225,7 +269,9 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
 ///   `bool leaf(std::uint32_t first, std::uint32_t count)` — visits the slots [first, first +
 ///       count) of a leaf together (so their triangles can be tested in SIMD lanes); false
 ///       stops the traversal.
-/// Lanes with equal keys are visited in lane order. The same monotonicity rule as
+/// The root node is always entered (its key is −∞, so even a visitor whose limit is negative,
+/// as signed distances may be, keeps it). Lanes with equal keys are visited in lane order. The
+/// same monotonicity rule as
 /// traverseWideBvhSlots holds. Returns false when the visitor stopped it early.
 template <class Visitor>
 bool traverseWideBvhOrdered(const WideBvh& bvh, Visitor& visitor) {
@@ -236,7 +282,7 @@ bool traverseWideBvhOrdered(const WideBvh& bvh, Visitor& visitor) {
   };
   Entry stack[kWideBvhStackSize];
   int top = 0;
-  stack[top++] = {0, 0, Real(0)};
+  stack[top++] = {0, 0, -std::numeric_limits<Real>::infinity()};  // the root: kept by every visitor
   while (top > 0) {
     const Entry e = stack[--top];
     if (!visitor.keep(e.key)) continue;

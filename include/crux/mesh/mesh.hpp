@@ -46,17 +46,18 @@ class Mesh {
   std::size_t triangleCount() const { return triangles_.size(); }
   std::size_t vertexCount() const { return vertices_.size(); }
   const std::string& name() const { return name_; }
-  const Bvh& bvh() const { return bvh_; }
-  /// The BVH collapsed 4-wide (widenBvh: the same leaves, lane boxes stored by coordinate for
-  /// one SIMD test of four) when built with BvhBuildOptions::wide, else empty; refitted with the
-  /// binary one by setVertices. When present, rays, segments, shape overlaps, shape–mesh contacts
-  /// and distances walk it instead of bvh(), with the same answers (docs/bvh.md).
-  const WideBvh& wideBvh() const { return wide_; }
+  /// The mesh's tree: a 4-wide BVH (built by binned SAH, collapsed 4-wide: buildWideBvh; lane
+  /// boxes stored by coordinate for one SIMD test of four), refitted by setVertices. Every mesh
+  /// query walks it (docs/bvh.md).
+  const WideBvh& bvh() const { return bvh_; }
   /// Identifies the current vertex positions: unique to each constructed mesh and renewed by
   /// every setVertices (copies share it). Caller-held accelerators record it and check it.
   std::uint64_t geometryId() const { return geometryId_; }
-  /// Bounds of all vertices (= the BVH root's bounds).
-  const Aabb& bounds() const { return bvh_.nodes.front().bounds; }
+  /// Bounds of all vertices (= the union of the BVH root's lanes).
+  const Aabb& bounds() const { return bounds_; }
+  /// The largest |coordinate| of bounds(): the scale of the mesh queries' rounding pads, kept
+  /// with the geometry so that no query recomputes it.
+  Real scale() const { return scale_; }
   /// Corner positions of triangle i.
   Triangle triangle(std::uint32_t i) const {
     const TriangleIndices& t = triangles_[i];
@@ -73,24 +74,27 @@ class Mesh {
   /// MeshDistanceAccel keeps so that a leaf's triangles are read contiguously, without the
   /// index gather.
   std::vector<Vec3> slotCorners() const;
-  /// Replaces the vertex positions (same count, finite) and refits the BVH.
+  /// Replaces the vertex positions (same count, finite) and refits the BVH (refitWideBvhSlots,
+  /// from the slot-ordered triangles: no gather, no allocation beyond the new array itself).
   void setVertices(std::vector<Vec3> vertices);
   /// Counts triangles, vertices, degenerate and duplicate triangles and edge manifoldness.
   MeshStats stats() const;
-  /// Bytes held by the vertex and index arrays and both BVHs.
+  /// Bytes held by the vertex and index arrays and the BVH.
   std::size_t memoryBytes() const;
   /// Seconds the last BVH build took (for `crux info`).
   double buildSeconds() const { return buildSeconds_; }
 
  private:
   std::vector<Aabb> triangleBounds() const;
+  void updateBounds();  ///< bounds_ and scale_ from the tree
 
   std::vector<Vec3> vertices_;
   std::vector<TriangleIndices> triangles_;
   std::vector<TriangleIndices> slotTriangles_;  ///< triangles_ permuted by bvh_.primIndices
   std::string name_;
-  Bvh bvh_;
-  WideBvh wide_;
+  WideBvh bvh_;
+  Aabb bounds_ = Aabb::empty();
+  Real scale_ = 0;
   std::uint64_t geometryId_ = 0;
   double buildSeconds_ = 0;
 };

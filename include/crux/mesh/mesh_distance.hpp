@@ -2,11 +2,12 @@
 /// @file mesh_distance.hpp  Distance and closest points between two triangle meshes under rigid
 /// transforms (surfaces: a mesh wholly inside a closed mesh is at the distance of the surfaces).
 ///
-/// Simultaneous best-first descent of both BVHs (the bounding-volume-tree distance query of
+/// Simultaneous best-first descent of both 4-wide BVHs (the bounding-volume-tree distance query of
 /// Larsen, Gottschalk, Lin & Manocha, "Fast Proximity Queries with Swept Sphere Volumes", 1999):
-/// node pairs wait in a fixed-capacity min-heap ordered by a lower bound, each popped pair is
-/// followed down its nearest child pair, and the search ends when the smallest pending bound
-/// exceeds the best distance. Bounds: b's node box as an OBB in a's frame (Euclidean box gaps);
+/// subtree pairs wait in a fixed-capacity min-heap ordered by a lower bound, each popped pair is
+/// followed down its nearest child pair (the larger subtree split into its four lanes), and the
+/// search ends when the smallest pending bound exceeds the best distance. Bounds: b's box as an
+/// OBB in a's frame (Euclidean box gaps);
 /// with MeshDistanceAccel on both sides instead the two oriented boxes (gap on the line of
 /// centres, then, for pairs close against their size, Euclidean gaps in either box's frame); at
 /// leaves, the triangles' corners projected on the line of centres. Leaf pairs call
@@ -25,20 +26,22 @@
 
 namespace crux {
 
-/// Oriented boxes around every node of a mesh's BVH, fitted to the node's triangle corners
-/// (principal axes of their covariance, Gottschalk, Lin & Manocha, "OBBTree", 1996), for the
-/// distance query's node bounds: a nearly flat surface patch gets a thin box, so pairs of patches
-/// are bounded almost as tightly as FCL's RSS volumes do, where the BVH's axis-aligned boxes are
-/// as thick as the patch is wide. Built once per mesh (O(n log n) time, 64 bytes per node and
-/// 36 per triangle in float builds) and kept by the caller next to the mesh, like
-/// MeshAdjacency: a Mesh holds no lazily built cache. It records the mesh's geometryId: after
-/// Mesh::setVertices (or given with another mesh) the distance query refuses it with
-/// InvalidInput (requireCurrentGeometry), never reading the old corners; rebuild it then.
+/// Oriented boxes around every subtree of a mesh's 4-wide BVH (the root and every lane,
+/// numbered as wideSubtree numbers them), fitted to the subtree's triangle corners (principal
+/// axes of their covariance, Gottschalk, Lin & Manocha, "OBBTree", 1996), for the distance
+/// query's bounds: a nearly flat surface patch gets a thin box, so pairs of patches are bounded
+/// almost as tightly as FCL's RSS volumes do, where the BVH's axis-aligned boxes are as thick as
+/// the patch is wide. Built once per mesh (O(n log n) time, 64 bytes per subtree and 36 per
+/// triangle in float builds) and kept by the caller next to the mesh, like MeshAdjacency: a Mesh
+/// holds no lazily built cache. It records the mesh's geometryId: after Mesh::setVertices (or
+/// given with another mesh) the distance query refuses it with InvalidInput
+/// (requireCurrentGeometry), never reading the old corners; rebuild it then.
 class MeshDistanceAccel {
  public:
-  /// One node's box: centre, unit axes (columns), half extents along them; `child` is the
-  /// node's first child (the second is child + 1, as in the BVH) or kLeaf. One cache line per
-  /// node in float builds, so a node pair's bound reads one line per node.
+  /// One subtree's box: centre, unit axes (columns), half extents along them; `child` is the
+  /// wide node whose lanes are the subtree's children (subtrees wideLaneId(child, 0..3)), or
+  /// kLeaf, or kUnused for an unused lane (a zero placeholder). One cache line per box in float
+  /// builds, so a pair's bound reads one line per side.
   struct alignas(64) Node {
     Mat3 axes = Mat3::Identity();
     Vec3 center = Vec3::Zero();
@@ -46,15 +49,16 @@ class MeshDistanceAccel {
     std::uint32_t child = kLeaf;
   };
   static constexpr std::uint32_t kLeaf = 0xffffffffu;
+  static constexpr std::uint32_t kUnused = 0xfffffffeu;
   MeshDistanceAccel() = default;
-  /// Fits a box to every node of mesh.bvh() and copies the triangle corners in BVH slot order.
+  /// Fits a box to every subtree of mesh.bvh() and copies the triangle corners in slot order.
   explicit MeshDistanceAccel(const Mesh& mesh);
   const std::vector<Node>& nodes() const { return nodes_; }
   /// The corners of the triangle in BVH slot k are corners()[3k], [3k+1], [3k+2] (a copy of
   /// Mesh::slotTriangle(k) laid out in leaf order: a leaf's triangles are read contiguously).
   const std::vector<Vec3>& corners() const { return corners_; }
   /// For a leaf (child == kLeaf): its triangles are slots [first, first + count) (the BVH
-  /// leaf's, kept next to the boxes so the query reads no BvhNode).
+  /// leaf's, kept next to the boxes so the query reads no BVH node).
   struct Range {
     std::uint32_t first = 0, count = 0;
   };
@@ -72,8 +76,8 @@ class MeshDistanceAccel {
 namespace mesh_detail {
 
 /// Internal (declared here for the tests): the first node-pair bound of the accelerated distance
-/// query, for the 2 or 4 child pairs of one expansion together in SIMD lanes (GCC/Clang vector
-/// extension: SSE on x86-64 in either precision; unused lanes repeat a pair). For pair l,
+/// query, for the up to 4 child pairs of one expansion together in SIMD lanes (GCC/Clang vector
+/// extension: SSE on x86-64 in either precision; unused lanes are the caller's to mask). For pair l,
 /// oriented boxes a[l] (mesh a's frame) and b[l] (b's frame, placed in a's by x_a = R·x_b + t):
 ///  - d[·][l] = (R·b.center + t) − a.center, the centre offset in a's frame;
 ///  - e[·][l] = b.center + Rᵀ·(t − a.center), the same offset in b's frame (≈ Rᵀ·d);
