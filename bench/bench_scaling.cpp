@@ -31,6 +31,7 @@
 
 #include "bench_output.hpp"
 #include "peers/bench_types.hpp"
+#include "ray_work.hpp"
 #if CRUX_BENCH_HAVE_EMBREE
 #include "peers/embree_peer.hpp"
 #endif
@@ -211,6 +212,8 @@ struct Engine {
   std::string agreement = "ref";
   std::size_t mismatches = 0;
   double bytesPerTriangle = -1;
+  RayWork work;            ///< crux's rays: work per ray (RayQueryCounters)
+  bool hasWork = false;
 };
 
 struct Row {
@@ -292,8 +295,11 @@ void writeJson(const Settings& s, const std::vector<std::string>& absent) {
         << ", \"threads\": " << e.threads << ", \"seconds_per_item\": " << jsonNumber(e.median)
         << ", \"cpu_share\": " << jsonNumber(e.cpuShare) << ", \"agreement\": " << jsonString(e.agreement)
         << ", \"mismatches\": " << e.mismatches
-        << ", \"bytes_per_triangle\": " << (e.bytesPerTriangle >= 0 ? jsonNumber(e.bytesPerTriangle) : "null")
-        << ", \"runs\": [";
+        << ", \"bytes_per_triangle\": " << (e.bytesPerTriangle >= 0 ? jsonNumber(e.bytesPerTriangle) : "null");
+    if (e.hasWork)
+      out << ", \"nodes_per_item\": " << jsonNumber(e.work.nodes) << ", \"triangles_per_item\": " << jsonNumber(e.work.triangles)
+          << ", \"certified_share\": " << jsonNumber(e.work.certifiedShare) << ", \"exact_share\": " << jsonNumber(e.work.exactShare);
+    out << ", \"runs\": [";
     for (std::size_t k = 0; k < e.runs.size(); ++k) out << (k ? ", " : "") << jsonNumber(e.runs[k]);
     out << "]}";
   }
@@ -441,7 +447,7 @@ int main(int argc, char** argv) {
     cruxRays(*mesh, rays.data(), nr, reference.data());
     std::vector<Engine> rayEngines;
     const crux::Mesh& m = *mesh;
-    rayEngines.push_back({"crux", "BVH, watertight", 1, [&] {
+    rayEngines.push_back({"crux", "4-wide BVH, watertight", 1, [&] {
                             const Stopwatch w;
                             cruxRays(m, rays.data(), nr, answers.data());
                             return w.elapsed();
@@ -488,8 +494,12 @@ int main(int argc, char** argv) {
       if (i > 0)
         e.agreement = e.mismatches == 0 ? "agree" : "DISAGREE " + std::to_string(e.mismatches) + " of " + std::to_string(nr);
     }
+    const RayWork work = measureRayWork(m, rays.data(), nr, false);
+    for (Engine& e : rayEngines)
+      if (e.name == "crux") e.work = work, e.hasWork = true;
     timeEngines(rayEngines, double(nr), s);
     print("rays", nt, rayEngines);
+    std::printf("   crux work: %s\n", work.text().c_str());
     std::printf("   crux hit rate %.1f%%\n", 100.0 * double(hits) / double(std::max<std::size_t>(1, nr)));
     for (Engine& e : rayEngines) gRows.push_back({"rays", nt, nr, e});
     rayEngines.clear();
