@@ -36,8 +36,18 @@ def _counter_progress_during(call):
     return progress / (alone * seconds), seconds
 
 
+def _rays_lasting(bunny, seconds, seed):
+    """Rays whose closest-hit batch on one thread lasts about `seconds` here (a short batch timed
+    first, then tiled): the batch must last long enough to measure on any machine."""
+    rays = random_rays(bunny, 20000, seed=seed)
+    start = time.perf_counter()
+    bunny.ray_closest(rays, threads=1)
+    once = max(time.perf_counter() - start, 1e-4)
+    return np.tile(rays, (max(1, int(np.ceil(seconds / once))), 1))
+
+
 def test_the_gil_is_released_during_a_batch(bunny):
-    rays = np.tile(random_rays(bunny, 20000, seed=4), (15, 1))
+    rays = _rays_lasting(bunny, 0.5, seed=4)
     fraction, seconds = _counter_progress_during(lambda: bunny.ray_closest(rays, threads=1))
     assert seconds > 0.2, "the batch must last long enough to measure"
     # A call holding the GIL lets the counter run only while the interpreter hands the GIL over at
@@ -50,7 +60,7 @@ def test_the_gil_is_released_during_a_batch(bunny):
 def test_two_python_threads_run_batches_faster_than_one_after_the_other(bunny):
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip("needs 2 cores")
-    rays = np.tile(random_rays(bunny, 20000, seed=6), (6, 1))
+    rays = _rays_lasting(bunny, 0.25, seed=6)
     both = np.concatenate([rays, rays])
 
     def run():
