@@ -276,7 +276,13 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   const WideBvh& bb = b.bvh();
   const Real scale = std::max(a.scale(), b.scale() + rel.t.cwiseAbs().maxCoeff());
   const Real pad = mesh_detail::kNodeBoxPad * scale;
-  constexpr int kMaxChildPairs = 4;
+  // With both accelerators, both subtrees of a pair are split when neither is this many times
+  // the other's size (up to 16 pairs, bounded four at a time), else the larger one: on bunny00
+  // 1.25 kept the binary tree's speed at every gap, where splitting one side only was 15%
+  // slower at 0.1R and splitting both within 1.5 or 2 was slower at the other gaps. Without
+  // accelerators one side is split (splitting both was 5–30% slower there).
+  constexpr Real kSplitBothRatio = Real(1.25);
+  constexpr int kMaxChildPairs = 16;
   // With both accelerators, the Euclidean box gaps refine a pair's line-of-centres gap only
   // when the boxes' summed radii on that line exceed this fraction of the centre distance
   // (tuned on bunny00 after the session-6 SIMD step: 0.3 / 0.4 / 0.55 / 0.7 / 0.85 / 1 give
@@ -494,10 +500,9 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     Real bound;
   };
   // The child pairs of a subtree pair within the limit, with their bounds, the nearest first
-  // (returns how many; pairs beyond the limit are dropped): the larger subtree is split into its
-  // node's lanes (RTCD 6.3.2), so the up to four pairs share the other side and, with both
-  // accelerators, get their first bound together in the four SIMD lanes. (Splitting both when
-  // of similar size, up to 16 pairs, was 5–30% slower on bunny00 at every gap.)
+  // (returns how many, at most kMaxChildPairs; pairs beyond the limit are dropped): the larger
+  // subtree is split into its node's lanes, or both (kSplitBothRatio; RTCD 6.3.2); with both
+  // accelerators their first bounds are taken four pairs at a time in SIMD lanes.
   auto children = [&](const Pair& p, Pair* out) -> int {
     bool leafA, leafB;
     std::uint32_t firstA, firstB;
@@ -515,38 +520,54 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       const Aabb boxA = wideSubtreeBounds(ba, p.a), boxB = wideSubtreeBounds(bb, p.b);
       sa = (boxA.max - boxA.min).sum(), sb = (boxB.max - boxB.min).sum();
     }
-    const bool splitA = !leafA && (leafB || sa >= sb);
-    const WideBvhNode& node = splitA ? ba.nodes[firstA] : bb.nodes[firstB];
-    std::uint32_t as[4], bs[4];
-    unsigned used = 0;
-    for (int l = 0; l < 4; ++l) {
-      as[l] = splitA ? wideLaneId(firstA, l) : p.a;
-      bs[l] = splitA ? p.b : wideLaneId(firstB, l);
-      used |= unsigned(node.used(l)) << l;
+    bool splitA, splitB;
+    if (both && !leafA && !leafB && sa < kSplitBothRatio * sb && sb < kSplitBothRatio * sa) {
+      splitA = splitB = true;
+    } else {
+      splitA = !leafA && (leafB || sa >= sb);
+      splitB = !splitA;
     }
+    std::uint32_t idsA[4] = {p.a}, idsB[4] = {p.b};
+    int nA = 1, nB = 1;
+    if (splitA) {
+      nA = 0;
+      for (int l = 0; l < 4; ++l)
+        if (ba.nodes[firstA].used(l)) idsA[nA++] = wideLaneId(firstA, l);
+    }
+    if (splitB) {
+      nB = 0;
+      for (int l = 0; l < 4; ++l)
+        if (bb.nodes[firstB].used(l)) idsB[nB++] = wideLaneId(firstB, l);
+    }
+    const int n = nA * nB;
     int kept = 0;
     if (both) {
-      // The four pairs' centre offsets together (an unused lane's box is a zero placeholder,
-      // masked out), then the rest of the bound only for pairs not already beyond the limit,
-      // taken by a mask rather than by one unpredictable branch per pair.
-      const Node* laneA[4];
-      const Node* laneB[4];
-      for (int l = 0; l < 4; ++l) laneA[l] = obbA + as[l], laneB[l] = obbB + bs[l];
-      mesh_detail::ObbPairOffsets o;
-      mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
-      unsigned live = 0;
-      for (int l = 0; l < 4; ++l) live |= unsigned(o.bound[l] != kNoLimit) << l;
-      live &= used;
-      while (live) {
-        const int l = lowestBit(live);
-        live &= live - 1;
-        out[kept] = {as[l], bs[l], obbBound(as[l], bs[l], o, l)};
-        kept += out[kept].bound <= best.limit;
+      // Four pairs' centre offsets at a time (a short group repeats its first pair, masked
+      // out), then the rest of the bound only for pairs not already beyond the limit, taken by
+      // a mask rather than by one unpredictable branch per pair.
+      for (int g = 0; g < n; g += 4) {
+        const Node* laneA[4];
+        const Node* laneB[4];
+        std::uint32_t as[4], bs[4];
+        for (int l = 0; l < 4; ++l) {
+          const int q = g + l < n ? g + l : g;
+          as[l] = idsA[q / nB], bs[l] = idsB[q % nB];
+          laneA[l] = obbA + as[l], laneB[l] = obbB + bs[l];
+        }
+        mesh_detail::ObbPairOffsets o;
+        mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
+        unsigned live = 0;
+        for (int l = 0; l < 4; ++l) live |= unsigned(o.bound[l] != kNoLimit && g + l < n) << l;
+        while (live) {
+          const int l = lowestBit(live);
+          live &= live - 1;
+          out[kept] = {as[l], bs[l], obbBound(as[l], bs[l], o, l)};
+          kept += out[kept].bound <= best.limit;
+        }
       }
     } else {
-      for (int l = 0; l < 4; ++l) {
-        if (!(used >> l & 1u)) continue;
-        out[kept] = {as[l], bs[l], nodeBound(as[l], bs[l])};
+      for (int q = 0; q < n; ++q) {
+        out[kept] = {idsA[q / nB], idsB[q % nB], nodeBound(idsA[q / nB], idsB[q % nB])};
         kept += out[kept].bound <= best.limit;
       }
     }
@@ -592,8 +613,8 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   };
 
   // Depth-first from one pair, nearest child pair first, the others deferred on a fixed stack
-  // (each step defers at most three pairs and descends one level of either tree).
-  Pair stack[2 * kWideBvhStackSize];
+  // (each step defers at most kMaxChildPairs − 1 pairs and descends a level of either tree).
+  Pair stack[(kMaxChildPairs - 1) * 2 * (kBvhMaxDepth + 2) + kMaxChildPairs];
   auto depthFirst = [&](Pair cur) {
     int top = 0;
     for (;;) {
