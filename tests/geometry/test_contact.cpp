@@ -350,7 +350,7 @@ bool triBox(const Triangle& t, const Vec3& half, Real margin, ContactManifold& m
   return contacts(ConvexShape(t), Transform{}, ConvexShape(box), Transform{}, margin, m);
 }
 
-TEST(ContactsIssue6, NearlyParallelOffsetEdgesKeepPointsOnTheBox) {
+TEST(ContactsOnTheBoundary, NearlyParallelOffsetEdgesKeepPointsOnTheBox) {
   // From H2's NearlyParallelOffsetEdgesKeepPointsOnTheBox (test_box_triangle_contact.cpp): the
   // edge-reference clipping put pointB at |y| = 1.782 > 1.7356 (double build).
   const Vec3 half(Real(0.82585418100247765), Real(1.7355784415104598), Real(0.49252121972387419));
@@ -362,7 +362,7 @@ TEST(ContactsIssue6, NearlyParallelOffsetEdgesKeepPointsOnTheBox) {
   EXPECT_TRUE(triBoxWellFormed(t, half, Real(0.2), m));
 }
 
-TEST(ContactsIssue6, ExactlyParallelEdgesStillGiveTwoPoints) {
+TEST(ContactsOnTheBoundary, ExactlyParallelEdgesStillGiveTwoPoints) {
   // A triangle edge parallel to the box edge (y = z = 1) and 0.05 above it along the bisector:
   // the overlap of the two edges, both ends.
   const Real d = Real(0.05 / std::sqrt(2.0));
@@ -384,7 +384,7 @@ V3d perpendicular(const V3d& v) {
   return v.cross(o).normalized();
 }
 
-TEST(ContactsIssue6, RandomNearlyParallelOffsetEdgesStayOnBothShapes) {
+TEST(ContactsOnTheBoundary, RandomNearlyParallelOffsetEdgesStayOnBothShapes) {
   // A triangle edge within 0.01°..2° of a box edge, offset along the edge's outward bisector
   // (gap) and across it (lateral), the third vertex away from the box.
   std::mt19937_64 rng(20261122);
@@ -424,7 +424,7 @@ TEST(ContactsIssue6, RandomNearlyParallelOffsetEdgesStayOnBothShapes) {
   std::printf("near-parallel edges: %d contacts of %d, %d with > 1 point\n", found, n, multi);
 }
 
-TEST(ContactsIssue6, RandomSliverTrianglesStayOnBothShapes) {
+TEST(ContactsOnTheBoundary, RandomSliverTrianglesStayOnBothShapes) {
   // Slivers (height / length 1e-1 .. 1e-7, not exactly degenerate) near a box face, tilted by up
   // to 3°, some long enough to overhang an edge.
   std::mt19937_64 rng(6006);
@@ -486,7 +486,7 @@ std::vector<GridTurn> gridTurns() {
 
 Vec3 toVec3(const Eigen::Vector3i& v) { return v.cast<Real>(); }
 
-TEST(ContactsIssue6, QuarterTurnFlatBoxesTouchingAtTheMarginHaveAContact) {
+TEST(ContactsOnTheBoundary, QuarterTurnFlatBoxesTouchingAtTheMarginHaveAContact) {
   // The `crux diff` case of docs/diff.md: two flat boxes (segments along z once placed), b under
   // a quarter turn about x typed as (√½, √½, 0, 0); a spans z in [-1, 1], b z in [2, 6]: the
   // separation is exactly 1 = margin, so the speculative contact is reported (exact backend: one
@@ -510,7 +510,7 @@ TEST(ContactsIssue6, QuarterTurnFlatBoxesTouchingAtTheMarginHaveAContact) {
   EXPECT_FALSE(contacts(a, Transform{}, b, tb, Real(0.5), m)) << str(m);
 }
 
-TEST(ContactsIssue6, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMargin) {
+TEST(ContactsOnTheBoundary, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMargin) {
   // Integer boxes (half extents 0..2, flat ones included, signed-permutation frames) placed by
   // quarter-turn quaternions and integer translations, b put at an integer gap vector g from a
   // (per axis: apart by g_i, or the intervals overlapping / touching when g_i = 0) with |g| an
@@ -791,7 +791,7 @@ struct TouchingTally {
 // degenerate triangle), radii and margin summing to k. The GJK distance is an ulp or so off
 // either way; before the exact margin decision in contacts() some of these were missed
 // (distance 4.4e-16 or 1 + 2e-16 with margin 0 or 1).
-TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
+TEST(ContactsOnTheBoundary, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
   test::GridDraws draws(0x5eed9u);
   const int cases = 2000;
   TouchingTally tally;
@@ -824,7 +824,7 @@ TEST(ContactsIssue6, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
 // points too: contacts() decides their margin exactly like the spheres', capsules' and
 // triangles' (before session 10 they kept GJK's decision and a triangle hull 5 from a capsule of
 // radius 5 at margin 0 was missed).
-TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
+TEST(ContactsOnTheBoundary, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
   test::GridDraws draws(0x4a11u);
   const int cases = test::scaledCases(3000, 600);
   TouchingTally tally;
@@ -865,7 +865,7 @@ TEST(ContactsIssue6, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
 // to X → foot, against a capsule on that segment (radius k − margin) and a segment triangle:
 // contacts() decides their margin exactly too (the polytope's boundary triangles and whether it
 // holds the core; 172 box and 105 tetrahedron pairs of 40,000 were missed by GJK's decision).
-TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
+TEST(ContactsOnTheBoundary, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
   test::GridDraws draws(0xb0c5u);
   const int cases = test::scaledCases(4000, 600);
   int built = 0, missed = 0, falseHits = 0;
@@ -918,7 +918,7 @@ TEST(ContactsIssue6, TouchingBoxesAndHullsOnTheIntegerGridHaveAContact) {
 // middle of a face, or at a face and a vertex; the distance is m·|w| exactly, at offsets up to
 // 2^21 from the origin (integer coordinates, exact in float). Every pair is reported at margin
 // m·|w|, in both operand orders; none at m·|w| − 0.5.
-TEST(ContactsIssue6, TouchingPolytopesOnTheIntegerGridHaveAContact) {
+TEST(ContactsOnTheBoundary, TouchingPolytopesOnTheIntegerGridHaveAContact) {
   test::GridDraws draws(0x9017u);
   using L3 = Eigen::Matrix<long, 3, 1>;
   const L3 normals[] = {L3(1, 2, 2), L3(2, 3, 6), L3(1, 4, 8), L3(2, 6, 9), L3(4, 4, 7),
@@ -983,7 +983,7 @@ TEST(ContactsIssue6, TouchingPolytopesOnTheIntegerGridHaveAContact) {
 // a hair above 1 and the margin-1 contact was missed. Reported at margin 1 with separation 1 (the
 // margin, when the computed distance lies beyond it), in both operand orders; none at a margin
 // just below 1.
-TEST(ContactsIssue6, HullAndBoxExactlyAtTheMarginOnTheGridHaveAContact) {
+TEST(ContactsOnTheBoundary, HullAndBoxExactlyAtTheMarginOnTheGridHaveAContact) {
   struct Case {
     std::vector<Vec3> hull;
     Obb box;
@@ -1022,7 +1022,7 @@ TEST(ContactsIssue6, HullAndBoxExactlyAtTheMarginOnTheGridHaveAContact) {
 // relative shallow, tests/regressions/native.crux-wrong.contacts.9301-8420). Random triangles
 // and hulls against capsules and boxes under random rotations: 210 of ~68,000 manifolds broke
 // this before.
-TEST(ContactsIssue6, ManifoldIsNeverShallowerThanTheClosestPairBeyondTheSnappingAllowance) {
+TEST(ContactsOnTheBoundary, ManifoldIsNeverShallowerThanTheClosestPairBeyondTheSnappingAllowance) {
   std::mt19937_64 rng(42);
   std::uniform_real_distribution<double> U(-1, 1);
   auto v = [&] { return Vec3(Real(U(rng)), Real(U(rng)), Real(U(rng))); };

@@ -146,7 +146,7 @@ TEST(ConvexHull, IntegerGridBoxWithManyCoplanarPoints) {
 // face. Before session 11 the build's plane tests n·p − d ran on the raw coordinates, whose
 // rounding far from the origin exceeded its tolerance (100 ulps of the cloud's small diagonal) in
 // double builds: hulls came out with missing faces, and touching hulls were not reported
-// (ContactsIssue6.TouchingPolytopesOnTheIntegerGridHaveAContact).
+// (ContactsOnTheBoundary.TouchingPolytopesOnTheIntegerGridHaveAContact).
 TEST(ConvexHull, IntegerCloudsFarFromTheOriginHaveTheMovedHull) {
   std::mt19937_64 rng(2718);
   auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
