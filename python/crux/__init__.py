@@ -10,6 +10,7 @@ Bad input raises ValueError with crux's message. See docs/python.md.
 from ._crux import (
     DOUBLE_PRECISION,
     REAL,
+    CastHits,
     ClosestPoints,
     Contacts,
     Mesh,
@@ -29,6 +30,7 @@ from .world import World, WorldError
 __all__ = [
     "DOUBLE_PRECISION",
     "REAL",
+    "CastHits",
     "ClosestPoints",
     "Contacts",
     "Mesh",

@@ -16,6 +16,7 @@ static_assert(sizeof(Ray) == 6 * sizeof(Real));
 static_assert(sizeof(Sphere) == 4 * sizeof(Real));
 static_assert(sizeof(Aabb) == 6 * sizeof(Real));
 static_assert(sizeof(Obb) == 15 * sizeof(Real));
+static_assert(sizeof(Capsule) == 7 * sizeof(Real) && alignof(Capsule) == alignof(Real));
 static_assert(alignof(Ray) == alignof(Real) && alignof(Sphere) == alignof(Real) && alignof(Obb) == alignof(Real));
 
 std::string Rows::rowName(std::size_t i) const {

@@ -39,7 +39,7 @@ class PyMesh {
 
 /// Named tuple types of the answers, made once at import.
 struct ResultTypes {
-  py::object rayHits, rayHitsAll, closestPoints, meshDistance, contacts, sceneRayHits, regionHits;
+  py::object rayHits, rayHitsAll, closestPoints, meshDistance, contacts, sceneRayHits, regionHits, castHits;
 };
 const ResultTypes& resultTypes();
 

@@ -30,6 +30,7 @@ PYBIND11_MODULE(_crux, m) {
   m.attr("MeshDistance") = types.meshDistance;
   m.attr("Contacts") = types.contacts;
   m.attr("SceneRayHits") = types.sceneRayHits;
+  m.attr("CastHits") = types.castHits;
   m.attr("RegionHits") = types.regionHits;
   bindMesh(m);
   bindScene(m);
