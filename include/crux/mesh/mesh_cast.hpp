@@ -7,11 +7,12 @@
 /// smallest reported t (ties: the lowest triangle index), with that cast's points, normal (from
 /// the mesh to the shape) and overlap flag. The BVH path (QueryPath::Bvh) and the brute-force path
 /// give identical answers:
-///  - BVH traversal through traverseBvhSlots with swept bounds: the shape's box in the mesh frame
-///    (linear casts; for rigid motions the box of the ball of radius shape.size() about its
-///    origin) moved along the motion; a node is entered when that moving box, grown by the
-///    contact tolerance and a rounding pad, meets the node's box, and its key is the entry time,
-///    so nodes are visited nearest first and pruned once they are entered after the best t;
+///  - BVH traversal (the mesh's 4-wide tree, nearest first) with swept bounds: the shape's box
+///    in the mesh frame (linear casts; for rigid motions the box of the ball of radius
+///    shape.size() about its origin) moved along the motion; a node is entered when that moving
+///    box, grown by the contact tolerance and a rounding pad, meets the node's box, and its key
+///    is the entry time, so nodes are visited nearest first and pruned once they are entered
+///    after the best t;
 ///  - a triangle's cast is abandoned as soon as its advancement passes the best t (CastOptions'
 ///    earlyOut): casts that could still tie or win are computed in full.
 /// Degenerate triangles are their segments or points. Queries never throw and never allocate;
