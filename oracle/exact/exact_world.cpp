@@ -171,14 +171,10 @@ class ExactWorld final : public CollisionWorld {
         out.push_back({c.pointA, c.pointB, c.normal, c.depth, std::nullopt, std::nullopt});
       return out;
     }
-    const bool meshIsA = a.isMesh();
-    const WorldOperand& m = meshIsA ? a : b;
-    const WorldOperand& s = meshIsA ? b : a;
-    const ConvexShape shape = convexOf(s);
-    for (const ExactContact& c : exact::contacts(mesh(std::get<MeshHandle>(m.shape)), m.pose, shape, s.pose, margin)) {
-      if (meshIsA) out.push_back({c.pointA, c.pointB, c.normal, c.depth, c.triangle, std::nullopt});
-      else out.push_back({c.pointB, c.pointA, -c.normal, c.depth, std::nullopt, c.triangle});
-    }
+    // a mesh operand is a (CollisionWorld::contacts swaps a shape-first pair)
+    const ConvexShape shape = convexOf(b);
+    for (const ExactContact& c : exact::contacts(mesh(std::get<MeshHandle>(a.shape)), a.pose, shape, b.pose, margin))
+      out.push_back({c.pointA, c.pointB, c.normal, c.depth, c.triangle, std::nullopt});
     return out;
   }
   WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
@@ -192,16 +188,14 @@ class ExactWorld final : public CollisionWorld {
       w.normal = d.normal;
       return w;
     }
-    const bool meshIsA = a.isMesh();
-    const WorldOperand& m = meshIsA ? a : b;
-    const WorldOperand& s = meshIsA ? b : a;
-    const ConvexShape shape = convexOf(s);
-    const ExactDistance d = exact::distance(mesh(std::get<MeshHandle>(m.shape)), m.pose, shape, s.pose);
+    // a mesh operand is a (CollisionWorld::distance swaps a shape-first pair)
+    const ConvexShape shape = convexOf(b);
+    const ExactDistance d = exact::distance(mesh(std::get<MeshHandle>(a.shape)), a.pose, shape, b.pose);
     w.distance = d.distance;
-    w.pointA = meshIsA ? d.pointA : d.pointB;
-    w.pointB = meshIsA ? d.pointB : d.pointA;
-    w.normal = meshIsA ? d.normal : Vec3d(-d.normal);
-    (meshIsA ? w.triangleA : w.triangleB) = d.triangleA;
+    w.pointA = d.pointA;
+    w.pointB = d.pointB;
+    w.normal = d.normal;
+    w.triangleA = d.triangleA;
     return w;
   }
   /// Linear casts (exact::cast): hit or miss exact; polytopes get the exact t rounded, and the

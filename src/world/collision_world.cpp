@@ -435,6 +435,13 @@ std::vector<WorldContact> CollisionWorld::contacts(const WorldOperand& a, const 
   if (a.isMesh() && b.isMesh())
     throw InvalidInput("b: contacts need at least one convex operand (a and b are both meshes; mesh_distance "
                        "measures two meshes)");
+  // (shape, mesh) is answered as (mesh, shape) with the roles swapped back, here for every
+  // backend: doContacts and doDistance see a mesh only as A.
+  if (b.isMesh()) {
+    std::vector<WorldContact> out = guarded(WorldOp::Contacts, [&] { return doContacts(b, a, margin); });
+    for (WorldContact& c : out) c = {c.pointB, c.pointA, -c.normal, c.depth, c.featureB, c.featureA};
+    return out;
+  }
   return guarded(WorldOp::Contacts, [&] { return doContacts(a, b, margin); });
 }
 
@@ -453,6 +460,10 @@ WorldDistance CollisionWorld::distance(const WorldOperand& a, const WorldOperand
   validateOperand(b, "b");
   if (a.isMesh() && b.isMesh())
     throw InvalidInput("b: distance needs at least one convex operand (a and b are both meshes; use mesh_distance)");
+  if (b.isMesh()) {  // (shape, mesh) from (mesh, shape), as for contacts
+    const WorldDistance d = guarded(WorldOp::Distance, [&] { return doDistance(b, a); });
+    return {d.distance, d.pointB, d.pointA, -d.normal, d.triangleB, d.triangleA};
+  }
   return guarded(WorldOp::Distance, [&] { return doDistance(a, b); });
 }
 

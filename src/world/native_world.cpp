@@ -195,45 +195,28 @@ class NativeWorld final : public CollisionWorld {
       }
       return out;
     }
-    // The mesh layer takes the mesh as A; a convex A is answered swapped and swapped back.
-    const bool meshIsA = a.isMesh();
-    const WorldOperand& meshOperand = meshIsA ? a : b;
-    const WorldOperand& shape = meshIsA ? b : a;
-    const MeshHandle h = std::get<MeshHandle>(meshOperand.shape);
+    // a mesh operand is a (CollisionWorld::contacts swaps a shape-first pair)
+    const MeshHandle h = std::get<MeshHandle>(a.shape);
     MeshContactManifold manifold;
-    crux::contacts(mesh(h), meshOperand.pose, convexOf(shape), shape.pose, m, manifold, &adjacency(h));
+    crux::contacts(mesh(h), a.pose, convexOf(b), b.pose, m, manifold, &adjacency(h));
     for (int i = 0; i < manifold.count; ++i) {
       const MeshContactPoint& p = manifold.points[i];
-      if (meshIsA)
-        out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), p.normal.cast<double>(),
-                       -double(p.separation), p.triangle, p.featureB});
-      else
-        out.push_back({p.pointB.cast<double>(), p.pointA.cast<double>(), -p.normal.cast<double>(),
-                       -double(p.separation), p.featureB, p.triangle});
+      out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), p.normal.cast<double>(),
+                     -double(p.separation), p.triangle, p.featureB});
     }
     return out;
   }
 
   WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
-    if (!a.isMesh() && !b.isMesh()) return toWorld(crux::distance(convexOf(a), a.pose, convexOf(b), b.pose));
-    const bool meshIsA = a.isMesh();
-    const WorldOperand& meshOperand = meshIsA ? a : b;
-    const WorldOperand& shape = meshIsA ? b : a;
-    const MeshHandle h = std::get<MeshHandle>(meshOperand.shape);
-    const MeshDistanceResult d = crux::distance(mesh(h), meshOperand.pose, convexOf(shape), shape.pose);
+    if (!a.isMesh()) return toWorld(crux::distance(convexOf(a), a.pose, convexOf(b), b.pose));
+    // a mesh operand is a (CollisionWorld::distance swaps a shape-first pair)
+    const MeshDistanceResult d = crux::distance(mesh(std::get<MeshHandle>(a.shape)), a.pose, convexOf(b), b.pose);
     WorldDistance w;
     w.distance = double(d.distance);
-    if (meshIsA) {
-      w.pointA = d.pointA.cast<double>();
-      w.pointB = d.pointB.cast<double>();
-      w.normal = d.normal.cast<double>();
-      w.triangleA = d.triangle;
-    } else {
-      w.pointA = d.pointB.cast<double>();
-      w.pointB = d.pointA.cast<double>();
-      w.normal = -d.normal.cast<double>();
-      w.triangleB = d.triangle;
-    }
+    w.pointA = d.pointA.cast<double>();
+    w.pointB = d.pointB.cast<double>();
+    w.normal = d.normal.cast<double>();
+    w.triangleA = d.triangle;
     return w;
   }
 

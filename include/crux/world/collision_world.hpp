@@ -542,7 +542,9 @@ class CollisionWorld {
   virtual std::vector<std::string> doSceneQuery(const SceneQueryShape& shape, bool boundsOnly);
   virtual std::vector<std::pair<std::string, std::string>> doScenePairs();
 
-  /// Narrow phase; operands validated, handles resolved, margin/max checked.
+  /// Narrow phase; operands validated, handles resolved, margin/max checked. A mesh operand is
+  /// always a: contacts() and distance() answer (shape, mesh) by calling these with the mesh
+  /// first and swapping the roles back (points, features, normal negated), in one place.
   virtual std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin);
   virtual WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b);
   virtual std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b,
