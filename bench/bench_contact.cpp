@@ -158,7 +158,7 @@ Interleaved timeInterleaved(std::size_t n, const std::vector<std::function<doubl
     for (std::size_t j = 0; j < bodies.size(); ++j) {
       // The order rotates by one engine per round, so no engine always runs first, right after
       // the last engine's slice (crux + MeshAdjacency did, and read 1.13-1.17x the uncorrected
-      // query where an in-process A/B harness measured 1.06: docs/narrowphase.md, session 12).
+      // query where an in-process A/B harness measured 1.06: docs/narrowphase.md, "Design choices (measured)").
       const std::size_t e = (j + std::size_t(k)) % bodies.size();
       std::size_t reps = 0;
       const auto t0 = std::chrono::steady_clock::now();

@@ -741,7 +741,7 @@ bool referenceCorrect(const MeshAdjacency& adjacency, const Triangle& meshTriang
 
 // contacts() with an adjacency corrects each point by a restructured, branch-reduced form of the
 // rule (a per-triangle FaceRule, a corner mask, a cheap edge-line drop, the activity and
-// tolerance read by BVH slot: docs/narrowphase.md, session 12). Here every triangle of the mesh
+// tolerance read by BVH slot: docs/narrowphase.md, "Design choices (measured)"). Here every triangle of the mesh
 // is run through the per-triangle routine by the test itself and corrected by referenceCorrect
 // (plus the rule that the deepest dropped point is kept when nothing kept is as deep); every
 // point contacts() reports must then be one of the reference's points (same triangle, position,

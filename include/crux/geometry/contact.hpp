@@ -64,12 +64,12 @@ inline constexpr Real kContactFaceAngleCos = Real(0.99939082701909573);
 
 /// Contact manifold of A and B: the points within `margin` (>= 0; separation <= margin) along
 /// the GJK/EPA normal. Returns out.count > 0. Never throws (but std::bad_alloc below), and
-/// allocates only in one rare case: when one operand is a core of 1-3 points (sphere, capsule,
-/// triangle, hull of <= 3 vertices) and the distance is within rounding of the margin, the margin
-/// is decided exactly (withinDistance, overlap.hpp; against a box or larger hull, with its
-/// boundary triangles), and when the filter cannot decide, the exact expansions may outgrow
-/// their inline storage (12 limbs; not seen on the tests' grid cases). Two boxes or hulls keep
-/// GJK's decision.
+/// allocates only in one rare case: when the distance is within rounding of the margin, the
+/// margin is decided exactly — for a core of 1-3 points (sphere, capsule, triangle, hull of <= 3
+/// vertices) by withinDistance (overlap.hpp), against a box or larger hull with its boundary
+/// triangles, and for two boxes or hulls by containment or a pair of boundary triangles
+/// (polytopesWithin, contact.cpp) — and when the filter cannot decide, the exact expansions may
+/// outgrow their inline storage (12 limbs; not seen on the tests' grid cases).
 bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb, Real margin,
               ContactManifold& out);
 

@@ -50,11 +50,10 @@
 /// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
 /// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
 /// across those seams (loadMesh merges identical vertices). Queries walk the mesh's 4-wide BVH
-/// when it keeps one (BvhBuildOptions::wide; a box tests four lanes at once), else its binary
-/// BVH: the same leaves in the same order, so the same manifold. The adjacency records the mesh's
-/// geometryId: after Mesh::setVertices its activity bits, tolerances, boxes and corners describe
-/// the old positions, and a query given it throws InvalidInput (requireCurrentGeometry) instead
-/// of reading them; rebuild it then.
+/// (a box tests four lanes at once). The adjacency records the mesh's geometryId: after
+/// Mesh::setVertices its activity bits, tolerances, boxes and corners describe the old positions,
+/// and a query given it throws InvalidInput (requireCurrentGeometry) instead of reading them;
+/// rebuild it then.
 ///
 /// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
 /// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×

@@ -18,12 +18,14 @@ namespace crux {
 struct MeshMemoryEstimate {
   std::size_t vertices = 0;
   std::size_t triangles = 0;
-  /// Held by the built Mesh: vertices, the index array and its BVH-ordered copy, BVH nodes
-  /// (at most 2·triangles - 1) and primitive indices. Mesh::memoryBytes() never exceeds it.
+  /// Held by the built Mesh: vertices, the index array and its BVH-ordered copy, the 4-wide
+  /// BVH's nodes (at most one per triangle) and primitive indices. Mesh::memoryBytes() never
+  /// exceeds it.
   std::size_t meshBytes = 0;
   /// Peak during construction: the vertices and indices, plus the BVH builder's temporaries
-  /// (triangle boxes, the builder's primitive array, and node arrays counted twice because the
-  /// parallel build assembles per-task node arrays before copying them into place).
+  /// (triangle boxes, the builder's primitive array, and binary node arrays counted twice
+  /// because the parallel build assembles per-task node arrays before copying them into place),
+  /// or, when larger, the widening step (the binary tree and the wide tree at once).
   std::size_t peakBytes = 0;
 };
 

@@ -1,8 +1,8 @@
 #pragma once
 /// @file mesh_point_query.hpp  The point of a mesh's surface closest to a query point.
 ///
-/// Best-first descent of the mesh's BVH (traverseBvhSlots, nearer child first, keyed by the
-/// squared distance from the point to the node box; a subtree is pruned when its box is farther
+/// Best-first descent of the mesh's 4-wide BVH (nearest lane first, keyed by the squared
+/// distance from the point to the lane's box; a subtree is pruned when its box is farther
 /// than the best triangle found so far), exact per triangle as closestPoint(Triangle, p)
 /// (closest_point.hpp, Ericson RTCD 5.1.5). The BVH path and the brute-force path
 /// (QueryPath::BruteForce, every triangle) give identical answers.
