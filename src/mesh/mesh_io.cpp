@@ -59,8 +59,10 @@ MeshMemoryEstimate estimateMeshMemory(std::size_t vertices, std::size_t triangle
   e.vertices = vertices;
   e.triangles = triangles;
   const std::size_t nodes = triangles == 0 ? 0 : mul(2, triangles) - 1;
-  // A wide node has at least two lanes, so there are fewer wide nodes than binary leaves.
-  const std::size_t wideNodes = triangles;
+  // Wide nodes: a node of fewer than four lanes has only leaf lanes (widenBvh opens inner lanes
+  // while it can), so with U four-lane nodes and B others over L <= triangles leaves,
+  // 4U + 2B <= (U + B − 1) + L and B <= L/2, hence U + B <= (2L − 1)/3 (and 1 for one leaf).
+  const std::size_t wideNodes = triangles == 0 ? 0 : std::max<std::size_t>(1, add(mul(2, triangles), 2) / 3);
   const std::size_t vertexBytes = mul(vertices, sizeof(Vec3));
   const std::size_t indexBytes = mul(triangles, sizeof(TriangleIndices));
   const std::size_t nodeBytes = mul(nodes, sizeof(BvhNode));
