@@ -173,6 +173,10 @@ int main(int argc, char** argv) {
                      "Directory of the bench executables and test_sanity (default: next to crux)");
   report->add_option("--render", reportOptions.renderFrom,
                      "Run nothing: re-render DIR's outputs from this results.json (of an earlier run)");
+  report->add_option("--diff-summary", reportOptions.diffSummary,
+                     "Show this crux diff summary (crux diff --json, or crux diff merge's output for a sharded "
+                     "campaign) instead of running crux diff")
+      ->check(CLI::ExistingFile);
   report->add_option("--compare", reportOptions.compareWith,
                      "An earlier run's results.json: per workload its figures beside today's, changes beyond "
                      "the measured noise flagged");

@@ -41,6 +41,10 @@ struct ReportOptions {
   /// An older results.json: per workload, its ratios beside today's, changes beyond the measured
   /// noise flagged (results.json "comparison").
   std::string compareWith;
+  /// A crux diff summary to show instead of running crux diff: `crux diff --json`'s output, or
+  /// `crux diff merge`'s for a campaign run in shards (docs/fuzzing.md). Its findings are listed
+  /// without replay lines (their case files stay with the campaign).
+  std::string diffSummary;
   /// Progress on stderr: a redrawn status line (step, how far, time left). Off when stderr is
   /// not a terminal; every step is logged to outDir/raw/progress.log either way.
   bool progressLine = false;

@@ -250,6 +250,51 @@ TEST_F(ReportRun, SummaryHoldsTheHeadlineTable) {
   EXPECT_NE(md.find("crux diff"), std::string::npos);
 }
 
+// A campaign's (or any earlier run's) crux diff summary stands in for a fresh crux diff run:
+// the report reads it, counts its cases and crux-wrong answers in the verdict, and names it.
+// No bench is run here (an empty --bin-dir): only the cross-validation part matters.
+TEST(ReportCommand, ShowsAnExistingDiffSummaryInsteadOfRunningCruxDiff) {
+  char pattern[] = "/tmp/crux_test_report_summary_XXXXXX";
+  const char* dir = mkdtemp(pattern);
+  ASSERT_NE(dir, nullptr);
+  const std::string tmp = dir, summary = tmp + "/summary.json", empty = tmp + "/bin";
+  ASSERT_EQ(std::system(("mkdir -p " + empty).c_str()), 0);
+  const std::string crux = crux::cli::test::cruxExecutable();
+  const auto diff = crux::cli::test::run(crux + " diff --seed 5 --cases 40 --backends native --quiet --json " +
+                                         summary + " 2>&1");
+  ASSERT_TRUE(exists(summary)) << diff.second;
+  const Json expected = Json::parse(readFile(summary));
+  ASSERT_GT(expected.value("cases", 0), 0);
+  const auto [status, out] = crux::cli::test::run(crux + " report --budget tiny --bin-dir " + empty + " --out " + tmp +
+                                                  "/report --diff-summary " + summary + " 2>&1");
+  EXPECT_TRUE(status == 0 || status == 1) << out;
+  const Json results = Json::parse(readFile(tmp + "/report/results.json"), nullptr, false);
+  ASSERT_FALSE(results.is_discarded()) << out;
+  const Json& step = results["cross_validation"]["diff"];
+  ASSERT_TRUE(step.value("available", false)) << step.dump();
+  EXPECT_EQ(step["summary"], summary);
+  EXPECT_EQ(step["data"]["cases"], expected["cases"]);
+  EXPECT_EQ(results["verdict"]["correctness"]["diff_cases"], expected["cases"]);
+  EXPECT_EQ(results["verdict"]["correctness"]["crux_wrong"], expected.value("crux_wrong", 0));
+  EXPECT_FALSE(exists(tmp + "/report/raw/diff.log")) << "crux diff ran";
+
+  // A file that is not a diff summary: the section is "not available", naming the file.
+  const std::string bogus = tmp + "/bogus.json";
+  ASSERT_EQ(std::system(("echo '{\"cases\": 3}' > " + bogus).c_str()), 0);
+  crux::cli::test::run(crux + " report --budget tiny --bin-dir " + empty + " --out " + tmp + "/report2 --diff-summary " +
+                       bogus + " 2>&1");
+  const Json second = Json::parse(readFile(tmp + "/report2/results.json"), nullptr, false);
+  ASSERT_FALSE(second.is_discarded());
+  EXPECT_FALSE(second["cross_validation"]["diff"].value("available", true));
+  EXPECT_NE(second["cross_validation"]["diff"].value("reason", "").find(bogus), std::string::npos);
+  // A missing file is refused on the command line.
+  const auto missing = crux::cli::test::run(crux + " report --budget tiny --out " + tmp + "/report3 --diff-summary " + tmp +
+                                            "/absent.json 2>&1");
+  EXPECT_NE(missing.first, 0);
+  EXPECT_NE(missing.second.find("absent.json"), std::string::npos) << missing.second;
+  if (!::testing::Test::HasFailure()) std::system(("rm -rf " + tmp).c_str());
+}
+
 TEST(ReportCommand, RejectsAnUnknownBudget) {
   const auto [status, out] =
       crux::cli::test::run(crux::cli::test::cruxExecutable() + " report --budget huge --out /tmp/x 2>&1");
