@@ -23,6 +23,7 @@
 #include <crux/mesh/mesh_contact.hpp>
 
 #include "bench_output.hpp"
+#include "peer_rows.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -65,25 +66,20 @@
 namespace {
 
 using namespace crux;
+using bench::EngineRow;
+using bench::WorkloadRow;
+#if CRUX_BENCH_HAVE_FCL
+using bench::FclMesh;
+using bench::fclMesh;
+using bench::toFcl;
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+using bench::toBt;
+#endif
 
 bool quick = false;
 std::string continuousCollideNote, fclNote;  // what fcl::continuousCollide did (printed once, in every row's notes)
 
-// ---- JSON rows (the schema of bench_contact) -------------------------------------------------
-
-struct EngineRow {
-  std::string name, config;
-  std::vector<double> runs;  // seconds per query, one per round
-  double median = 0;         // seconds per query
-  double ratio = NAN;        // median per-round engine / crux
-  std::string agreement = "ref", detail;
-};
-struct WorkloadRow {
-  std::string key, title;
-  std::size_t queries = 0;
-  std::vector<std::string> notes;
-  std::vector<EngineRow> engines;
-};
 std::vector<WorkloadRow> rows;
 
 /// One line of the targets section.
@@ -94,97 +90,13 @@ struct Target {
 };
 std::vector<Target> targets;
 
-// ---- interleaved timing (bench_contact's timeInterleaved) ------------------------------------
-
-struct Interleaved {
-  std::vector<double> median, ratio;
-  std::vector<std::vector<double>> runs;
-};
-Interleaved timeInterleaved(std::size_t n, const std::vector<std::function<double()>>& bodies) {
-  const int rounds = quick ? 5 : 9;
-  const double slice = quick ? 0.03 : 0.1;
-  Interleaved r;
-  r.runs.assign(bodies.size(), {});
-  volatile double sink = 0;
-  for (int k = 0; k < rounds; ++k)
-    for (std::size_t j = 0; j < bodies.size(); ++j) {
-      const std::size_t e = (j + std::size_t(k)) % bodies.size();  // order rotates each round
-      std::size_t reps = 0;
-      const auto t0 = std::chrono::steady_clock::now();
-      double elapsed = 0;
-      do {
-        sink = sink + bodies[e]();
-        ++reps;
-        elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      } while (elapsed < slice);
-      r.runs[e].push_back(elapsed * 1e9 / double(reps * n));
-    }
-  for (std::size_t e = 0; e < bodies.size(); ++e) {
-    r.median.push_back(bench::median(r.runs[e]));
-    std::vector<double> q;
-    for (int k = 0; k < rounds; ++k) q.push_back(r.runs[e][std::size_t(k)] / r.runs[0][std::size_t(k)]);
-    r.ratio.push_back(bench::median(q));
-  }
-  return r;
-}
-
-// ---- peers' scenes ----------------------------------------------------------------------------
-
-#if CRUX_BENCH_HAVE_FCL
-using FclMesh = fcl::BVHModel<fcl::OBBRSSd>;
-std::shared_ptr<FclMesh> fclMesh(const Mesh& m) {
-  std::vector<fcl::Vector3d> points;
-  for (const Vec3& v : m.vertices()) points.push_back(v.cast<double>());
-  std::vector<fcl::Triangle> tris;
-  for (const TriangleIndices& t : m.triangles()) tris.emplace_back(t[0], t[1], t[2]);
-  auto model = std::make_shared<FclMesh>();
-  model->beginModel(int(tris.size()), int(points.size()));
-  model->addSubModel(points, tris);
-  model->endModel();
-  return model;
-}
-fcl::Transform3d toFcl(const Transform& t, const Vec3& offset = Vec3::Zero()) {
-  fcl::Transform3d tf = fcl::Transform3d::Identity();
-  tf.linear() = t.rotation.cast<double>().toRotationMatrix();
-  tf.translation() = t.translation.cast<double>() + offset.cast<double>();
-  return tf;
-}
-#endif
 
 #if CRUX_BENCH_HAVE_BULLET
-btTransform toBt(const Transform& t, const Vec3& offset = Vec3::Zero()) {
-  const Eigen::Quaterniond q = t.rotation.cast<double>();
-  const Vec3 p = t.translation + offset;
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-                     btVector3(btScalar(p.x()), btScalar(p.y()), btScalar(p.z())));
-}
-
-/// Bullet's collision world holding one static btBvhTriangleMeshShape (margin 0) at the identity.
-struct BulletMeshScene {
-  std::vector<btScalar> positions;
-  std::vector<int> indices;
-  std::unique_ptr<btTriangleIndexVertexArray> array;
-  std::unique_ptr<btBvhTriangleMeshShape> shape;
-  btCollisionObject meshObject;
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btCollisionWorld world{&dispatcher, &broadphase, &configuration};
-  explicit BulletMeshScene(const Mesh& m) {
-    for (const Vec3& v : m.vertices())
-      for (int i = 0; i < 3; ++i) positions.push_back(btScalar(v[i]));
-    for (const TriangleIndices& t : m.triangles())
-      for (int i = 0; i < 3; ++i) indices.push_back(int(t[i]));
-    array = std::make_unique<btTriangleIndexVertexArray>(int(m.triangleCount()), indices.data(), int(3 * sizeof(int)),
-                                                         int(m.vertices().size()), positions.data(),
-                                                         int(3 * sizeof(btScalar)));
-    shape = std::make_unique<btBvhTriangleMeshShape>(array.get(), true, true);
-    shape->setMargin(0);
-    meshObject.setCollisionShape(shape.get());
-    meshObject.getWorldTransform().setIdentity();
-    world.addCollisionObject(&meshObject);
-  }
-  ~BulletMeshScene() { world.removeCollisionObject(&meshObject); }
+/// The mesh's Bullet scene (peer_rows.hpp) with the mesh object in the world, as
+/// convexSweepTest needs it.
+struct BulletSweepScene : bench::BulletMeshScene {
+  explicit BulletSweepScene(const Mesh& m) : BulletMeshScene(m) { world.addCollisionObject(&meshObject); }
+  ~BulletSweepScene() { world.removeCollisionObject(&meshObject); }
 };
 #endif
 
@@ -391,7 +303,7 @@ void run(const std::string& path, int perRow) {
   fclRequest.ccd_solver_type = fcl::CCDC_CONSERVATIVE_ADVANCEMENT;
 #endif
 #if CRUX_BENCH_HAVE_BULLET
-  BulletMeshScene bullet(m);
+  BulletSweepScene bullet(m);
 #endif
 
   std::mt19937_64 rng(2026);
@@ -581,7 +493,7 @@ void run(const std::string& path, int perRow) {
       }
 #endif
       // ---- timings.
-      const Interleaved tm = timeInterleaved(qs.size(), bodies);
+      const bench::Interleaved tm = bench::timeInterleaved(qs.size(), bodies, quick ? 5 : 9, quick ? 0.03 : 0.1);
       std::printf("%-38s %12s %10s   (interleaved: %d rounds; ratio = median per-round peer/crux)\n", "query",
                   "ns/query", "peer/crux", int(tm.runs[0].size()));
       for (std::size_t e = 0; e < names.size(); ++e) {
@@ -632,25 +544,9 @@ void writeJson(const std::string& path) {
       << ",\n  \"runs\": " << (quick ? 5 : 9) << ",\n  \"seconds_per_run\": " << jsonNumber(quick ? 0.03 : 0.1)
       << ",\n  \"reported_clock\": \"wall\",\n  \"info\": {"
       << "\"build_type\": " << jsonString(CRUX_BENCH_BUILD_TYPE)
-      << ", \"crux_real\": " << jsonString(sizeof(Real) == 8 ? "double" : "float") << "},\n  \"workloads\": [";
-  for (std::size_t wi = 0; wi < rows.size(); ++wi) {
-    const WorkloadRow& w = rows[wi];
-    out << (wi ? "," : "") << "\n    {\"key\": " << jsonString(w.key) << ", \"title\": " << jsonString(w.title)
-        << ", \"unit\": \"query\", \"queries\": " << w.queries << ", \"notes\": [";
-    for (std::size_t i = 0; i < w.notes.size(); ++i) out << (i ? ", " : "") << jsonString(w.notes[i]);
-    out << "], \"engines\": [";
-    for (std::size_t ei = 0; ei < w.engines.size(); ++ei) {
-      const EngineRow& e = w.engines[ei];
-      out << (ei ? "," : "") << "\n      {\"name\": " << jsonString(e.name) << ", \"config\": " << jsonString(e.config)
-          << ", \"wall_seconds_per_query_runs\": [";
-      for (std::size_t i = 0; i < e.runs.size(); ++i) out << (i ? ", " : "") << jsonNumber(e.runs[i]);
-      out << "], \"wall_seconds_per_query_median\": " << jsonNumber(e.median)
-          << ", \"ratio_to_crux\": " << jsonNumber(e.ratio) << ", \"agreement\": " << jsonString(e.agreement)
-          << ", \"detail\": " << jsonString(e.detail) << "}";
-    }
-    out << "]}";
-  }
-  out << "\n  ]\n}\n";
+      << ", \"crux_real\": " << jsonString(sizeof(Real) == 8 ? "double" : "float") << "},\n  \"workloads\": ";
+  bench::writeWorkloads(out, rows);
+  out << "\n}\n";
 }
 
 }  // namespace

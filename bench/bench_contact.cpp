@@ -24,6 +24,7 @@
 #include <crux/mesh/mesh_distance.hpp>
 
 #include "bench_output.hpp"
+#include "peer_rows.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -66,6 +67,17 @@
 namespace {
 
 using namespace crux;
+using bench::EngineRow;
+using bench::WorkloadRow;
+#if CRUX_BENCH_HAVE_FCL
+using bench::FclMesh;
+using bench::fclMesh;
+using bench::toFcl;
+#endif
+#if CRUX_BENCH_HAVE_BULLET
+using bench::BulletMeshScene;
+using bench::toBt;
+#endif
 
 struct Pair {
   int a, b;  // shape indices
@@ -89,20 +101,6 @@ bool quick = false;
 std::vector<double> lastRuns;
 std::size_t lastQueries = 0;
 
-/// One engine's figures in a workload (JSON "engines" entry).
-struct EngineRow {
-  std::string name, config;
-  std::vector<double> runs;  // seconds per query, one per run
-  double median = 0;         // seconds per query
-  std::string agreement = "ref", detail;
-};
-/// One query kind on one pair set (JSON "workloads" entry); engines.front() is crux.
-struct WorkloadRow {
-  std::string key, title;
-  std::size_t queries = 0;
-  std::vector<std::string> notes;
-  std::vector<EngineRow> engines;
-};
 std::vector<WorkloadRow> rows;
 
 /// Starts a JSON workload row.
@@ -113,7 +111,7 @@ WorkloadRow& beginRow(const std::string& key, const std::string& title, std::siz
 /// Adds the engine just timed (lastRuns) to the current row.
 void addEngine(const std::string& name, const std::string& config, double ns, const std::string& agreement = "ref",
                const std::string& detail = "") {
-  EngineRow e{name, config, {}, ns * 1e-9, agreement, detail};
+  EngineRow e{name, config, {}, ns * 1e-9, NAN, agreement, detail};
   for (double r : lastRuns) e.runs.push_back(r * 1e-9);
   rows.back().engines.push_back(e);
 }
@@ -139,49 +137,6 @@ double timeIt(std::size_t n, const std::function<double()>& body) {
   return samples[samples.size() / 2];
 }
 
-/// Interleaved timing of several engines on the same n queries: `rounds` rounds, in each every
-/// body runs repeatedly for ~`slice` seconds in turn, starting one engine later each round (so
-/// the load of a shared machine, and the cold caches after another engine's slice, fall on all
-/// engines alike). median[e]: median ns/query of engine e; ratio[e]: median over the rounds
-/// of (engine e / engine 0) in the same round; runs[e]: ns/query per round.
-struct Interleaved {
-  std::vector<double> median, ratio;
-  std::vector<std::vector<double>> runs;
-};
-Interleaved timeInterleaved(std::size_t n, const std::vector<std::function<double()>>& bodies) {
-  const int rounds = quick ? 5 : 9;
-  const double slice = quick ? 0.03 : 0.1;
-  Interleaved r;
-  r.runs.assign(bodies.size(), {});
-  volatile double sink = 0;
-  for (int k = 0; k < rounds; ++k)
-    for (std::size_t j = 0; j < bodies.size(); ++j) {
-      // The order rotates by one engine per round, so no engine always runs first, right after
-      // the last engine's slice (crux + MeshAdjacency did, and read 1.13-1.17x the uncorrected
-      // query where an in-process A/B harness measured 1.06: docs/narrowphase.md, "Design choices (measured)").
-      const std::size_t e = (j + std::size_t(k)) % bodies.size();
-      std::size_t reps = 0;
-      const auto t0 = std::chrono::steady_clock::now();
-      double elapsed = 0;
-      do {
-        sink = sink + bodies[e]();
-        ++reps;
-        elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      } while (elapsed < slice);
-      r.runs[e].push_back(elapsed * 1e9 / double(reps * n));
-    }
-  auto median = [](std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-  };
-  for (std::size_t e = 0; e < bodies.size(); ++e) {
-    r.median.push_back(median(r.runs[e]));
-    std::vector<double> q;
-    for (int k = 0; k < rounds; ++k) q.push_back(r.runs[e][std::size_t(k)] / r.runs[0][std::size_t(k)]);
-    r.ratio.push_back(median(q));
-  }
-  return r;
-}
 
 Transform randomPose(std::mt19937_64& rng, double spread) {
   std::normal_distribution<double> g;
@@ -192,14 +147,6 @@ Transform randomPose(std::mt19937_64& rng, double spread) {
   return t;
 }
 
-#if CRUX_BENCH_HAVE_FCL
-fcl::Transform3d toFcl(const Transform& t) {
-  fcl::Transform3d tf = fcl::Transform3d::Identity();
-  tf.linear() = t.rotation.cast<double>().toRotationMatrix();
-  tf.translation() = t.translation.cast<double>();
-  return tf;
-}
-#endif
 
 std::vector<std::unique_ptr<ConvexHull>> hullStore;
 
@@ -415,20 +362,6 @@ std::vector<MeshPlacement> placeCopies(const Mesh& m, double target, int count, 
   return out;
 }
 
-#if CRUX_BENCH_HAVE_FCL
-using FclMesh = fcl::BVHModel<fcl::OBBRSSd>;
-std::shared_ptr<FclMesh> fclMesh(const Mesh& m) {
-  std::vector<fcl::Vector3d> points;
-  for (const Vec3& v : m.vertices()) points.push_back(v.cast<double>());
-  std::vector<fcl::Triangle> tris;
-  for (const TriangleIndices& t : m.triangles()) tris.emplace_back(t[0], t[1], t[2]);
-  auto model = std::make_shared<FclMesh>();
-  model->beginModel(int(tris.size()), int(points.size()));
-  model->addSubModel(points, tris);
-  model->endModel();
-  return model;
-}
-#endif
 
 void runMeshDistance(const std::string& path, int perSeparation) {
   std::printf("\n== mesh-mesh distance: %s vs a rotated copy\n", path.c_str());
@@ -498,7 +431,7 @@ void runMeshDistance(const std::string& path, int perSeparation) {
       return s;
     });
 #endif
-    const Interleaved tm = timeInterleaved(ps.size(), bodies);
+    const bench::Interleaved tm = bench::timeInterleaved(ps.size(), bodies, quick ? 5 : 9, quick ? 0.03 : 0.1);
     auto roundRatio = [&](std::size_t num, std::size_t den) {
       std::vector<double> q;
       for (std::size_t k = 0; k < tm.runs[num].size(); ++k) q.push_back(tm.runs[num][k] / tm.runs[den][k]);
@@ -605,38 +538,6 @@ ContactAnswer cruxAnswer(const Mesh& m, const ConvexShape& shape, const Transfor
 }
 
 #if CRUX_BENCH_HAVE_BULLET
-btTransform toBt(const Transform& t) {
-  const Eigen::Quaterniond q = t.rotation.cast<double>();
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())),
-                     btVector3(btScalar(t.translation.x()), btScalar(t.translation.y()), btScalar(t.translation.z())));
-}
-
-/// Bullet's collision world around one static btBvhTriangleMeshShape (margin 0).
-struct BulletMeshScene {
-  std::vector<btScalar> positions;
-  std::vector<int> indices;
-  std::unique_ptr<btTriangleIndexVertexArray> array;
-  std::unique_ptr<btBvhTriangleMeshShape> shape;
-  btDefaultCollisionConfiguration configuration;
-  btCollisionDispatcher dispatcher{&configuration};
-  btDbvtBroadphase broadphase;
-  btCollisionWorld world{&dispatcher, &broadphase, &configuration};
-  btCollisionObject meshObject;
-  explicit BulletMeshScene(const Mesh& m) {
-    for (const Vec3& v : m.vertices())
-      for (int i = 0; i < 3; ++i) positions.push_back(btScalar(v[i]));
-    for (const TriangleIndices& t : m.triangles())
-      for (int i = 0; i < 3; ++i) indices.push_back(int(t[i]));
-    array = std::make_unique<btTriangleIndexVertexArray>(int(m.triangleCount()), indices.data(), int(3 * sizeof(int)),
-                                                         int(m.vertices().size()), positions.data(),
-                                                         int(3 * sizeof(btScalar)));
-    shape = std::make_unique<btBvhTriangleMeshShape>(array.get(), true, true);
-    shape->setMargin(0);
-    meshObject.setCollisionShape(shape.get());
-    meshObject.getWorldTransform().setIdentity();
-  }
-};
-
 /// Smallest distance and number of points contactPairTest reports.
 struct BulletMinDistance : btCollisionWorld::ContactResultCallback {
   btScalar minDistance = BT_LARGE_FLOAT;
@@ -874,7 +775,7 @@ void runMeshContacts(const std::string& path, int perKind) {
       return sum;
     });
 #endif
-    const Interleaved tm = timeInterleaved(ps.size(), bodies);
+    const bench::Interleaved tm = bench::timeInterleaved(ps.size(), bodies, quick ? 5 : 9, quick ? 0.03 : 0.1);
     std::printf("%-34s %12s %10s   (interleaved: %d rounds; ratio = median per-round peer/crux)\n", "query",
                 "ns/query", "peer/crux", int(tm.runs[0].size()));
     for (std::size_t e = 0; e < names.size(); ++e) {
@@ -939,26 +840,9 @@ void writeJson(const std::string& path) {
   out << "{\n  \"bench\": \"bench_contact\",\n  \"quick\": " << (quick ? "true" : "false") << ",\n  \"runs\": " << runs
       << ",\n  \"seconds_per_run\": " << jsonNumber(seconds) << ",\n  \"reported_clock\": \"wall\",\n  \"info\": {"
       << "\"build_type\": " << jsonString(CRUX_BENCH_BUILD_TYPE)
-      << ", \"crux_real\": " << jsonString(sizeof(Real) == 8 ? "double" : "float") << "},\n  \"workloads\": [";
-  for (std::size_t wi = 0; wi < rows.size(); ++wi) {
-    const WorkloadRow& w = rows[wi];
-    out << (wi ? "," : "") << "\n    {\"key\": " << jsonString(w.key) << ", \"title\": " << jsonString(w.title)
-        << ", \"unit\": \"query\", \"queries\": " << w.queries << ", \"notes\": [";
-    for (std::size_t i = 0; i < w.notes.size(); ++i) out << (i ? ", " : "") << jsonString(w.notes[i]);
-    out << "], \"engines\": [";
-    const double crux = w.engines.empty() ? 0 : w.engines.front().median;
-    for (std::size_t ei = 0; ei < w.engines.size(); ++ei) {
-      const EngineRow& e = w.engines[ei];
-      out << (ei ? "," : "") << "\n      {\"name\": " << jsonString(e.name) << ", \"config\": " << jsonString(e.config)
-          << ", \"wall_seconds_per_query_runs\": [";
-      for (std::size_t i = 0; i < e.runs.size(); ++i) out << (i ? ", " : "") << jsonNumber(e.runs[i]);
-      out << "], \"wall_seconds_per_query_median\": " << jsonNumber(e.median)
-          << ", \"ratio_to_crux\": " << jsonNumber(crux > 0 ? e.median / crux : NAN)
-          << ", \"agreement\": " << jsonString(e.agreement) << ", \"detail\": " << jsonString(e.detail) << "}";
-    }
-    out << "]}";
-  }
-  out << "\n  ]\n}\n";
+      << ", \"crux_real\": " << jsonString(sizeof(Real) == 8 ? "double" : "float") << "},\n  \"workloads\": ";
+  bench::writeWorkloads(out, rows);
+  out << "\n}\n";
 }
 }  // namespace
 
