@@ -7,6 +7,7 @@
 #include <crux/error.hpp>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
+#include <crux/geometry/triangle_distance.hpp>
 #include <crux/mesh/mesh.hpp>
 
 #include <Eigen/Geometry>
@@ -279,6 +280,33 @@ double smallestHeight(const std::array<V, 3>& t) {
   const Vec3d a(t[0][0], t[0][1], t[0][2]), b(t[1][0], t[1][1], t[1][2]), c(t[2][0], t[2][1], t[2][2]);
   const double longest = std::max({(b - a).norm(), (c - b).norm(), (a - c).norm()});
   return longest > 0 ? (b - a).cross(c - a).norm() / longest : 0;
+}
+
+/// The gap between the shapes of a triangle_plane or triangle_triangle case as the backends see
+/// them (coordinates in Real): the triangle's distance to the plane (0 when its corners are on
+/// both sides), or the triangles' distance (closestPoints); NaN for other ops.
+double caseGap(const DiffCase& c, const J& query) {
+  auto triangle = [](const J& t) {
+    return Triangle{Vec3(Real(t[0][0].get<double>()), Real(t[0][1].get<double>()), Real(t[0][2].get<double>())),
+                    Vec3(Real(t[1][0].get<double>()), Real(t[1][1].get<double>()), Real(t[1][2].get<double>())),
+                    Vec3(Real(t[2][0].get<double>()), Real(t[2][1].get<double>()), Real(t[2][2].get<double>()))};
+  };
+  if (c.op == "triangle_plane" && query.contains("triangle") && query.contains("plane")) {
+    const Triangle t = triangle(query["triangle"]);
+    const V nv = readV(query["plane"]["normal"]);
+    const Vec3d n = Vec3d(double(Real(nv[0])), double(Real(nv[1])), double(Real(nv[2])));
+    const double d = double(Real(query["plane"]["d"].get<double>())), len = n.norm();
+    if (!(len > 0)) return NAN;
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Vec3& p : {t.a, t.b, t.c}) {
+      const double side = (n.dot(p.cast<double>()) - d) / len;
+      lo = std::min(lo, side), hi = std::max(hi, side);
+    }
+    return lo <= 0 && hi >= 0 ? 0 : std::min(std::fabs(lo), std::fabs(hi));
+  }
+  if (c.op == "triangle_triangle" && query.contains("a") && query.contains("b"))
+    return double(closestPoints(triangle(query["a"]), triangle(query["b"])).distance);
+  return NAN;
 }
 
 /// A ray origin or segment endpoint lying exactly on the plane of a (non-degenerate) triangle.
@@ -989,6 +1017,12 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
       if (!e.count(p)) return peer("gimpact-triangle-pairs");
   }
   if (within) return peer("boundary");
+  // A peer's hit on shapes within τ of each other, though no probe flips exact's miss: the gap is
+  // below an ulp of the coordinates, so a probe's offset vanishes when the moved case is parsed
+  // into Real (a triangle 1e-7 from a plane at coordinates ~8, in a float build). The peer's
+  // hit is within its declared tolerance.
+  if (diff == Difference::Boolean && got.value("hit", false) && !exact.value("hit", true) && caseGap(c, query) <= tau)
+    return {Verdict::WithinTolerance, "boundary", detail.str()};
   if (diff == Difference::Numeric) {
     // both found a contact; the numbers differ beyond the declared tolerance
     double worst = maxDiff(got["point"], exact["point"]);

@@ -332,6 +332,31 @@ TEST(DiffClassify, TriangleNearPlaneWithinBulletTolerance) {
   EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
 }
 
+TEST(DiffClassify, PeerHitCloserToTouchingThanAnUlpIsWithinTolerance) {
+  // found by crux diff --seed 1 (cases 2635 and 5439, float build): a triangle lying in a plane
+  // within ~1.5e-7 at coordinates ~8, and two triangles 3.6e-7 from coplanar; exact says miss,
+  // Bullet hit. No probe flips exact's answer (an offset below an ulp of the coordinates vanishes
+  // when the moved case is parsed into Real), but the shapes are within Bullet's τ.
+  DiffRunner runner;
+  const auto plane = primitive(
+      R"({"op":"triangle_plane","triangle":[[6.358982699897318,-1.0164759925791254,8.028470993041992],[0.09915792809062118,4.767565672721181,7.428925037384033],[2.4610916664683553,2.688000564405348,7.739855766296387]],"plane":{"normal":[-0.551641131351399,-0.5302836786022467,0.643809974193573],"d":2.199954032897949}})",
+      false);
+  const auto triangles = primitive(
+      R"({"op":"triangle_triangle","a":[[2,0.25,0],[2,0,0],[2,0,0.25]],"b":[[1.9999996423721313,0,0],[2,0,1],[2,1,0]]})",
+      false);
+  for (const auto* c : {&plane, &triangles}) {
+    if (runner.run(*c, "exact").value("hit", true)) GTEST_SKIP() << "exact hits in this precision: nothing to classify";
+    const auto k = classify(runner, *c, "bullet", answer(c->op, true));
+    EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+    EXPECT_EQ(k.cause, "boundary") << describe(k);
+  }
+  // the same plane moved 1 away: a hit is beyond any tolerance
+  auto far = plane;
+  far.query = R"({"op":"triangle_plane","triangle":[[6.358982699897318,-1.0164759925791254,8.028470993041992],[0.09915792809062118,4.767565672721181,7.428925037384033],[2.4610916664683553,2.688000564405348,7.739855766296387]],"plane":{"normal":[-0.551641131351399,-0.5302836786022467,0.643809974193573],"d":3.199954032897949}})";
+  const auto k = classify(runner, far, "bullet", answer("triangle_plane", true));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+}
+
 TEST(DiffCase, TranslatedCaseMovesTheQueryShape) {
   const auto c = primitive(kTouching, true);
   const auto moved = translatedCase(c, Vec3d(1, 2, 3));
