@@ -240,9 +240,24 @@ py::object castBatch(const PyMesh& self, py::handle shapesIn, std::size_t width,
     throw InvalidInput(std::string("motions: expected the leading shape of ") + name + " (one motion per shape)");
   validateRows<Shape>(rows);
   const Shape* shapes = rows.as<Shape>();
-  for (std::size_t i = 0; i < rows.count; ++i) validate(ConvexShape(shapes[i]), rows.rowName(i));
+  // plain names first (no string built per row); the failing row is named on the second try
+  for (std::size_t i = 0; i < rows.count; ++i) {
+    try {
+      validate(ConvexShape(shapes[i]), rows.name);
+    } catch (const InvalidInput&) {
+      validate(ConvexShape(shapes[i]), rows.rowName(i));
+      throw;
+    }
+  }
   const Vec3* motions = motionRows.as<Vec3>();
-  for (std::size_t i = 0; i < motionRows.count; ++i) validateMotion(motions[i], "motions[" + std::to_string(i) + "]");
+  for (std::size_t i = 0; i < motionRows.count; ++i) {
+    try {
+      validateMotion(motions[i], "motions");
+    } catch (const InvalidInput&) {
+      validateMotion(motions[i], motionRows.rowName(i));
+      throw;
+    }
+  }
   auto t = newArray<Real>(rows.lead);
   auto tri = newArray<std::int64_t>(rows.lead);
   auto pointShape = newArray<Real>(rows.lead, {3});
