@@ -603,11 +603,4 @@ Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id) {
   return box;
 }
 
-void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds) {
-  if (slotBounds.size() != bvh.primIndices.size())
-    throw InvalidInput("refitWideBvh: expected " + std::to_string(bvh.primIndices.size()) + " slot bounds, got " +
-                       std::to_string(slotBounds.size()));
-  refitWideBvhSlots(bvh, [&](std::uint32_t k) -> const Aabb& { return slotBounds[k]; });
-}
-
 }  // namespace crux

@@ -219,9 +219,6 @@ void refitWideBvhSlots(WideBvh& bvh, const SlotBox& slotBox) {
   }
 }
 
-/// refitWideBvhSlots with the boxes given in slot order (slotBounds[k]); throws InvalidInput
-/// unless there is one per primitive.
-void refitWideBvh(WideBvh& bvh, const std::vector<Aabb>& slotBounds);
 
 /// Depth-first traversal of a WideBvh, visiting the leaves in the order traverseBvhSlots visits
 /// the binary BVH's with equal keys (lanes in order, each lane's subtree before the next lane).
