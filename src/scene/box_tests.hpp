@@ -4,7 +4,10 @@
 
 #include <crux/error.hpp>
 #include <crux/geometry/overlap.hpp>
+#include <crux/mesh/bvh.hpp>
 #include <crux/scene/broad_phase.hpp>
+
+#include "../mesh/lanes.hpp"
 
 #include <string>
 
@@ -50,5 +53,33 @@ struct ObbRegion {
   bool leaf(const Aabb& box) const { return boxesTouch(box, enclosing) && overlaps(box, shape); }
   bool node(const Aabb& bounds) const { return boxesTouch(bounds, enclosing); }
 };
+
+/// rayBoxEntry for the four lane boxes of a wide node at once: bit i of the result is
+/// rayBoxEntry(ray, node.laneBounds(i), maxT, entry[i]), entry[i] its entry distance. Each lane
+/// goes through the same operations in the same order (grow by the margin, slab parameters,
+/// NaN-free max and min), so the answers are rayBoxEntry's, bit for bit; unused lanes (empty
+/// boxes) are never entered. Like rayBoxEntry it is monotone in the box, so a lane whose box
+/// contains a leaf's box is entered whenever the leaf's is, and no earlier entry is missed.
+inline unsigned rayLaneEntry(const RaySlabs& ray, const WideBvhNode& node, Real maxT, Real (&entry)[4]) {
+  using namespace mesh_detail;
+  const Real* mins[3] = {node.minX, node.minY, node.minZ};
+  const Real* maxs[3] = {node.maxX, node.maxY, node.maxZ};
+  Lanes tNear = {0, 0, 0, 0}, tFar = {maxT, maxT, maxT, maxT};
+  LaneBits inside = {-1, -1, -1, -1};
+  for (int i = 0; i < 3; ++i) {
+    const Lanes lo = lanesLoad(mins[i]) - ray.margin, hi = lanesLoad(maxs[i]) + ray.margin;
+    const Real o = ray.origin[i];
+    if (ray.parallel[i]) {
+      inside &= (lo <= o) & (o <= hi);
+      continue;
+    }
+    const Lanes t1 = ((ray.negative[i] ? hi : lo) - o) * ray.invDir[i];
+    const Lanes t2 = ((ray.negative[i] ? lo : hi) - o) * ray.invDir[i];
+    tNear = lanesSelect(t1 > tNear, t1, tNear);
+    tFar = lanesSelect(t2 < tFar, t2, tFar);
+  }
+  std::memcpy(entry, &tNear, sizeof entry);
+  return laneMask(inside & (tNear <= tFar));
+}
 
 }  // namespace crux::detail

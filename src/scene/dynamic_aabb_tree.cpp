@@ -2,7 +2,10 @@
 
 #include "box_tests.hpp"
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
 namespace crux {
@@ -36,6 +39,8 @@ DynamicAabbTree::DynamicAabbTree(const DynamicAabbTreeOptions& options) : option
     throw InvalidInput("DynamicAabbTreeOptions.marginFraction must be finite and >= 0");
   if (!(options.displacementMultiplier >= 0) || !std::isfinite(options.displacementMultiplier))
     throw InvalidInput("DynamicAabbTreeOptions.displacementMultiplier must be finite and >= 0");
+  if (!(options.rayTreeRaysPerBox >= 0))
+    throw InvalidInput("DynamicAabbTreeOptions.rayTreeRaysPerBox must be >= 0 (+inf: never)");
 }
 
 Aabb DynamicAabbTree::fatten(const Aabb& box) const {
@@ -257,6 +262,12 @@ double DynamicAabbTree::innerArea() const {
 void DynamicAabbTree::markChanged(ProxyId id, std::uint8_t flag) {
   if (flags_[id] == 0) changed_.push_back(id);
   flags_[id] |= flag;
+  dropRayTree();
+}
+
+void DynamicAabbTree::dropRayTree() {
+  rayTreeReady_.store(false, std::memory_order_relaxed);
+  raysSinceChange_.store(0, std::memory_order_relaxed);
 }
 
 void DynamicAabbTree::insert(ProxyId id, const Aabb& box) {
@@ -324,6 +335,7 @@ void DynamicAabbTree::clear() {
   changed_.clear();
   pairKeys_.clear();
   pairOverlap_.clear();
+  dropRayTree();
 }
 
 bool DynamicAabbTree::contains(ProxyId id) const { return id < entries_.size() && entries_[id].leaf != kNull; }
@@ -371,8 +383,81 @@ bool DynamicAabbTree::query(const Obb& box, ProxyCollector& collector) const {
   return queryRegion(detail::ObbRegion(box), collector);
 }
 
+// Builds the wide ray tree over the exact boxes, once per change (the first caller past the
+// threshold; the others wait on the mutex and find it built). The build runs isolated: a TBB
+// worker holding the mutex must not pick up another ray of an enclosing batch, which would wait
+// on the same mutex.
+void DynamicAabbTree::buildRayTree() const {
+  const std::lock_guard<std::mutex> lock(rayTreeMutex_);
+  if (rayTreeReady_.load(std::memory_order_relaxed)) return;
+  std::vector<Aabb> boxes;
+  std::vector<ProxyId> ids;
+  boxes.reserve(size_);
+  ids.reserve(size_);
+  for (std::size_t id = 0; id < entries_.size(); ++id)
+    if (entries_[id].leaf != kNull) {
+      boxes.push_back(entries_[id].box);
+      ids.push_back(ProxyId(id));
+    }
+  tbb::this_task_arena::isolate([&] { rayTree_ = buildWideBvh(boxes); });
+  raySlotBoxes_.resize(boxes.size());
+  raySlotIds_.resize(boxes.size());
+  for (std::size_t k = 0; k < boxes.size(); ++k) {
+    raySlotBoxes_[k] = boxes[rayTree_.primIndices[k]];
+    raySlotIds_[k] = ids[rayTree_.primIndices[k]];
+  }
+  ++rayTreeBuilds_;
+  rayTreeReady_.store(true, std::memory_order_release);
+}
+
+void DynamicAabbTree::prepareRays() const {
+  if (!rayTreeReady_.load(std::memory_order_acquire)) buildRayTree();
+}
+
+// The wide ray tree, nearest lane first (traverseWideBvhOrdered); a leaf's boxes are handed to
+// the collector nearest first as well.
+bool DynamicAabbTree::raycastWide(const Ray& ray, RayProxyCollector& collector) const {
+  struct Visitor {
+    const DynamicAabbTree& tree;
+    const RaySlabs slabs;
+    RayProxyCollector& collector;
+    unsigned enter(const WideBvhNode& node, Real (&keys)[4]) const {
+      return detail::rayLaneEntry(slabs, node, collector.maxT, keys);
+    }
+    bool keep(Real key) const { return key <= collector.maxT; }
+    bool leaf(std::uint32_t first, std::uint32_t count) {
+      // Entered boxes sorted by entry distance (insertion sort; ties keep slot order).
+      constexpr std::uint32_t kMax = 16;
+      std::uint32_t order[kMax];
+      Real entry[kMax];
+      std::uint32_t n = 0;
+      for (std::uint32_t k = first, end = first + count; k < end; ++k) {
+        Real t;
+        if (!rayBoxEntry(slabs, tree.raySlotBoxes_[k], collector.maxT, t)) continue;
+        if (n == kMax) {  // (leaves hold BvhBuildOptions::maxLeafSize boxes; never taken)
+          if (!collector.add(tree.raySlotIds_[k], t)) return false;
+          continue;
+        }
+        std::uint32_t j = n++;
+        for (; j > 0 && entry[j - 1] > t; --j) order[j] = order[j - 1], entry[j] = entry[j - 1];
+        order[j] = k, entry[j] = t;
+      }
+      for (std::uint32_t j = 0; j < n; ++j)
+        if (entry[j] <= collector.maxT && !collector.add(tree.raySlotIds_[order[j]], entry[j])) return false;
+      return true;
+    }
+  };
+  Visitor visitor{*this, RaySlabs(ray, collector.boxMargin), collector};
+  return traverseWideBvhOrdered(rayTree_, visitor);
+}
+
 bool DynamicAabbTree::raycast(const Ray& ray, RayProxyCollector& collector) const {
   if (root_ == kNull) return true;
+  if (!rayTreeReady_.load(std::memory_order_acquire)) {
+    const std::size_t rays = raysSinceChange_.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (Real(rays) > options_.rayTreeRaysPerBox * Real(size_)) buildRayTree();
+  }
+  if (rayTreeReady_.load(std::memory_order_acquire)) return raycastWide(ray, collector);
   const RaySlabs slabs(ray, collector.boxMargin);
   struct Item {
     std::uint32_t node;

@@ -126,6 +126,7 @@ struct HitRate {
 class Lockstep {
  public:
   explicit Lockstep(BroadPhaseKind kind) : tested_(makeBroadPhase(kind)) {}
+  explicit Lockstep(std::unique_ptr<BroadPhase> tested) : tested_(std::move(tested)) {}
 
   BroadPhase& tested() { return *tested_; }
   BruteForceBroadPhase& reference() { return reference_; }
@@ -226,10 +227,11 @@ struct Family {
   Real spread;
 };
 
-/// Runs `steps` random operations on `kind` and compares with the reference after each one.
-void randomSequence(BroadPhaseKind kind, const Family& family, std::uint64_t seed, int steps) {
+/// Runs `steps` random operations on `tested` and compares with the reference after each one.
+void randomSequence(std::unique_ptr<BroadPhase> tested, const Family& family, std::uint64_t seed, int steps) {
+  const BroadPhaseKind kind = tested->kind();
   Generator gen(seed, family.center, family.spread);
-  Lockstep s(kind);
+  Lockstep s(std::move(tested));
   std::vector<ProxyId> live, dead;
   for (ProxyId id = 0; id < 120; ++id) dead.push_back(id);
   HitRate regionRate, rayRate;
@@ -281,10 +283,27 @@ const Family kAtMillion{"at-1e6", Vec3(1e6, -1e6, 1e6), 50};
 class EveryTree : public ::testing::TestWithParam<BroadPhaseKind> {};
 
 TEST_P(EveryTree, MatchesBruteForceUnderRandomInsertRemoveMove) {
-  randomSequence(GetParam(), kNearOrigin, 0x5eed0001, 4000);
+  randomSequence(makeBroadPhase(GetParam()), kNearOrigin, 0x5eed0001, 4000);
 }
 
-TEST_P(EveryTree, MatchesBruteForceAtMillionCoordinates) { randomSequence(GetParam(), kAtMillion, 0x5eed0002, 3000); }
+TEST_P(EveryTree, MatchesBruteForceAtMillionCoordinates) {
+  randomSequence(makeBroadPhase(GetParam()), kAtMillion, 0x5eed0002, 3000);
+}
+
+/// A dynamic tree whose rays always walk the wide ray tree (built at the first ray after a change).
+std::unique_ptr<BroadPhase> treeWithRayTreeAlways() {
+  DynamicAabbTreeOptions o;
+  o.rayTreeRaysPerBox = 0;
+  return std::make_unique<DynamicAabbTree>(o);
+}
+
+TEST(DynamicAabbTree, RayTreeMatchesBruteForceUnderRandomInsertRemoveMove) {
+  randomSequence(treeWithRayTreeAlways(), kNearOrigin, 0x5eed0001, 4000);
+}
+
+TEST(DynamicAabbTree, RayTreeMatchesBruteForceAtMillionCoordinates) {
+  randomSequence(treeWithRayTreeAlways(), kAtMillion, 0x5eed0002, 3000);
+}
 
 TEST_P(EveryTree, FindsBoxesFarOutsideAnyInitialBounds) {
   Lockstep s(GetParam());
@@ -578,6 +597,87 @@ TEST(DynamicAabbTree, SmallMovesStayInsideTheFatBox) {
 TEST(DynamicAabbTree, RejectsAnInvalidMargin) {
   EXPECT_THROW(DynamicAabbTree(DynamicAabbTreeOptions{-0.1f}), InvalidInput);
   EXPECT_THROW(DynamicAabbTree(DynamicAabbTreeOptions{std::numeric_limits<Real>::quiet_NaN()}), InvalidInput);
+}
+
+TEST(DynamicAabbTree, RejectsAnInvalidRayTreeThreshold) {
+  DynamicAabbTreeOptions o;
+  o.rayTreeRaysPerBox = -1;
+  EXPECT_THROW(DynamicAabbTree{o}, InvalidInput);
+  o.rayTreeRaysPerBox = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_THROW(DynamicAabbTree{o}, InvalidInput);
+}
+
+/// Every (id, entry) a raycast hands out, with the collector's box margin, sorted.
+std::vector<std::pair<ProxyId, Real>> rayEntries(const BroadPhase& bp, const Ray& ray, Real margin) {
+  struct All final : RayProxyCollector {
+    std::vector<std::pair<ProxyId, Real>> hits;
+    bool add(ProxyId id, Real t) override {
+      hits.emplace_back(id, t);
+      return true;
+    }
+  } c;
+  c.boxMargin = margin;
+  bp.raycast(ray, c);
+  std::sort(c.hits.begin(), c.hits.end());
+  return c.hits;
+}
+
+TEST(DynamicAabbTree, RayTreeIsBuiltAfterEnoughRaysAndDroppedByEveryChange) {
+  Generator gen(0x5eed0004, Vec3::Zero(), 10);
+  DynamicAabbTree tree;  // default threshold: size / 8 rays
+  BruteForceBroadPhase reference;
+  for (ProxyId id = 0; id < 320; ++id) {
+    const Aabb b = gen.box();
+    tree.insert(id, b);
+    reference.insert(id, b);
+  }
+  const auto castAndCompare = [&](int rays) {
+    for (int i = 0; i < rays; ++i) {
+      const Ray ray = gen.queryRay();
+      const Real margin = gen.chance(0.5) ? 0 : gen.uniform(0, 1);
+      ASSERT_EQ(rayEntries(tree, ray, margin), rayEntries(reference, ray, margin)) << "ray " << i;
+    }
+  };
+  castAndCompare(40);  // 40 = 320 / 8: not yet past the threshold
+  EXPECT_FALSE(tree.hasRayTree());
+  castAndCompare(1);
+  EXPECT_TRUE(tree.hasRayTree());
+  EXPECT_EQ(tree.rayTreeBuilds(), 1u);
+  castAndCompare(200);  // margins, parallel rays: every entry as rayBoxEntry's
+  EXPECT_EQ(tree.rayTreeBuilds(), 1u);
+
+  // A moved box is found where it is now, not where the ray tree saw it.
+  const Aabb far{Vec3(100, 100, 100), Vec3(101, 101, 101)};
+  tree.update(7, far);
+  reference.update(7, far);
+  EXPECT_FALSE(tree.hasRayTree());
+  castAndCompare(41);
+  EXPECT_TRUE(tree.hasRayTree());
+  const Ray towardsFar{Vec3(100.5f, 100.5f, 0), Vec3(0, 0, 1)};
+  EXPECT_EQ(rayEntries(tree, towardsFar, 0), rayEntries(reference, towardsFar, 0));
+  EXPECT_EQ(rayEntries(tree, towardsFar, 0).size(), 1u);
+
+  tree.remove(7);
+  reference.remove(7);
+  EXPECT_FALSE(tree.hasRayTree());
+  castAndCompare(50);
+  EXPECT_TRUE(rayEntries(tree, towardsFar, 0).empty());
+  tree.insert(7, far);
+  EXPECT_FALSE(tree.hasRayTree());
+  tree.clear();
+  EXPECT_FALSE(tree.hasRayTree());
+  EXPECT_TRUE(rayEntries(tree, towardsFar, 0).empty());
+}
+
+TEST(DynamicAabbTree, RayTreeCanBeTurnedOff) {
+  DynamicAabbTreeOptions o;
+  o.rayTreeRaysPerBox = std::numeric_limits<Real>::infinity();
+  DynamicAabbTree tree(o);
+  Generator gen(0x5eed0005, Vec3::Zero(), 10);
+  for (ProxyId id = 0; id < 50; ++id) tree.insert(id, gen.box());
+  for (int i = 0; i < 500; ++i) rayEntries(tree, gen.queryRay(), 0);
+  EXPECT_FALSE(tree.hasRayTree());
+  EXPECT_EQ(tree.rayTreeBuilds(), 0u);
 }
 
 TEST(DynamicAabbTree, PairCacheSurvivesRemoveAndReinsertOfTheSameId) {

@@ -7,6 +7,7 @@
 // workers, or serially under TSan: see kBatchThreads).
 
 #include <crux/model/hierarchy.hpp>
+#include <crux/scene/dynamic_aabb_tree.hpp>
 #include <crux/scene/scene_batch.hpp>
 #include "support/scene_fixtures.hpp"
 
@@ -196,6 +197,33 @@ TEST_P(ConcurrentScene, RaysAndRegionQueries) {
   for (int t = 0; t < kThreads; ++t) EXPECT_EQ(batchFailures[t], 0) << "thread " << t;
   for (std::size_t i = 0; i < rays.size(); ++i) ASSERT_TRUE(sameHit(batchHits[i], hit[i])) << str(rays[i]);
   for (std::size_t i = 0; i < spheres.size(); ++i) ASSERT_EQ(batchSpheres[i], bySphere[i]) << str(spheres[i]);
+}
+
+// The dynamic tree builds its wide ray tree lazily, inside a const raycast: threads that reach
+// the threshold together must get one build and the same answers (and TSan no race).
+TEST(ConcurrentScene, RayTreeBuiltWhileThreadsCastRays) {
+  std::mt19937_64 rng(0x7AEE);
+  Scene scene(BroadPhaseKind::DynamicAabbTree);
+  populate(scene, bumpySphere(8, 16), 16, rng);
+  const std::vector<Ray> rays = sceneRays(200, rng);
+  std::vector<std::optional<SceneRayHit>> hit(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) hit[i] = scene.raycast(rays[i]);
+  const auto& tree = dynamic_cast<const DynamicAabbTree&>(scene.broadPhase());
+  ASSERT_TRUE(tree.hasRayTree());
+  for (int round = 0; round < 3; ++round) {
+    scene.setTransform(0, scene.models().local(0));  // same pose: answers unchanged, ray tree dropped
+    ASSERT_FALSE(tree.hasRayTree());
+    const std::size_t builds = tree.rayTreeBuilds();
+    std::vector<int> failures(kThreads, 0);
+    onThreads([&](int t) {
+      rotated(rays.size(), t, [&](std::size_t i) {
+        if (!sameHit(scene.raycast(rays[i]), hit[i])) ++failures[t];
+      });
+    });
+    for (int t = 0; t < kThreads; ++t) EXPECT_EQ(failures[t], 0) << "round " << round << " thread " << t;
+    EXPECT_TRUE(tree.hasRayTree());
+    EXPECT_EQ(tree.rayTreeBuilds(), builds + 1);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBroadPhases, ConcurrentScene,
