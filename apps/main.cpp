@@ -3,6 +3,7 @@
 #include "cli/batch.hpp"
 #include "cli/diff.hpp"
 #include "cli/info.hpp"
+#include "cli/mesh_ops.hpp"
 #include "cli/report.hpp"
 
 #include <crux/config.hpp>
@@ -147,6 +148,16 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
 
+  // ---- crux import-mesh (internal: the import command of isolated mesh loading) ----
+  CLI::App* importMesh = app.add_subcommand(
+      "import-mesh",
+      "Internal: import PATH with assimp and write the mesh to standard output in loadMesh's binary "
+      "form, within BUDGET bytes of address space (crux's isolated mesh loading starts it; mesh_io.hpp)");
+  importMesh->group("");  // not listed in --help
+  std::string importBudget, importPath;
+  importMesh->add_option("BUDGET", importBudget, "Address-space budget in bytes (0: none)")->required();
+  importMesh->add_option("PATH", importPath, "The mesh file")->required();
+
   // ---- crux report (the main job, docs/report.md) ----
   CLI::App* report = app.add_subcommand(
       "report",
@@ -247,9 +258,17 @@ int main(int argc, char** argv) {
     reportOptions.progressLine = isatty(fileno(stderr)) && isatty(fileno(stdout));
     return crux::cli::runReport(reportOptions, std::cerr);
   }
+  if (importMesh->parsed()) {
+    // _exit: no atexit handlers and no leak check of assimp's own leaks (a sanitizer build would
+    // turn them into a non-zero status, read by the parent as a failed import).
+    const int status = crux::cli::runImportMesh(importBudget, importPath, std::cerr);
+    std::fflush(nullptr);
+    ::_exit(status);
+  }
   if (info->parsed()) {
     crux::cli::InfoOptions options;
     options.json = infoJson;
+    options.cruxExecutable = selfExecutable();
     return crux::cli::runInfo(meshPaths, options, std::cout, std::cerr);
   }
   return 0;

@@ -1,4 +1,5 @@
 #include "cli/info.hpp"
+#include "cli/mesh_ops.hpp"
 
 #include "cli/batch.hpp"
 
@@ -147,7 +148,7 @@ int runInfo(const std::vector<std::string>& paths, const InfoOptions& options, s
   for (const std::string& path : paths) {
     try {
       const auto start = std::chrono::steady_clock::now();
-      const Mesh mesh = loadMesh(path);
+      const Mesh mesh = loadMeshFile(path, options.cruxExecutable);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const MeshReport r = report(path, mesh, seconds);
       if (options.json) {

@@ -31,9 +31,12 @@ BvhShape bvhShape(const WideBvh& bvh);
 struct InfoOptions {
   /// One JSON object per file and line (JSON Lines) instead of the text report.
   bool json = false;
+  /// The `crux` executable: when set, each file is imported in a `crux import-mesh` child
+  /// (loadMeshFile), so a file that crashes assimp is reported like any other failure.
+  std::string cruxExecutable;
 };
 
-/// Loads every file with crux::loadMesh (timing the load, which includes the BVH build) and
+/// Loads every file with loadMeshFile (timing the load, which includes the BVH build) and
 /// writes its report to `out`, in argument order. A file that fails to load is reported on
 /// `err` as "crux info: <loadMesh's message, which starts with the path>" (and, with json, as
 /// {"path":…,"error":…} on `out`) and the remaining files are still reported.

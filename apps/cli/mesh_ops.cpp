@@ -3,7 +3,11 @@
 #include "cli/json_codec.hpp"
 
 #include <crux/error.hpp>
+#include <crux/mesh/mesh_io.hpp>
 #include <crux/mesh/mesh_query.hpp>
+
+#include <charconv>
+#include <ostream>
 
 #include <memory>
 #include <optional>
@@ -104,7 +108,7 @@ void loadMeshOp(const Json& request, Answer& answer, BatchState& state) {
   if (path.empty()) fail("path", "the file path is empty");
   std::shared_ptr<const Mesh> mesh;
   try {
-    mesh = std::make_shared<const Mesh>(loadMesh(path));
+    mesh = std::make_shared<const Mesh>(loadMeshFile(path, state.options.workerExecutable));
   } catch (const InvalidInput& e) {  // loadMesh's message starts with the file's path
     fail("path", e.what());
   }
@@ -217,6 +221,25 @@ void addMeshOps(OpTable& table) {
   table["mesh_plane"] = meshShape<Plane>("plane");
   table["mesh_triangle"] = meshShape<Triangle>("triangle");
   table["mesh_mesh"] = meshMesh;
+}
+
+Mesh loadMeshFile(const std::string& path, const std::string& cruxExecutable) {
+  LoadMeshOptions options;
+  if (!cruxExecutable.empty()) {
+    options.isolation = MeshImportIsolation::Subprocess;
+    options.importCommand = {cruxExecutable, "import-mesh"};
+  }
+  return loadMesh(path, options);
+}
+
+int runImportMesh(const std::string& budget, const std::string& path, std::ostream& err) {
+  std::size_t bytes = 0;
+  const auto [end, ec] = std::from_chars(budget.data(), budget.data() + budget.size(), bytes);
+  if (ec != std::errc() || end != budget.data() + budget.size()) {
+    err << "crux import-mesh: BUDGET must be a byte count, got \"" << budget << "\"\n";
+    return 2;
+  }
+  return runMeshImport(path, bytes, 1);
 }
 
 }  // namespace crux::cli

@@ -14,4 +14,15 @@ namespace crux::cli {
 /// include/crux/mesh/mesh_query.hpp).
 void addMeshOps(OpTable& table);
 
+/// loadMesh for a file a user names (`load_mesh`, `crux info`): with `cruxExecutable` (the
+/// `crux` executable) assimp runs in a `crux import-mesh` child process
+/// (MeshImportIsolation::Subprocess), so a file that crashes or hangs assimp costs an
+/// InvalidInput for that file only; without it, in this process.
+Mesh loadMeshFile(const std::string& path, const std::string& cruxExecutable);
+
+/// `crux import-mesh BUDGET PATH`, the import command of MeshImportIsolation::Subprocess:
+/// crux::runMeshImport(PATH, BUDGET, standard output). Returns its exit status (2: bad
+/// arguments, with the reason on `err`).
+int runImportMesh(const std::string& budget, const std::string& path, std::ostream& err);
+
 }  // namespace crux::cli

@@ -1,6 +1,6 @@
 """Type stubs of the extension module crux._crux (re-exported by the package crux)."""
 
-from typing import Any, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, List, NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -64,7 +64,7 @@ class RegionHits(NamedTuple):
 class Mesh:
     def __init__(self, vertices: ArrayLike, triangles: ArrayLike, name: str = "mesh") -> None: ...
     @staticmethod
-    def load(path: str) -> "Mesh": ...
+    def load(path: str, import_command: Optional[List[str]] = None) -> "Mesh": ...
     @property
     def vertices(self) -> np.ndarray: ...
     @property

@@ -15,6 +15,7 @@
 #include <crux/mesh/batch_query.hpp>
 #include <crux/mesh/mesh_cast.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_io.hpp>
 #include <crux/mesh/mesh_point_query.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
@@ -23,6 +24,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace crux::python {
@@ -359,17 +361,25 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
   mesh.def(py::init(&makeMesh), "vertices"_a, "triangles"_a, "name"_a = "mesh")
       .def_static(
           "load",
-          [](const std::string& path) {
+          [](const std::string& path, std::optional<std::vector<std::string>> importCommand) {
+            LoadMeshOptions options;
+            if (importCommand) {
+              options.isolation = MeshImportIsolation::Subprocess;
+              options.importCommand = std::move(*importCommand);
+            }
             std::shared_ptr<const Mesh> loaded;
             {
               py::gil_scoped_release release;
-              loaded = std::make_shared<const Mesh>(loadMesh(path));
+              loaded = std::make_shared<const Mesh>(loadMesh(path, options));
             }
             return std::make_shared<PyMesh>(std::move(loaded));
           },
-          "path"_a,
-          "Loads a triangle mesh file (OBJ, OFF, PLY, STL, glTF, ... via assimp): polygons triangulated,\n"
-          "identical vertices merged. Raises ValueError naming the file and the problem.")
+          "path"_a, "import_command"_a = py::none(),
+          "Loads a triangle mesh file (OFF by crux's own reader; OBJ, PLY, STL, glTF, ... via assimp):\n"
+          "polygons triangulated, identical vertices merged. Raises ValueError naming the file and the\n"
+          "problem. assimp runs in this process, and some malformed files crash it; for untrusted files\n"
+          "pass import_command=[<crux executable>, \"import-mesh\"] to import in a child process, where\n"
+          "a crash or hang becomes a ValueError (crux's MeshImportIsolation::Subprocess).")
       .def_property_readonly(
           "vertices",
           [](py::object self) {

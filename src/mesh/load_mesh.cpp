@@ -13,13 +13,15 @@
 /// clipping in their Newell-normal projection (a fan when no ear is found: self-intersecting or
 /// zero-area polygons); faces of one or two vertices (points, lines) are skipped.
 ///
-/// Every other format goes to assimp, by default in a forked child process that sends the
-/// triangles back through a pipe (LoadMeshOptions, mesh_io.hpp): assimp 5.2 crashes (SEGV in the
-/// ASE importer), aborts (ai_assert in TriangulateProcess on malformed PLY) or runs for minutes
-/// on some malformed files (docs/fuzzing.md), and only a process boundary contains that. A
-/// signal, a non-zero exit or the time limit (10 s + 2 s per MB by default) become an
-/// InvalidInput naming the file. The memory estimate (estimateMeshMemory) is checked before
-/// any mesh-sized array is allocated.
+/// Every other format goes to assimp, in this process by default, or, with
+/// MeshImportIsolation::Subprocess, in a child process that sends the triangles back through a
+/// pipe (LoadMeshOptions, mesh_io.hpp): assimp 5.2 crashes (SEGV in the ASE importer), aborts
+/// (ai_assert in TriangulateProcess on malformed PLY) or runs for minutes on some malformed
+/// files (docs/fuzzing.md), and only a process boundary contains that. The child is a separate
+/// program (LoadMeshOptions::importCommand, e.g. `crux import-mesh`) started by posix_spawn, so
+/// the library never forks a copy of a possibly threaded host. A signal, a non-zero exit or the
+/// time limit (10 s + 2 s per MB by default) become an InvalidInput naming the file. The memory
+/// estimate (estimateMeshMemory) is checked before any mesh-sized array is allocated.
 ///
 /// Both paths then merge vertices with identical positions and drop unreferenced vertices, so
 /// the mesh's edges (and MeshStats' manifoldness) do not depend on how the file split vertices
@@ -54,9 +56,12 @@
 #define CRUX_POSIX_IMPORT 1
 #include <fcntl.h>
 #include <poll.h>
+#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+extern char** environ;
 #else
 #define CRUX_POSIX_IMPORT 0
 #endif
@@ -448,11 +453,10 @@ bool writeAll(int fd, const void* data, std::size_t size) {
   return true;
 }
 
-/// Runs in the forked child: imports, writes the answer, and leaves with _exit (no atexit
-/// handlers, no leak check of assimp's leaks, nothing of the parent's state flushed twice).
-[[noreturn]] void importChild(const std::string& path, int fd, std::size_t memoryLimitBytes) {
-  // A crash must kill the child plainly, not run the parent's handlers (a sanitizer's or
-  // libFuzzer's would report the parent's input as a crash).
+/// The child's answer, written to `fd` (runMeshImport's body). Returns the exit status.
+int writeImportAnswer(const std::string& path, int fd, std::size_t memoryLimitBytes) {
+  // A crash in assimp kills this process plainly (a sanitizer's handler would print a report
+  // about assimp and exit instead), so the parent names the signal.
   for (const int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGTRAP}) ::signal(sig, SIG_DFL);
   ::signal(SIGPIPE, SIG_IGN);
 #if !CRUX_UNDER_SANITIZER  // sanitizers reserve terabytes of address space: RLIMIT_AS would break them
@@ -494,7 +498,7 @@ bool writeAll(int fd, const void* data, std::size_t size) {
   } else if (ok) {
     ok = writeAll(fd, message.data(), message.size());
   }
-  ::_exit(ok ? 0 : 3);
+  return ok ? 0 : 3;
 }
 
 const char* signalName(int sig) {
@@ -601,19 +605,30 @@ RawMesh readWithAssimpInChild(const std::string& path, const LoadMeshOptions& op
   // refused by the parent's estimate, with its clear message, not by a failed allocation).
   std::size_t memoryBudget = options.memoryLimitBytes != 0 ? options.memoryLimitBytes : availableMemoryBytes();
   if (memoryBudget != 0) memoryBudget = std::max<std::size_t>(memoryBudget, 256'000'000);
+  if (options.importCommand.empty())
+    fail(path, "LoadMeshOptions::importCommand is empty: MeshImportIsolation::Subprocess needs an import "
+               "command such as {\"crux\", \"import-mesh\"} (mesh_io.hpp)");
+  std::vector<std::string> args = options.importCommand;
+  args.push_back(std::to_string(memoryBudget));
+  args.push_back(path);
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
   int fds[2];
   if (::pipe2(fds, O_CLOEXEC) != 0) fail(path, std::string("cannot create the import pipe: ") + std::strerror(errno));
-  std::fflush(nullptr);  // nothing buffered is written twice
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    const int error = errno;
+  // posix_spawn, not fork: the child execs the import command at once, so nothing of this
+  // (possibly threaded) process runs in it. Its standard output is the pipe's write end (dup2
+  // clears close-on-exec on the copy); both original ends close on exec.
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  pid_t pid = -1;
+  const int error = ::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (error != 0) {
     ::close(fds[0]);
     ::close(fds[1]);
-    fail(path, std::string("cannot start the import process (fork): ") + std::strerror(error));
-  }
-  if (pid == 0) {
-    ::close(fds[0]);
-    importChild(path, fds[1], memoryBudget);
+    fail(path, "cannot start the import command " + options.importCommand.front() + ": " + std::strerror(error));
   }
   ::close(fds[1]);
   ChildImport child(path, pid, fds[0], seconds);
@@ -693,6 +708,15 @@ void mergeIdenticalVertices(RawMesh& raw) {
 }
 
 }  // namespace
+
+int runMeshImport(const std::string& path, std::size_t memoryBudgetBytes, int fd) {
+#if defined(CRUX_HAVE_ASSIMP) && CRUX_POSIX_IMPORT
+  return writeImportAnswer(path, fd, memoryBudgetBytes);
+#else
+  (void)path, (void)memoryBudgetBytes, (void)fd;
+  return 4;  // no assimp or no POSIX: loadMesh never starts an import command then
+#endif
+}
 
 Mesh loadMesh(const std::string& path, const LoadMeshOptions& options) {
   requireReadableFile(path);

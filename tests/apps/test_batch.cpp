@@ -1164,6 +1164,23 @@ TEST(BatchStreaming, EachAnswerIsWrittenBeforeTheNextLineIsRead) {
   }
 }
 
+// load_mesh imports through `crux import-mesh`: a file on which assimp crashes (a SEGV in its ASE
+// importer, tests/fuzz/regressions) costs that line, and the run goes on.
+TEST(BatchStreaming, AMeshFileThatCrashesAssimpCostsItsLineOnly) {
+  const std::string ase = std::string(CRUX_SOURCE_DIR) + "/tests/fuzz/regressions/assimp-ase-segv-empty-lists.ase";
+  Interactive crux({});
+  crux.send(R"({"id":"bad","op":"load_mesh","name":"m","path":")" + ase + R"("})");
+  const Json bad = Json::parse(crux.readLine(60));
+  EXPECT_EQ(bad["id"], "bad");
+  ASSERT_TRUE(bad.contains("error")) << bad.dump();
+  EXPECT_NE(bad["error"].get<std::string>().find("assimp crashed importing the file"), std::string::npos)
+      << bad.dump();
+  crux.send(kTouchingTriangleSphere);
+  const Json ok = Json::parse(crux.readLine());
+  EXPECT_EQ(ok["hit"], true) << ok.dump();
+  EXPECT_EQ(crux.finish(), 0);
+}
+
 TEST(BatchStreaming, AnswersWrittenBeforeTheProcessIsKilledAreKept) {
   Interactive crux({});
   crux.send(kTouchingTriangleSphere);

@@ -1,7 +1,8 @@
 /// @file fuzz_load_mesh.cpp  libFuzzer target fuzz_load_mesh: arbitrary bytes into
 /// crux::loadMesh (crux's OFF reader, assimp for every other format).
 ///
-/// assimp runs in a child process (MeshImportIsolation::Subprocess, limited here to 3 s, and
+/// assimp runs in a child process (MeshImportIsolation::Subprocess: the `crux import-mesh`
+/// command of the crux executable built beside this one, limited here to 3 s, and
 /// outside the sanitizers to loadMesh's 256 MB floor of address-space growth, so that the
 /// fuzzer's own -timeout and -rss_limit_mb never fire on assimp's behalf): its crashes and
 /// hangs become InvalidInput. The mesh itself is limited to kMeshMemoryLimit
@@ -17,6 +18,7 @@
 /// vertices are finite and whose triangles index existing vertices.
 
 #include "fuzz_input.hpp"
+#include "../support/import_command.hpp"
 
 #include <crux/error.hpp>
 #include <crux/mesh/mesh_io.hpp>
@@ -26,6 +28,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <vector>
 
 namespace crux::fuzz {
 
@@ -60,8 +63,13 @@ void run(const std::uint8_t* data, std::size_t size) {
     const char* env = std::getenv("CRUX_FUZZ_IN_PROCESS");
     return env && *env && *env != '0';
   }();
+  static const std::vector<std::string> importCommand = test_support::cruxImportCommand();
+  if (!inProcess && importCommand.empty())
+    fail("fuzz_load_mesh imports through the crux executable beside it (build the crux_app target), "
+         "or in process with CRUX_FUZZ_IN_PROCESS=1");
   LoadMeshOptions options;
   options.isolation = inProcess ? MeshImportIsolation::InProcess : MeshImportIsolation::Subprocess;
+  options.importCommand = importCommand;
   options.timeLimitSeconds = 3;
   options.memoryLimitBytes = kMeshMemoryLimit;
   try {

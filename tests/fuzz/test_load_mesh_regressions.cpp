@@ -1,7 +1,7 @@
 // Named regressions: files that crash, abort or hang assimp 5.2 (found by fuzz_load_mesh and by
 // mutating assimp's own test models; docs/fuzzing.md, Findings). Through crux::loadMesh they must
-// now give an InvalidInput naming the file, because assimp runs in a child process
-// (MeshImportIsolation::Subprocess, src/mesh/load_mesh.cpp). The inputs are in
+// now give an InvalidInput naming the file when assimp runs in a child process
+// (MeshImportIsolation::Subprocess with `crux import-mesh`, src/mesh/load_mesh.cpp). The inputs are in
 // tests/fuzz/regressions/; the fast ones are also in the load_mesh replay corpus.
 #include <crux/error.hpp>
 #include <crux/mesh/mesh_io.hpp>
@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include "support/import_command.hpp"
 #include "support/invalid_input.hpp"
 
 namespace crux {
@@ -25,6 +26,7 @@ namespace fs = std::filesystem;
 const fs::path kRegressions = fs::path(CRUX_SOURCE_DIR) / "tests" / "fuzz" / "regressions";
 
 using test_support::invalidInputMessage;
+using test_support::isolatedImport;
 
 /// Loads tests/fuzz/regressions/`name` and expects an InvalidInput that starts with its path
 /// and contains `problem`, within `seconds` (+ 5 s of slack for loaded machines).
@@ -32,7 +34,8 @@ void expectRefused(const std::string& name, const std::string& problem, double s
                    std::size_t memoryLimit = 0) {
   const fs::path path = kRegressions / name;
   ASSERT_TRUE(fs::exists(path)) << path;
-  LoadMeshOptions options;
+  LoadMeshOptions options = isolatedImport();
+  if (options.importCommand.empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
   options.timeLimitSeconds = seconds;
   options.memoryLimitBytes = memoryLimit;
   const auto start = std::chrono::steady_clock::now();
@@ -63,7 +66,8 @@ TEST(LoadMeshRegression, AcWithDeepSubdivisionHungAssimp) {
 // Stopped by the child's memory cap (RLIMIT_AS) or, under sanitizers, by the time limit.
 TEST(LoadMeshRegression, PlyDeclaringTwoBillionVerticesExhaustedMemory) {
   const fs::path path = kRegressions / "assimp-ply-huge-vertex-count.ply";
-  LoadMeshOptions options;
+  LoadMeshOptions options = isolatedImport();
+  if (options.importCommand.empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
   options.timeLimitSeconds = 2;
   options.memoryLimitBytes = 512'000'000;
   const std::string m = invalidInputMessage([&] { loadMesh(path.string(), options); });

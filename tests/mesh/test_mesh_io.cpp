@@ -20,6 +20,7 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include "support/import_command.hpp"
 #include "support/invalid_input.hpp"
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
@@ -40,7 +41,9 @@ namespace fs = std::filesystem;
 
 const fs::path kAssimpModels = "/usr/share/assimp/models";
 
+using test_support::cruxImportCommand;
 using test_support::invalidInputMessage;
+using test_support::isolatedImport;
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
@@ -236,9 +239,9 @@ TEST(LoadMeshLimits, OffHeaderOfAMillionTrianglesRefusedBeforeReadingThem) {
 TEST(LoadMeshLimits, AssimpImportRefusedInTheParentWhenOverTheLimit) {
   const fs::path obj = kAssimpModels / "OBJ" / "box.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << obj << " is missing (run scripts/setup)";
-  for (const MeshImportIsolation isolation : {MeshImportIsolation::Subprocess, MeshImportIsolation::InProcess}) {
-    LoadMeshOptions options;
-    options.isolation = isolation;
+  if (cruxImportCommand().empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
+  for (const LoadMeshOptions& isolation : {isolatedImport(), LoadMeshOptions{}}) {
+    LoadMeshOptions options = isolation;
     const Mesh mesh = loadMesh(obj.string(), options);
     EXPECT_EQ(mesh.triangleCount(), 12u);
     options.memoryLimitBytes = 1000;
@@ -248,11 +251,11 @@ TEST(LoadMeshLimits, AssimpImportRefusedInTheParentWhenOverTheLimit) {
 }
 
 TEST(LoadMeshLimits, SubprocessAndInProcessImportsAgree) {
+  if (cruxImportCommand().empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
   for (const char* name : {"OBJ/box.obj", "PLY/cube.ply", "STL/Spider_ascii.stl", "glTF2/Box/glTF/Box.gltf"}) {
     const fs::path p = kAssimpModels / name;
     if (!fs::exists(p)) continue;
-    LoadMeshOptions child, inProcess;
-    inProcess.isolation = MeshImportIsolation::InProcess;
+    const LoadMeshOptions child = isolatedImport(), inProcess;
     const Mesh a = loadMesh(p.string(), child), b = loadMesh(p.string(), inProcess);
     EXPECT_EQ(a.vertices(), b.vertices()) << name;
     EXPECT_EQ(a.triangles(), b.triangles()) << name;
@@ -262,7 +265,8 @@ TEST(LoadMeshLimits, SubprocessAndInProcessImportsAgree) {
 TEST(LoadMeshLimits, ImportTimeLimitStopsTheChild) {
   const fs::path obj = kAssimpModels / "OBJ" / "box.obj";
   if (!fs::exists(obj)) GTEST_SKIP() << obj << " is missing (run scripts/setup)";
-  LoadMeshOptions options;
+  if (cruxImportCommand().empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
+  LoadMeshOptions options = isolatedImport();
   options.timeLimitSeconds = 1e-9;  // expires before the child can answer
   const std::string m = invalidInputMessage([&] { loadMesh(obj.string(), options); });
   EXPECT_EQ(m.rfind(obj.string() + ": ", 0), 0u) << m;
@@ -273,13 +277,35 @@ TEST(LoadMeshLimits, ImportTimeLimitStopsTheChild) {
 }
 
 TEST(LoadMeshLimits, AssimpErrorsComeBackFromTheChildUnchanged) {
+  if (cruxImportCommand().empty()) GTEST_SKIP() << "no crux executable beside the test (CRUX_BUILD_APPS=OFF)";
   const fs::path p = write("garbage.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
-  LoadMeshOptions inProcess;
-  inProcess.isolation = MeshImportIsolation::InProcess;
-  const std::string a = invalidInputMessage([&] { loadMesh(p.string()); });
-  const std::string b = invalidInputMessage([&] { loadMesh(p.string(), inProcess); });
+  const std::string a = invalidInputMessage([&] { loadMesh(p.string(), isolatedImport()); });
+  const std::string b = invalidInputMessage([&] { loadMesh(p.string()); });
   EXPECT_FALSE(a.empty());
   EXPECT_EQ(a, b);
+}
+
+TEST(LoadMeshLimits, SubprocessNeedsAnImportCommand) {
+  const fs::path obj = kAssimpModels / "OBJ" / "box.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << obj << " is missing (run scripts/setup)";
+  LoadMeshOptions options;
+  options.isolation = MeshImportIsolation::Subprocess;
+  std::string m = invalidInputMessage([&] { loadMesh(obj.string(), options); });
+  EXPECT_EQ(m.rfind(obj.string() + ": ", 0), 0u) << m;
+  EXPECT_TRUE(contains(m, "importCommand is empty")) << m;
+  options.importCommand = {"/nonexistent/crux", "import-mesh"};
+  m = invalidInputMessage([&] { loadMesh(obj.string(), options); });
+  EXPECT_TRUE(contains(m, "cannot start the import command /nonexistent/crux")) << m;
+}
+
+// The library starts no process unless asked: the default load of an assimp format runs in
+// this process and needs no import command.
+TEST(LoadMeshLimits, DefaultLoadRunsAssimpInThisProcess) {
+  const fs::path obj = kAssimpModels / "OBJ" / "box.obj";
+  if (!fs::exists(obj)) GTEST_SKIP() << obj << " is missing (run scripts/setup)";
+  EXPECT_EQ(LoadMeshOptions{}.isolation, MeshImportIsolation::InProcess);
+  EXPECT_TRUE(LoadMeshOptions{}.importCommand.empty());
+  EXPECT_EQ(loadMesh(obj.string()).triangleCount(), 12u);
 }
 
 }  // namespace

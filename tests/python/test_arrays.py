@@ -2,6 +2,8 @@
 and zero copy, leading dimensions, poses, bad input raising ValueError with crux's message (never a
 crash)."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -97,6 +99,20 @@ def test_missing_file_raises_value_error_naming_it(tmp_path):
     bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
     with pytest.raises(ValueError, match="bad.off"):
         crux.Mesh.load(str(bad))
+
+
+def test_load_in_a_child_process_matches_the_in_process_load(tmp_path):
+    exe = os.environ.get("CRUX_EXECUTABLE")
+    if not exe:
+        pytest.skip("no crux executable in this build")
+    obj = tmp_path / "square.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")
+    a = crux.Mesh.load(str(obj))
+    b = crux.Mesh.load(str(obj), import_command=[exe, "import-mesh"])
+    assert np.array_equal(a.vertices, b.vertices)
+    assert np.array_equal(a.triangles, b.triangles)
+    with pytest.raises(ValueError, match="cannot start the import command"):
+        crux.Mesh.load(str(obj), import_command=[str(tmp_path / "no-such-crux"), "import-mesh"])
 
 
 def test_poses_in_every_form_give_the_same_transform():

@@ -99,11 +99,13 @@ class Mesh {
   double buildSeconds_ = 0;
 };
 
-/// Loads a triangle mesh with assimp (OBJ, OFF, PLY, STL ASCII/binary, glTF, ...): polygons
-/// are triangulated, identical vertices merged, every mesh of the file placed by its node
-/// transforms and concatenated. Points and lines are ignored. Throws InvalidInput naming the
-/// file and the problem (missing, unreadable or malformed file, no triangles, non-finite
-/// vertices).
+/// Loads a triangle mesh: OFF by crux's own strict reader, every other format (OBJ, PLY, STL
+/// ASCII/binary, glTF, ...) by assimp, in this process: polygons are triangulated, identical
+/// vertices merged, every mesh of the file placed by its node transforms and concatenated.
+/// Points and lines are ignored. Throws InvalidInput naming the file and the problem (missing,
+/// unreadable or malformed file, no triangles, non-finite vertices, more memory than is
+/// available). assimp 5.2 crashes on some malformed files (docs/fuzzing.md): for untrusted files
+/// use loadMesh(path, LoadMeshOptions) with MeshImportIsolation::Subprocess (mesh_io.hpp).
 Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
 
 /// The one check of every caller-held object derived from a mesh's geometry (MeshDistanceAccel,

@@ -1,15 +1,20 @@
 #pragma once
 /// @file mesh_io.hpp  Loading meshes safely: memory estimates checked before a mesh is built, and
-/// assimp imports isolated in a child process with a time and memory limit.
+/// assimp imports, on request, isolated in a child process with a time and memory limit.
 ///
 /// docs/limits.md gives the figures behind the estimate (measured peaks at 1M and 10M triangles)
-/// and docs/fuzzing.md why imports are isolated (assimp 5.2 crashes, aborts or hangs on some
-/// malformed files, which no try/catch can contain).
+/// and docs/fuzzing.md why imports may need isolating (assimp 5.2 crashes, aborts or hangs on
+/// some malformed files, which no try/catch can contain). The library never forks: a forked copy
+/// of a threaded host (locks held by other threads, allocation, assimp's statics) is not safe to
+/// run. Isolation starts a separate program instead (posix_spawn of an import command, which
+/// execs at once), such as the `crux import-mesh` command the `crux` command line uses for every
+/// file it loads.
 
 #include <crux/mesh/mesh.hpp>
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace crux {
 
@@ -49,12 +54,13 @@ void requireMeshMemory(std::size_t vertices, std::size_t triangles, std::size_t 
 
 /// How loadMesh runs assimp.
 enum class MeshImportIsolation {
-  /// In a forked child process (POSIX) that sends the triangles back through a pipe: a crash,
-  /// abort, hang or out-of-memory in assimp becomes an InvalidInput in the caller. The default.
-  Subprocess,
-  /// In the calling process: faster for many small trusted files, but a malformed file can
-  /// crash the process (docs/fuzzing.md lists known inputs). The only mode without fork().
+  /// In the calling process (the default): no child process. A malformed file can crash the
+  /// process inside assimp (docs/fuzzing.md lists known inputs); trusted files only.
   InProcess,
+  /// In a child process (POSIX) started by posix_spawn from LoadMeshOptions::importCommand,
+  /// which sends the triangles back through a pipe (runMeshImport): a crash, abort, hang or
+  /// out-of-memory in assimp becomes an InvalidInput in the caller.
+  Subprocess,
 };
 
 /// Options of loadMesh.
@@ -63,13 +69,27 @@ struct LoadMeshOptions {
   /// Refuse meshes whose estimated peak (estimateMeshMemory) exceeds this many bytes;
   /// 0: the memory available now (availableMemoryBytes()).
   std::size_t memoryLimitBytes = 0;
-  MeshImportIsolation isolation = MeshImportIsolation::Subprocess;
+  MeshImportIsolation isolation = MeshImportIsolation::InProcess;
+  /// Subprocess only: the import command, its executable's path first, then its arguments
+  /// (e.g. {"/usr/bin/crux", "import-mesh"}). loadMesh appends two arguments, the child's
+  /// address-space budget in bytes and the file's path, and reads the child's standard output;
+  /// the command answers with runMeshImport. Empty with Subprocess: InvalidInput.
+  std::vector<std::string> importCommand;
   /// Wall-clock limit of a Subprocess import in seconds; 0: 10 s + 2 s per MB of file.
   double timeLimitSeconds = 0;
 };
 
+/// The child's side of MeshImportIsolation::Subprocess, for an import command's main (the
+/// `crux import-mesh BUDGET PATH` command calls it): imports `path` with assimp in this
+/// process, after limiting this process's address space to its current size plus
+/// `memoryBudgetBytes` (0: no limit; none under sanitizers, which reserve terabytes), and writes
+/// the answer to the descriptor `fd` in the form loadMesh reads: the vertices and triangles, or
+/// an error message. Returns the exit status for the command (0 once the answer is written).
+/// A crash inside assimp kills this process, which is the point.
+int runMeshImport(const std::string& path, std::size_t memoryBudgetBytes, int fd);
+
 /// loadMesh (mesh.hpp) with explicit limits: OFF files are read by crux's own strict reader in
-/// process; every other format by assimp, isolated as `options.isolation` says. The memory
+/// process; every other format by assimp, in process or isolated as `options.isolation` says. The memory
 /// check runs as soon as the counts are known (OFF: after the header, before the vertices are
 /// read; assimp: before the parent allocates the triangles it receives) and again before the
 /// BVH build. Throws InvalidInput naming the file and the problem.
