@@ -20,7 +20,8 @@ using V = Eigen::Vector3d;
 
 /// cos and sin of contact.hpp's feature angle (2°).
 constexpr double kFeatureCos = double(kContactFaceAngleCos);
-constexpr double kFeatureSin = 0.034899496702500969;  // sin(2°)
+using contact_detail::kContactFaceAngleSin;
+using contact_detail::nearerPerpendicular;
 
 /// The SAT answer is accepted when it realises the axis' separation: an edge–edge pair whose
 /// closest points differ along the axis only, and (separated pairs) a clipped point at the
@@ -150,7 +151,7 @@ int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
   }
   const int is = (d.x() >= 0 ? 1 : 0) | (d.y() >= 0 ? 2 : 0) | (d.z() >= 0 ? 4 : 0);
   int bestAxis = -1;
-  double bestCos = kFeatureSin;
+  double bestCos = kContactFaceAngleSin;
   for (int i = 0; i < 3; ++i)
     if (h[i] > 0 && std::abs(d[i]) <= bestCos) {
       bestCos = std::abs(d[i]);
@@ -165,21 +166,6 @@ int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
   f[1] = {boxVertex(h, other), 0, vertexId(other)};
   id = edgeId(is, other);
   return 2;
-}
-
-/// Whether an edge e with e·d = ed and |e|² = e2 (d unit) is within the feature angle of
-/// perpendicular to d and at least as near to it as bestCos (|cos| of the best so far, from
-/// sin 2°), which it then becomes.
-inline bool nearerPerpendicular(double ed, double e2, double& bestCos) {
-  // Cheap reject (no square root): beyond the feature angle with room to spare for rounding, so
-  // the exact test below would reject it too (bestCos only decreases from sin 2°).
-  if (!(e2 > 0) || ed * ed > kFeatureSin * kFeatureSin * (1 + 1e-6) * e2) return false;
-  const double len = std::sqrt(e2);
-  if (!(len > 0)) return false;
-  const double c = std::abs(ed) / len;
-  if (!(c <= bestCos)) return false;
-  bestCos = c;
-  return true;
 }
 
 /// The triangle's supporting feature along unit d (contact.hpp's rule), as a clip polygon;
@@ -198,7 +184,7 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
       is = i;
     }
   int bestK = -1;
-  double bestCos = kFeatureSin;
+  double bestCos = kContactFaceAngleSin;
   for (int k = 1; k <= 2; ++k) {
     const int o = (is + k) % 3;
     const V e = t[o] - t[is];
@@ -230,7 +216,7 @@ int triangleFeatureAlongAxis(const V* t, const double* L, const V& m, double mLe
   const bool over1 = p2 > std::max(p0, p1);  // (std::max: `p1 > p0 ? p1 : p0`)
   is = int(over1) << 1 | (int(over0) & ~int(over1));
   int bestK = -1;
-  double bestCos = kFeatureSin;
+  double bestCos = kContactFaceAngleSin;
   for (int kk = 1; kk <= 2; ++kk) {
     const int o = kNextMod3[is + kk - 1];
     // The edge is → o is ±E_j, j = is (kk = 1) or o (kk = 2): the same |e·d| and |e|² = L[j].

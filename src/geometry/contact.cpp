@@ -27,8 +27,6 @@ using detail::V3;
 constexpr int kMaxFeatureVerts = 32;
 constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 
-/// sin of the feature angle (kContactFaceAngleCos).
-const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
 // contact_internal.hpp, shared with triangle_contact.cpp: the sliver rule, the rounding budget
 // (coincidenceTolerance) and the reference clipping with its coincident-point merge
@@ -54,22 +52,11 @@ void setVertex(Feature& f, const V3& v, int index) {
 }
 
 /// Supporting vertex `s` (index is) or, when one of the edges (s, other[k]) is perpendicular to d
-/// within the feature angle, that edge.
+/// within the feature angle, that edge (contact_detail::supportingEdge).
 void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int nOthers, std::uint32_t edgeBase,
                   Feature& f) {
   const V3 vs = P.vertex(is);
-  int bestK = -1;
-  double bestCos = kSinTol;
-  for (int k = 0; k < nOthers; ++k) {
-    const V3 e = P.vertex(others[k]) - vs;
-    const double len = e.norm();
-    if (!(len > 0)) continue;
-    const double c = std::abs(e.dot(d)) / len;
-    if (c <= bestCos) {
-      bestCos = c;
-      bestK = k;
-    }
-  }
+  const int bestK = contact_detail::supportingEdge([&P](int i) { return P.vertex(i); }, d, is, others, nOthers);
   if (bestK < 0) {
     setVertex(f, vs, is);
     return;
@@ -445,7 +432,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
   bool clipFeatures = fa.n >= 2 && fb.n >= 2;
   if (clipFeatures && fa.n == 2 && fb.n == 2) {
     const V3 ea = fa.v[1] - fa.v[0], eb = fb.v[1] - fb.v[0];
-    clipFeatures = ea.cross(eb).norm() <= kSinTol * ea.norm() * eb.norm();
+    clipFeatures = contact_detail::edgesParallel(ea, eb);
   }
   if (clipFeatures) {
     // Reference: the better aligned (non-sliver) face; else (two edges) B's edge.

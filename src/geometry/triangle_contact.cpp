@@ -22,8 +22,6 @@ using detail::lowestBit;  // geometry/bits.hpp
 
 using detail::V3;
 
-/// sin of the feature angle (kContactFaceAngleCos), as contact.cpp.
-const double kSinTol = std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
 /// The triangle in double with its (unnormalised) normal and degeneracy.
 struct TriD {
@@ -72,20 +70,10 @@ std::uint32_t edgeId(int i, int j) {
   return featureId(FeatureKind::Edge, static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
 }
 
-/// Vertex `is` of `p`, or the edge (is, others[k]) perpendicular to d within the feature angle.
+/// Vertex `is` of `p`, or the edge (is, others[k]) perpendicular to d within the feature angle
+/// (contact_detail::supportingEdge).
 void vertexOrEdge(const V3* p, const V3& d, int is, const int* others, int nOthers, Feature& f) {
-  int bestK = -1;
-  double bestCos = kSinTol;
-  for (int k = 0; k < nOthers; ++k) {
-    const V3 e = p[others[k]] - p[is];
-    const double len = e.norm();
-    if (!(len > 0)) continue;
-    const double c = std::abs(e.dot(d)) / len;
-    if (c <= bestCos) {
-      bestCos = c;
-      bestK = k;
-    }
-  }
+  const int bestK = contact_detail::supportingEdge([p](int i) { return p[i]; }, d, is, others, nOthers);
   if (bestK < 0) {
     f.n = 1;
     f.v[0] = p[is];
@@ -540,7 +528,7 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
   bool clipFeatures = fa.n >= 2 && fb.n >= 2;
   if (clipFeatures && fa.n == 2) {
     const V3 ea = fa.v[1] - fa.v[0], eb = fb.v[1] - fb.v[0];
-    clipFeatures = ea.cross(eb).norm() <= kSinTol * ea.norm() * eb.norm();
+    clipFeatures = contact_detail::edgesParallel(ea, eb);
   }
   if (clipFeatures) {
     const bool refIsA = fa.n >= 3;
