@@ -264,4 +264,37 @@ int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   return -1;
 }
 
+double segmentSegment(const Eigen::Vector3d& p1, const Eigen::Vector3d& d1, const Eigen::Vector3d& p2,
+                      const Eigen::Vector3d& d2, double& s, double& t) {
+  using V = Eigen::Vector3d;
+  const auto clamp01 = [](double x) { return x < 0 ? 0.0 : (x > 1 ? 1.0 : x); };
+  const V r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  if (a <= 0 && e <= 0) {
+    s = t = 0;
+  } else if (a <= 0) {
+    s = 0;
+    t = clamp01(f / e);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 0) {
+      t = 0;
+      s = clamp01(-c / a);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = clamp01(-c / a);
+      } else if (t > 1) {
+        t = 1;
+        s = clamp01((b - c) / a);
+      }
+    }
+  }
+  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
+}
+
 }  // namespace crux::closest_detail

@@ -1,5 +1,7 @@
-// The closest point of a sliver triangle, shared by closestPoint(Triangle) (closest_point.cpp)
-// and the sphere–triangle contact (triangle_contact.cpp), which also needs the point's region.
+// Closest-point routines shared inside the geometry layer: the closest point of a sliver
+// triangle (closestPoint(Triangle) in closest_point.cpp and the sphere–triangle contact in
+// triangle_contact.cpp, which also needs the point's region) and the one segment–segment
+// closest-point routine (GJK's core pairs, the contacts, triangle–triangle distance).
 #pragma once
 
 #include <crux/math.hpp>
@@ -26,5 +28,15 @@ inline constexpr double kSliverHeightRelative = 1e-3;
 /// edge from corner i to corner i+1 (mod 3), 3 + i corner i.
 int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                     const Eigen::Vector3d& p, Eigen::Vector3d& q);
+
+/// Closest points of the segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (Ericson, Real-Time
+/// Collision Detection, 5.1.9 ClosestPtSegmentSegment); a zero-length segment is its point.
+/// Parallel segments (a·e − b² = 0) fix s = 0, then clamp t and s in turn. No tolerance on the
+/// parallel test: for nearly parallel segments the rounded s may land anywhere on the overlap,
+/// where the distance varies by less than the rounding, whereas treating them as parallel (s = 0)
+/// is off by up to the angle × their length (1e-6 × L for a tolerance of 1e-12 on sin², measured
+/// on capsule pairs). Sets s and t; returns the squared distance.
+double segmentSegment(const Eigen::Vector3d& p1, const Eigen::Vector3d& d1, const Eigen::Vector3d& p2,
+                      const Eigen::Vector3d& d2, double& s, double& t);
 
 }  // namespace crux::closest_detail

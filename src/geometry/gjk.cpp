@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 
+#include "geometry/closest_point_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {
@@ -300,33 +301,12 @@ GjkResult gjk(const Placed& A, const Placed& B, double bound) {
 }
 
 double closestSegmentSegment(const V3& p1, const V3& q1, const V3& p2, const V3& q2, V3& c1, V3& c2) {
-  const V3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const V3 d1 = q1 - p1, d2 = q2 - p2;
   double s = 0, t = 0;
-  if (a <= 0 && e <= 0) {
-    s = t = 0;
-  } else if (a <= 0) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= 0) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denom = a * e - b * b;
-      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  c1 = p1 + d1 * s;
-  c2 = p2 + d2 * t;
-  return (c1 - c2).squaredNorm();
+  const double dist2 = closest_detail::segmentSegment(p1, d1, p2, d2, s, t);
+  c1 = p1 + s * d1;
+  c2 = p2 + t * d2;
+  return dist2;
 }
 
 namespace {

@@ -117,7 +117,7 @@ WideDistance coreQueryWide(const Placed& A, const Placed& B);
 DistanceResult coreQuery(const Placed& A, const Placed& B);
 
 /// Closest points of two segments [p1,q1], [p2,q2] (Ericson RTCD 5.1.9), degenerate segments
-/// included; returns the squared distance.
+/// included; returns the squared distance (closest_detail::segmentSegment, the one routine).
 double closestSegmentSegment(const V3& p1, const V3& q1, const V3& p2, const V3& q2, V3& c1, V3& c2);
 
 }  // namespace crux::detail

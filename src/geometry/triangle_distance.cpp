@@ -5,6 +5,8 @@
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
 
+#include "geometry/closest_point_internal.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,10 +17,6 @@ namespace {
 using V3 = Eigen::Vector3d;
 
 constexpr double kDoubleEps = std::numeric_limits<double>::epsilon();
-/// Segment pairs with a·e − b² <= kParallelTolerance·a·e (sin² of the angle between them) are
-/// treated as parallel (RTCD 5.1.9: s is fixed to 0, then t and s are clamped in turn).
-/// Above it the cancellation error of s only moves the distance to second order.
-constexpr double kParallelTolerance = 1e-12;
 /// A triangle whose doubled area |n| is at most this × (longest edge)² has no face: its edges
 /// (the segment it nearly is) carry the distance within rounding. 64 ulps of double.
 constexpr double kFlatTolerance = 64 * kDoubleEps;
@@ -42,38 +40,7 @@ std::uint32_t edgeFeature(int i, double s) {
 
 double clamp01(double x) { return x < 0 ? 0 : (x > 1 ? 1 : x); }
 
-/// Closest points of segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (RTCD 5.1.9); zero-length
-/// segments are points. Returns the squared distance.
-double segmentSegment(const V3& p1, const V3& d1, const V3& p2, const V3& d2, double& s, double& t) {
-  constexpr double kTiny = std::numeric_limits<double>::min();
-  const V3 r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  if (a <= kTiny && e <= kTiny) {
-    s = t = 0;
-  } else if (a <= kTiny) {
-    s = 0;
-    t = clamp01(f / e);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= kTiny) {
-      t = 0;
-      s = clamp01(-c / a);
-    } else {
-      const double b = d1.dot(d2);
-      const double denom = a * e - b * b;
-      s = denom > kParallelTolerance * a * e ? clamp01((b * f - c * e) / denom) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = clamp01(-c / a);
-      } else if (t > 1) {
-        t = 1;
-        s = clamp01((b - c) / a);
-      }
-    }
-  }
-  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
-}
+using closest_detail::segmentSegment;  // RTCD 5.1.9, closest_point_internal.hpp
 
 /// A triangle in double with its edges, (unnormalised) normal and whether it has a face.
 struct Tri {
