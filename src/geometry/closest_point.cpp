@@ -12,6 +12,7 @@
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/predicates.hpp>
 
+#include "geometry/bits.hpp"
 #include "geometry/closest_point_internal.hpp"
 
 namespace crux {
@@ -29,41 +30,22 @@ WVec3 closestOnSegment(const WVec3& a, const WVec3& b, const WVec3& p) {
   return a + ab * (t / len2);  // 0 < t < len2, so len2 > 0
 }
 
-/// Closest point of a proper (non-collinear) triangle: RTCD 5.1.5 ClosestPtPointTriangle.
-/// The vertex tests come first and are inclusive (<=, >=), so where an edge test would tie
-/// with a vertex test the vertex wins (the errata's (2,-0.5,0) case).
+/// Closest point of a proper (non-collinear) triangle: RTCD 5.1.5 ClosestPtPointTriangle, its
+/// region by closest_detail::closestRegionOnTriangle (the vertex tests come first and are
+/// inclusive, so where an edge test would tie with a vertex test the vertex wins: the errata's
+/// (2,-0.5,0) case).
 WVec3 closestOnProperTriangle(const WVec3& a, const WVec3& b, const WVec3& c, const WVec3& p) {
-  const WVec3 ab = b - a, ac = c - a, ap = p - a;
-  const Wide d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;  // vertex region A
-
-  const WVec3 bp = p - b;
-  const Wide d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;  // vertex region B
-
-  const Wide vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return closestOnSegment(a, b, p);  // edge region AB
-
-  const WVec3 cp = p - c;
-  const Wide d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;  // vertex region C
-
-  const Wide vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return closestOnSegment(a, c, p);  // edge region AC
-
-  const Wide va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return closestOnSegment(b, c, p);  // edge BC
-
+  WVec3 q;
+  if (closest_detail::closestRegionOnTriangle(a, b, c, p, q) >= 0) return q;  // an edge or a vertex
   // Face region: the orthogonal projection onto the plane. Computed from the normal rather than
   // from va/vb/vc, whose cancellation grows with the distance of p.
-  const WVec3 n = ab.cross(ac);
+  const WVec3 n = (b - a).cross(c - a);
   const Wide nn = n.squaredNorm();
   if (!(nn > 0)) {  // too thin for its normal to be formed: its boundary (closestOnSliver's)
-    WVec3 q;
     closest_detail::closestOnSliver(a, b, c, p, q);
     return q;
   }
-  return p - n * (n.dot(ap) / nn);
+  return p - n * (n.dot(p - a) / nn);
 }
 
 WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
@@ -295,6 +277,42 @@ double segmentSegment(const Eigen::Vector3d& p1, const Eigen::Vector3d& d1, cons
     }
   }
   return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
+}
+
+int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                            const Eigen::Vector3d& p, Eigen::Vector3d& q) {
+  using V3 = Eigen::Vector3d;
+  const V3 ab = b - a, ac = c - a, ap = p - a, bp = p - b, cp = p - c;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  const double e43 = d4 - d3, e56 = d5 - d6;
+  // RTCD's conditions in its order (& on bools, not &&: no branches)
+  const unsigned c3 = unsigned(d1 <= 0) & unsigned(d2 <= 0);
+  const unsigned c4 = unsigned(d3 >= 0) & unsigned(d4 <= d3);
+  const unsigned c0 = unsigned(vc <= 0) & unsigned(d1 >= 0) & unsigned(d3 <= 0);
+  const unsigned c5 = unsigned(d6 >= 0) & unsigned(d5 <= d6);
+  const unsigned c2 = unsigned(vb <= 0) & unsigned(d2 >= 0) & unsigned(d6 <= 0);
+  const unsigned c1 = unsigned(va <= 0) & unsigned(e43 >= 0) & unsigned(e56 >= 0);
+  // the first condition that holds, as a bit index in that order (7: none, the face)
+  const unsigned bits = c3 | c4 << 1 | c0 << 2 | c5 << 3 | c2 << 4 | c1 << 5 | 1u << 6;
+  static constexpr signed char kRegion[7] = {3, 4, 0, 5, 2, 1, -1};
+  const int region = kRegion[detail::lowestBit(bits)];
+  // The point without branches either: the edge's formula (by region; any edge for the others,
+  // its result then unused) and the vertex, one of the two picked by index.
+  static constexpr unsigned char kEdge[7] = {0, 0, 1, 2, 0, 0, 0}, kVertex[7] = {0, 0, 0, 0, 0, 1, 2};
+  const unsigned k = kEdge[region + 1];
+  const V3 cb = c - b;
+  const V3* base[3] = {&a, &b, &a};
+  const V3* dir[3] = {&ab, &cb, &ac};
+  const double num[3] = {d1, e43, d2}, den[3] = {d1 - d3, e43 + e56, d2 - d6};
+  V3 cand[2];
+  cand[0] = *base[k] + *dir[k] * (num[k] / den[k]);
+  const V3* corner[3] = {&a, &b, &c};
+  cand[1] = *corner[kVertex[region + 1]];
+  q = cand[region >= 3];
+  return region;
 }
 
 }  // namespace crux::closest_detail

@@ -1,7 +1,8 @@
 // Closest-point routines shared inside the geometry layer: the closest point of a sliver
 // triangle (closestPoint(Triangle) in closest_point.cpp and the sphere–triangle contact in
-// triangle_contact.cpp, which also needs the point's region) and the one segment–segment
-// closest-point routine (GJK's core pairs, the contacts, triangle–triangle distance).
+// triangle_contact.cpp, which also needs the point's region), the one point–triangle region
+// routine (the same two) and the one segment–segment closest-point routine (GJK's core pairs,
+// the contacts, triangle–triangle distance).
 #pragma once
 
 #include <crux/math.hpp>
@@ -28,6 +29,16 @@ inline constexpr double kSliverHeightRelative = 1e-3;
 /// edge from corner i to corner i+1 (mod 3), 3 + i corner i.
 int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                     const Eigen::Vector3d& p, Eigen::Vector3d& q);
+
+/// Closest point q of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions) and its
+/// region: -1 the face, 0..2 the edge from corner i to corner i+1 (mod 3), 3..5 the vertex
+/// region − 3. For the face q is left untouched (sphereCore computes it from the plane).
+/// RTCD's tests in RTCD's order with RTCD's formulas, but every dot product is taken first and
+/// the region is the first of the six conditions that holds, combined without branches: the
+/// region of a mesh's candidate triangles is unpredictable, and the mispredicted chain of early
+/// returns cost more than the dot products it skipped.
+int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                            const Eigen::Vector3d& p, Eigen::Vector3d& q);
 
 /// Closest points of the segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (Ericson, Real-Time
 /// Collision Detection, 5.1.9 ClosestPtSegmentSegment); a zero-length segment is its point.

@@ -10,7 +10,6 @@
 #include <cmath>
 #include <limits>
 
-#include "geometry/bits.hpp"
 #include "geometry/closest_point_internal.hpp"
 #include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
@@ -18,7 +17,6 @@
 namespace crux {
 namespace {
 
-using detail::lowestBit;  // geometry/bits.hpp
 
 using detail::V3;
 
@@ -118,47 +116,6 @@ void triangleFeature(const TriD& t, const V3& d, Feature& f) {
   vertexOrEdge(t.p, d, is, others, 2, f);
 }
 
-/// Closest point q of a non-degenerate triangle to p (RTCD 5.1.5, Voronoi regions) and its
-/// region: -1 the face, 0..2 the edge from corner i to corner i+1 (mod 3), 3..5 the vertex
-/// region − 3. For the face q is left untouched (sphereCore computes it from the plane).
-/// RTCD's tests in RTCD's order with RTCD's formulas, but every dot product is taken first and
-/// the region is the first of the six conditions that holds, combined without branches: the
-/// region of a mesh's candidate triangles is unpredictable, and the mispredicted chain of early
-/// returns cost more than the dot products it skipped.
-int closestRegionOnTriangle(const V3& a, const V3& b, const V3& c, const V3& p, V3& q) {
-  const V3 ab = b - a, ac = c - a, ap = p - a, bp = p - b, cp = p - c;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-  const double e43 = d4 - d3, e56 = d5 - d6;
-  // RTCD's conditions in its order (& on bools, not &&: no branches)
-  const unsigned c3 = unsigned(d1 <= 0) & unsigned(d2 <= 0);
-  const unsigned c4 = unsigned(d3 >= 0) & unsigned(d4 <= d3);
-  const unsigned c0 = unsigned(vc <= 0) & unsigned(d1 >= 0) & unsigned(d3 <= 0);
-  const unsigned c5 = unsigned(d6 >= 0) & unsigned(d5 <= d6);
-  const unsigned c2 = unsigned(vb <= 0) & unsigned(d2 >= 0) & unsigned(d6 <= 0);
-  const unsigned c1 = unsigned(va <= 0) & unsigned(e43 >= 0) & unsigned(e56 >= 0);
-  // the first condition that holds, as a bit index in that order (7: none, the face)
-  const unsigned bits = c3 | c4 << 1 | c0 << 2 | c5 << 3 | c2 << 4 | c1 << 5 | 1u << 6;
-  static constexpr signed char kRegion[7] = {3, 4, 0, 5, 2, 1, -1};
-  const int region = kRegion[lowestBit(bits)];
-  // The point without branches either: the edge's formula (by region; any edge for the others,
-  // its result then unused) and the vertex, one of the two picked by index.
-  static constexpr unsigned char kEdge[7] = {0, 0, 1, 2, 0, 0, 0}, kVertex[7] = {0, 0, 0, 0, 0, 1, 2};
-  const unsigned k = kEdge[region + 1];
-  const V3 cb = c - b;
-  const V3* base[3] = {&a, &b, &a};
-  const V3* dir[3] = {&ab, &cb, &ac};
-  const double num[3] = {d1, e43, d2}, den[3] = {d1 - d3, e43 + e56, d2 - d6};
-  V3 cand[2];
-  cand[0] = *base[k] + *dir[k] * (num[k] / den[k]);
-  const V3* corner[3] = {&a, &b, &c};
-  cand[1] = *corner[kVertex[region + 1]];
-  q = cand[region >= 3];
-  return region;
-}
-
 /// Closest point of segment [a, b] to p.
 V3 closestOnSegment(const V3& a, const V3& b, const V3& p) {
   const V3 ab = b - a;
@@ -251,7 +208,7 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
   if (!t.degenerate) {
     // a sliver takes no region tests (they cancel: closest_detail::closestOnSliver), and its
     // face point comes from there (the better-conditioned normal), not from the plane of mm
-    region = t.sliver ? closest_detail::closestOnSliver(a, b, c, p, q) : closestRegionOnTriangle(a, b, c, p, q);
+    region = t.sliver ? closest_detail::closestOnSliver(a, b, c, p, q) : closest_detail::closestRegionOnTriangle(a, b, c, p, q);
     if (region == SphereTriangleContact::kFace && !t.sliver) {  // exact projection: distance and normal from the plane, not from q - p
       const V3 mh = mm / t.len;
       const double h = mh.dot(p - a);
