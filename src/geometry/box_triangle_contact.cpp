@@ -82,52 +82,6 @@ struct Point {
   std::uint32_t fa, fb;
 };
 
-/// Keeps the deepest point, the farthest from it, and the two extreme signed areas about `u`
-/// (contact.cpp's reduction).
-void reduce(Point* pts, int& count, const V& u) {
-  if (count <= ContactManifold::kMaxContactPoints) return;
-  auto P = [&](int i) -> const V& { return pts[i].b; };
-  int sel[4] = {0, -1, -1, -1};
-  for (int i = 1; i < count; ++i)
-    if (pts[i].sep < pts[sel[0]].sep) sel[0] = i;
-  double best = -1;
-  for (int i = 0; i < count; ++i)
-    if (i != sel[0] && (P(i) - P(sel[0])).squaredNorm() > best) {
-      best = (P(i) - P(sel[0])).squaredNorm();
-      sel[1] = i;
-    }
-  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
-  int hi = -1, lo = -1;
-  for (int i = 0; i < count; ++i) {
-    if (i == sel[0] || i == sel[1]) continue;
-    if (hi < 0 || area(i) > area(hi)) hi = i;
-    if (lo < 0 || area(i) < area(lo)) lo = i;
-  }
-  sel[2] = hi;
-  sel[3] = lo;
-  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the largest triangle + the best 4th
-    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
-    sel[3] = -1;
-    double bestGain = -1;
-    for (int i = 0; i < count; ++i) {
-      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
-      double gain = 0;
-      for (int e = 0; e < 3; ++e) {
-        const V a = P(sel[e]), b = P(sel[(e + 1) % 3]);
-        gain = std::max(gain, std::abs((b - a).cross(P(i) - a).dot(u)));
-      }
-      if (gain > bestGain) {
-        bestGain = gain;
-        sel[3] = i;
-      }
-    }
-  }
-  Point kept[4];
-  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
-  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
-  count = 4;
-}
-
 /// Box vertex i in the local frame: signs (bit0, bit1, bit2) of i.
 V boxVertex(const V& h, int i) {
   return V((i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z());
@@ -630,7 +584,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     if (minSep > best.sep + kRealiseTolerance)
       return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
   }
-  reduce(pts, np, u);
+  contact_detail::reduceToFour(pts, np, u, [](const Point& p) { return p.b; }, [](const Point& p) { return p.sep; });
   out.normal = n.cast<Real>();
   out.count = np;
   for (int q = 0; q < np; ++q) {

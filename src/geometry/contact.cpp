@@ -205,55 +205,6 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
   }
 }
 
-/// Keeps the deepest point and the three that maximise the manifold's area (about axis u).
-void reduce(ContactPoint* pts, int& count, const V3& u) {
-  if (count <= ContactManifold::kMaxContactPoints) return;
-  int sel[4];
-  sel[0] = 0;
-  for (int i = 1; i < count; ++i)
-    if (pts[i].separation < pts[sel[0]].separation) sel[0] = i;
-  auto P = [&](int i) { return pts[i].pointB.template cast<double>(); };
-  double best = -1;
-  sel[1] = sel[0] == 0 ? 1 : 0;
-  for (int i = 0; i < count; ++i)
-    if ((P(i) - P(sel[0])).squaredNorm() > best) {
-      best = (P(i) - P(sel[0])).squaredNorm();
-      sel[1] = i;
-    }
-  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
-  int hi = -1, lo = -1;
-  for (int i = 0; i < count; ++i) {
-    if (i == sel[0] || i == sel[1]) continue;
-    if (hi < 0 || area(i) > area(hi)) hi = i;
-    if (lo < 0 || area(i) < area(lo)) lo = i;
-  }
-  sel[2] = hi;
-  sel[3] = lo;
-  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the two largest |area|
-    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
-    sel[3] = -1;
-    double a3 = -1;
-    for (int i = 0; i < count; ++i) {
-      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
-      // the point adding the most area to the triangle: max distance outside its edges
-      const V3 q = P(i);
-      double gain = 0;
-      for (int e = 0; e < 3; ++e) {
-        const V3 a = P(sel[e]), b = P(sel[(e + 1) % 3]);
-        gain = std::max(gain, std::abs((b - a).cross(q - a).dot(u)));
-      }
-      if (gain > a3) {
-        a3 = gain;
-        sel[3] = i;
-      }
-    }
-  }
-  ContactPoint kept[4];
-  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
-  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
-  count = 4;
-}
-
 }  // namespace
 
 Real ContactManifold::depth() const {
@@ -453,7 +404,9 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     int np = contact_detail::clipToReference<kMaxClipVerts>(ref, inc, refIsA, u, n, rA, rB, m, tol, pts);
     if (np > 0 && !contact_detail::keepsClosest(pts, np, double(dr.distance), tol)) np = 0;  // the pair below
     if (np > 0) {
-      reduce(pts, np, u);
+      contact_detail::reduceToFour(
+          pts, np, u, [](const ContactPoint& p) { return V3(p.pointB.template cast<double>()); },
+          [](const ContactPoint& p) { return p.separation; });
       out.normal = n.cast<Real>();
       out.count = np;
       for (int i = 0; i < np; ++i) out.points[i] = pts[i];
