@@ -7,6 +7,8 @@
 
 #include <crux/math.hpp>
 
+#include "geometry/bits.hpp"
+
 namespace crux::closest_detail {
 
 /// A triangle is a sliver when its height is below this × its longest edge (|(b−a)×(c−a)| <=
@@ -37,8 +39,42 @@ int closestOnSliver(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 /// the region is the first of the six conditions that holds, combined without branches: the
 /// region of a mesh's candidate triangles is unpredictable, and the mispredicted chain of early
 /// returns cost more than the dot products it skipped.
-int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                            const Eigen::Vector3d& p, Eigen::Vector3d& q);
+/// (Inline: the sphere–triangle contact calls it for every candidate triangle of a mesh.)
+inline int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                   const Eigen::Vector3d& p, Eigen::Vector3d& q) {
+  using V3 = Eigen::Vector3d;
+  const V3 ab = b - a, ac = c - a, ap = p - a, bp = p - b, cp = p - c;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+  const double e43 = d4 - d3, e56 = d5 - d6;
+  // RTCD's conditions in its order (& on bools, not &&: no branches)
+  const unsigned c3 = unsigned(d1 <= 0) & unsigned(d2 <= 0);
+  const unsigned c4 = unsigned(d3 >= 0) & unsigned(d4 <= d3);
+  const unsigned c0 = unsigned(vc <= 0) & unsigned(d1 >= 0) & unsigned(d3 <= 0);
+  const unsigned c5 = unsigned(d6 >= 0) & unsigned(d5 <= d6);
+  const unsigned c2 = unsigned(vb <= 0) & unsigned(d2 >= 0) & unsigned(d6 <= 0);
+  const unsigned c1 = unsigned(va <= 0) & unsigned(e43 >= 0) & unsigned(e56 >= 0);
+  // the first condition that holds, as a bit index in that order (7: none, the face)
+  const unsigned bits = c3 | c4 << 1 | c0 << 2 | c5 << 3 | c2 << 4 | c1 << 5 | 1u << 6;
+  static constexpr signed char kRegion[7] = {3, 4, 0, 5, 2, 1, -1};
+  const int region = kRegion[detail::lowestBit(bits)];
+  // The point without branches either: the edge's formula (by region; any edge for the others,
+  // its result then unused) and the vertex, one of the two picked by index.
+  static constexpr unsigned char kEdge[7] = {0, 0, 1, 2, 0, 0, 0}, kVertex[7] = {0, 0, 0, 0, 0, 1, 2};
+  const unsigned k = kEdge[region + 1];
+  const V3 cb = c - b;
+  const V3* base[3] = {&a, &b, &a};
+  const V3* dir[3] = {&ab, &cb, &ac};
+  const double num[3] = {d1, e43, d2}, den[3] = {d1 - d3, e43 + e56, d2 - d6};
+  V3 cand[2];
+  cand[0] = *base[k] + *dir[k] * (num[k] / den[k]);
+  const V3* corner[3] = {&a, &b, &c};
+  cand[1] = *corner[kVertex[region + 1]];
+  q = cand[region >= 3];
+  return region;
+}
 
 /// Closest points of the segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (Ericson, Real-Time
 /// Collision Detection, 5.1.9 ClosestPtSegmentSegment); a zero-length segment is its point.
@@ -47,7 +83,37 @@ int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, 
 /// where the distance varies by less than the rounding, whereas treating them as parallel (s = 0)
 /// is off by up to the angle × their length (1e-6 × L for a tolerance of 1e-12 on sin², measured
 /// on capsule pairs). Sets s and t; returns the squared distance.
-double segmentSegment(const Eigen::Vector3d& p1, const Eigen::Vector3d& d1, const Eigen::Vector3d& p2,
-                      const Eigen::Vector3d& d2, double& s, double& t);
+inline double segmentSegment(const Eigen::Vector3d& p1, const Eigen::Vector3d& d1, const Eigen::Vector3d& p2,
+                             const Eigen::Vector3d& d2, double& s, double& t) {
+  using V = Eigen::Vector3d;
+  const auto clamp01 = [](double x) { return x < 0 ? 0.0 : (x > 1 ? 1.0 : x); };
+  const V r = p1 - p2;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  if (a <= 0 && e <= 0) {
+    s = t = 0;
+  } else if (a <= 0) {
+    s = 0;
+    t = clamp01(f / e);
+  } else {
+    const double c = d1.dot(r);
+    if (e <= 0) {
+      t = 0;
+      s = clamp01(-c / a);
+    } else {
+      const double b = d1.dot(d2);
+      const double denom = a * e - b * b;
+      s = denom > 0 ? clamp01((b * f - c * e) / denom) : 0.0;
+      t = (b * s + f) / e;
+      if (t < 0) {
+        t = 0;
+        s = clamp01(-c / a);
+      } else if (t > 1) {
+        t = 1;
+        s = clamp01((b - c) / a);
+      }
+    }
+  }
+  return (p1 + s * d1 - (p2 + t * d2)).squaredNorm();
+}
 
 }  // namespace crux::closest_detail

@@ -300,15 +300,6 @@ GjkResult gjk(const Placed& A, const Placed& B, double bound) {
   return r;
 }
 
-double closestSegmentSegment(const V3& p1, const V3& q1, const V3& p2, const V3& q2, V3& c1, V3& c2) {
-  const V3 d1 = q1 - p1, d2 = q2 - p2;
-  double s = 0, t = 0;
-  const double dist2 = closest_detail::segmentSegment(p1, d1, p2, d2, s, t);
-  c1 = p1 + s * d1;
-  c2 = p2 + t * d2;
-  return dist2;
-}
-
 namespace {
 
 bool isPointOrSegment(const ConvexShape& s) { return s.kind == ConvexKind::Sphere || s.kind == ConvexKind::Capsule; }

@@ -1,4 +1,6 @@
 #pragma once
+
+#include "geometry/closest_point_internal.hpp"
 // Internal to src/geometry: the double-precision machinery shared by gjk.cpp, epa.cpp and
 // contact.cpp (shapes placed in the world, simplices, GJK and EPA entry points).
 
@@ -118,6 +120,13 @@ DistanceResult coreQuery(const Placed& A, const Placed& B);
 
 /// Closest points of two segments [p1,q1], [p2,q2] (Ericson RTCD 5.1.9), degenerate segments
 /// included; returns the squared distance (closest_detail::segmentSegment, the one routine).
-double closestSegmentSegment(const V3& p1, const V3& q1, const V3& p2, const V3& q2, V3& c1, V3& c2);
+inline double closestSegmentSegment(const V3& p1, const V3& q1, const V3& p2, const V3& q2, V3& c1, V3& c2) {
+  const V3 d1 = q1 - p1, d2 = q2 - p2;
+  double s = 0, t = 0;
+  const double dist2 = closest_detail::segmentSegment(p1, d1, p2, d2, s, t);
+  c1 = p1 + s * d1;
+  c2 = p2 + t * d2;
+  return dist2;
+}
 
 }  // namespace crux::detail
