@@ -1,6 +1,9 @@
 #include <crux/geometry/shapes.hpp>
+#include <crux/precondition.hpp>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 namespace crux {
@@ -97,5 +100,36 @@ void validate(const Triangle& triangle, const std::string& name) {
   requireFinite(triangle.b, name + "[1]");
   requireFinite(triangle.c, name + "[2]");
 }
+
+bool queryable(const Vec3& point) { return point.allFinite(); }
+bool queryable(const Ray& ray) {
+  return ray.origin.allFinite() && ray.dir.allFinite() && ray.dir.template cast<Wide>().squaredNorm() > 0;
+}
+bool queryable(const Segment& segment) { return segment.start.allFinite() && segment.end.allFinite(); }
+bool queryable(const Sphere& sphere) {
+  return sphere.center.allFinite() && std::isfinite(sphere.radius) && sphere.radius >= 0;
+}
+bool queryable(const Aabb& box) {
+  return box.min.allFinite() && box.max.allFinite() && (box.min.array() <= box.max.array()).all();
+}
+bool queryable(const Obb& box) {
+  return box.center.allFinite() && box.half.allFinite() && box.axes.allFinite() && (box.half.array() >= 0).all();
+}
+bool queryable(const Plane& plane) {
+  return plane.normal.allFinite() && std::isfinite(plane.d) && plane.normal.template cast<Wide>().squaredNorm() > 0;
+}
+bool queryable(const Triangle& triangle) {
+  return triangle.a.allFinite() && triangle.b.allFinite() && triangle.c.allFinite();
+}
+
+namespace detail {
+
+void preconditionFailed(const char* query, const char* rule) {
+  std::fprintf(stderr, "crux: precondition violated in %s: %s\n", query, rule);
+  std::fflush(stderr);
+  std::abort();
+}
+
+}  // namespace detail
 
 }  // namespace crux

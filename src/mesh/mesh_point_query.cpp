@@ -1,6 +1,7 @@
 /// @file mesh_point_query.cpp  Closest surface point of a mesh to a point (mesh_point_query.hpp).
 
 #include <crux/mesh/mesh_point_query.hpp>
+#include <crux/precondition.hpp>
 
 #include <crux/geometry/closest_point.hpp>
 
@@ -45,6 +46,8 @@ struct ClosestPointVisitor {
 }  // namespace
 
 MeshClosestPoint closestPoint(const Mesh& mesh, const Vec3& p, Real maxDistance, QueryPath path) {
+  if (!detail::entryPrecondition(p, "closestPoint(Mesh, point)", "a point with finite coordinates (validatePoint)"))
+    return {};
   ClosestPointVisitor v{mesh, p, maxDistance * maxDistance};
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i) v.visit(mesh.triangle(i), i);

@@ -7,6 +7,7 @@
 /// beyond the best hit. Closest, any and boolean queries allocate nothing.
 
 #include <crux/mesh/mesh_query.hpp>
+#include <crux/precondition.hpp>
 
 #include <crux/geometry/axis_aligned.hpp>
 #include <crux/geometry/overlap.hpp>
@@ -122,6 +123,16 @@ bool before(Real t, std::uint32_t tri, Real bestT, std::uint32_t bestTri) {
   return t < bestT || (t == bestT && tri < bestTri);
 }
 
+// The rules the entry points check (precondition.hpp: no answer, or an abort with
+// CRUX_CHECK_PRECONDITIONS).
+constexpr const char* kRayRule = "a ray with a finite origin and a finite, non-zero direction (validate(Ray))";
+constexpr const char* kSegmentRule = "a segment with finite ends (validate(Segment))";
+constexpr const char* kSphereRule = "a sphere with a finite centre and a finite radius >= 0 (validate(Sphere))";
+constexpr const char* kAabbRule = "an AABB with finite min <= max (validate(Aabb))";
+constexpr const char* kObbRule = "an OBB with finite centre and axes and finite half extents >= 0 (validate(Obb))";
+constexpr const char* kPlaneRule = "a plane with a finite, non-zero normal and a finite offset (validate(Plane))";
+constexpr const char* kTriangleRule = "a triangle with finite corners (validate(Triangle))";
+
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
   const Real scale = std::max(mesh.scale(), ray.origin.cwiseAbs().maxCoeff());
   return mesh_detail::RayBoxTest(ray.origin, ray.dir, scale);
@@ -191,6 +202,8 @@ struct RayAllVisitor {
 
 std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                       QueryPath path, bool stopAtFirst) {
+  if (!detail::entryPrecondition(ray, stopAtFirst ? "raycastAny(Mesh, Ray)" : "raycastClosest(Mesh, Ray)", kRayRule))
+    return std::nullopt;
   TriangleRayTest test(ray, options);
   test.count(options.counters);
   const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
@@ -260,6 +273,7 @@ Real shapeScale(const Mesh& mesh, std::initializer_list<Real> magnitudes) {
 Real absMax(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
 
 bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(s, "intersects / touchingTriangles(Mesh, Segment)", kSegmentRule)) return false;
   const Real scale = shapeScale(mesh, {absMax(s.start), absMax(s.end)});
   const Vec3 d = s.end - s.start;
   const mesh_detail::RayBoxTest box(s.start, d, scale);
@@ -286,6 +300,7 @@ bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vecto
 }
 
 bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(s, "overlaps / touchingTriangles(Mesh, Sphere)", kSphereRule)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {absMax(s.center), s.radius});
   auto node = [&](const Aabb& b) { return mesh_detail::sphereTouchesBox(s.center, s.radius, b, pad); };
   auto tri = [&](const Triangle& t) { return overlaps(t, s); };
@@ -293,6 +308,7 @@ bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<
 }
 
 bool aabbQuery(const Mesh& mesh, const Aabb& q, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Aabb)", kAabbRule)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {maxAbs(q)});
   auto node = [&](const Aabb& b) { return mesh_detail::boxTouchesBox(q, b, pad); };
   auto tri = [&](const Triangle& t) { return overlaps(t, q); };
@@ -300,6 +316,7 @@ bool aabbQuery(const Mesh& mesh, const Aabb& q, QueryPath path, std::vector<std:
 }
 
 bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Obb)", kObbRule)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {absMax(q.center) + q.half.sum()});
   const mesh_detail::ObbBoxTest box(q.axes, pad);
   const mesh_detail::ObbBoxTest::Placed placed = box.place(q.center, q.half);
@@ -310,6 +327,7 @@ bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::u
 }
 
 bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(p, "overlaps / touchingTriangles(Mesh, Plane)", kPlaneRule)) return false;
   const Real scale = mesh.scale();
   auto node = [&](const Aabb& b) { return mesh_detail::planeTouchesBox(p.normal, p.d, b, kNodeBoxPad, scale); };
   auto tri = [&](const Triangle& t) { return overlaps(t, p); };
@@ -317,6 +335,7 @@ bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<st
 }
 
 bool triangleQuery(const Mesh& mesh, const Triangle& q, QueryPath path, std::vector<std::uint32_t>* out) {
+  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Triangle)", kTriangleRule)) return false;
   const Aabb qb = bounds(q);
   const Real scale = shapeScale(mesh, {maxAbs(qb)});
   const Real pad = kNodeBoxPad * scale;
@@ -471,6 +490,7 @@ bool raycastAny(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options
 
 std::vector<MeshRayHit> raycastAll(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                    QueryPath path) {
+  if (!detail::entryPrecondition(ray, "raycastAll(Mesh, Ray)", kRayRule)) return {};
   std::vector<MeshRayHit> hits;
   const TriangleRayTest test(ray, options);
   if (path == QueryPath::BruteForce) {

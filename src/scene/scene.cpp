@@ -1,4 +1,5 @@
 #include <crux/scene/scene.hpp>
+#include <crux/precondition.hpp>
 
 #include <sstream>
 
@@ -202,6 +203,9 @@ void Scene::setParent(ModelId id, ModelId parent) {
 }
 
 std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions& options, ScenePath path) const {
+  if (!detail::entryPrecondition(ray, "Scene::raycast",
+                                 "a ray with a finite origin and a finite, non-zero direction (validate(Ray))"))
+    return std::nullopt;
   if (path == ScenePath::BroadPhase) {
     ClosestModelCollector collector(hierarchy_, ray, options);
     broadPhase_->raycast(ray, collector);
@@ -218,6 +222,10 @@ std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions&
 template <class Shape>
 std::vector<ModelId> Scene::regionQuery(const Shape& shape, RegionTest test, ScenePath path) const {
   std::vector<ModelId> result;
+  if (!detail::entryPrecondition(shape, "Scene::query",
+                                 "a finite sphere (radius >= 0), AABB (min <= max) or OBB (half extents >= 0): "
+                                 "validate(...)"))
+    return result;
   if (path == ScenePath::BroadPhase) {
     std::vector<ModelId> candidates;
     IdListCollector collector(candidates);

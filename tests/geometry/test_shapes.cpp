@@ -6,6 +6,7 @@
 #include <cmath>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/shapes.hpp>
+#include <crux/precondition.hpp>
 #include <limits>
 #include <string>
 
@@ -138,6 +139,56 @@ TEST(ValidateShapes, PlaneNormalWhoseSquaredLengthUnderflows) {
     EXPECT_EQ(q.z(), Real(7));
     EXPECT_TRUE(std::isfinite(squaredDistance(plane, p)));
   }
+}
+
+// ---- queryable: the cheap preconditions, without throwing ----------------------------------------
+
+/// Every kind of bad input the queries may be handed, with what validate() says of it.
+TEST(Queryable, RefusesWhatValidateRefusesOnTheCheapRules) {
+  const Real nan = std::numeric_limits<Real>::quiet_NaN(), inf = std::numeric_limits<Real>::infinity();
+  const auto both = [](const auto& shape) {
+    bool threw = false;
+    try {
+      validate(shape);
+    } catch (const InvalidInput&) {
+      threw = true;
+    }
+    return std::pair<bool, bool>{queryable(shape), threw};
+  };
+  for (const Real bad : {nan, inf, -inf}) {
+    for (int i = 0; i < 3; ++i) {
+      Vec3 v = Vec3(1, 2, 3);
+      v[i] = bad;
+      EXPECT_EQ(both(Ray{v, Vec3(0, 0, 1)}), std::make_pair(false, true));
+      EXPECT_EQ(both(Ray{Vec3::Zero(), v}), std::make_pair(false, true));
+      EXPECT_EQ(both(Segment{v, Vec3::Zero()}), std::make_pair(false, true));
+      EXPECT_EQ(both(Sphere{v, 1}), std::make_pair(false, true));
+      EXPECT_EQ(both(Aabb{v, Vec3::Constant(9)}), std::make_pair(false, true));
+      EXPECT_EQ(both(Obb{v, Vec3::Ones(), Mat3::Identity()}), std::make_pair(false, true));
+      EXPECT_EQ(both(Plane{v, 0}), std::make_pair(false, true));
+      EXPECT_EQ(both(Triangle{v, Vec3::Zero(), Vec3::Ones()}), std::make_pair(false, true));
+      EXPECT_FALSE(queryable(v));
+    }
+    EXPECT_EQ(both(Sphere{Vec3::Zero(), bad}), std::make_pair(false, true));
+    EXPECT_EQ(both(Plane{Vec3(0, 0, 1), bad}), std::make_pair(false, true));
+  }
+  EXPECT_EQ(both(Ray{Vec3::Zero(), Vec3::Zero()}), std::make_pair(false, true));
+  EXPECT_EQ(both(Sphere{Vec3::Zero(), -1}), std::make_pair(false, true));
+  EXPECT_EQ(both(Aabb{Vec3(1, 0, 0), Vec3(0, 1, 1)}), std::make_pair(false, true));
+  EXPECT_EQ(both(Obb{Vec3::Zero(), Vec3(1, -1, 1), Mat3::Identity()}), std::make_pair(false, true));
+  EXPECT_EQ(both(Plane{Vec3::Zero(), 0}), std::make_pair(false, true));
+  // valid, degenerate included: queryable and no exception
+  EXPECT_EQ(both(Ray{Vec3::Zero(), Vec3(0, 0, 1e-3f)}), std::make_pair(true, false));
+  EXPECT_EQ(both(Sphere{Vec3::Zero(), 0}), std::make_pair(true, false));
+  EXPECT_EQ(both(Aabb{Vec3::Zero(), Vec3::Zero()}), std::make_pair(true, false));
+  EXPECT_EQ(both(Obb{Vec3::Zero(), Vec3::Zero(), Mat3::Identity()}), std::make_pair(true, false));
+  EXPECT_EQ(both(Triangle{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()}), std::make_pair(true, false));
+  EXPECT_EQ(both(Segment{Vec3::Ones(), Vec3::Ones()}), std::make_pair(true, false));
+}
+
+TEST(Precondition, AViolationAbortsNamingTheQueryAndTheRule) {
+  EXPECT_DEATH(detail::preconditionFailed("raycastClosest(Mesh, Ray)", "a finite ray"),
+               "crux: precondition violated in raycastClosest\\(Mesh, Ray\\): a finite ray");
 }
 
 }  // namespace

@@ -7,7 +7,9 @@
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
+#include <crux/mesh/mesh_point_query.hpp>
 #include <crux/mesh/mesh_query.hpp>
+#include <crux/precondition.hpp>
 #include <exact/exact.hpp>
 
 #include <gtest/gtest.h>
@@ -1127,6 +1129,79 @@ TEST(MeshQueryRealMesh, BunnyAgainstItselfMovedMatchesPerTriangleQueries) {
     EXPECT_EQ(pairs, reference) << str(tb);
     EXPECT_EQ(overlaps(*m, Transform::identity(), *m, tb), !pairs.empty());
   }
+}
+
+// ---- preconditions: inputs that are not queryable get no answer, never UB -----------------------
+
+/// A closed tetrahedron around the queries' good inputs.
+Mesh preconditionTetrahedron() {
+  return Mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+}
+
+/// Each query family with NaN, +inf and -inf in every coordinate slot, a zero ray direction, a
+/// negative radius, min > max and a negative half extent: no hit, no overlap, an empty list (and
+/// before the entry checks, an infinite ray origin or OBB centre crashed the BVH walk).
+TEST(MeshQueryPreconditions, InputsThatAreNotQueryableGetNoAnswer) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (see DebugBuildsAbortNamingTheQuery)";
+  const Mesh mesh = preconditionTetrahedron();
+  const Real nan = std::numeric_limits<Real>::quiet_NaN(), inf = std::numeric_limits<Real>::infinity();
+  int cases = 0;
+  for (const QueryPath path : {QueryPath::Bvh, QueryPath::BruteForce}) {
+    const auto expectNone = [&](const auto& shape, const char* what) {
+      ++cases;
+      EXPECT_FALSE(overlaps(mesh, shape, path)) << what;
+      EXPECT_TRUE(touchingTriangles(mesh, shape, path).empty()) << what;
+    };
+    const auto expectNoRay = [&](const Ray& ray, const char* what) {
+      ++cases;
+      EXPECT_FALSE(raycastClosest(mesh, ray, {}, path).has_value()) << what;
+      EXPECT_FALSE(raycastAny(mesh, ray, {}, path)) << what;
+      EXPECT_TRUE(raycastAll(mesh, ray, {}, path).empty()) << what;
+    };
+    for (const Real bad : {nan, inf, -inf}) {
+      for (int i = 0; i < 3; ++i) {
+        Vec3 v(Real(0.2), Real(0.2), Real(-1));  // each good input below touches the mesh
+        v[i] = bad;
+        expectNoRay(Ray{v, Vec3(0, 0, 1)}, "ray origin");
+        Vec3 d(0, 0, 1);
+        d[i] = bad;
+        expectNoRay(Ray{Vec3(Real(0.2), Real(0.2), -1), d}, "ray direction");
+        ++cases;
+        EXPECT_FALSE(intersects(mesh, Segment{v, Vec3(Real(0.2), Real(0.2), 2)}, path));
+        EXPECT_TRUE(touchingTriangles(mesh, Segment{v, Vec3(Real(0.2), Real(0.2), 2)}, path).empty());
+        Vec3 c = Vec3::Constant(Real(0.2));
+        c[i] = bad;
+        expectNone(Sphere{c, 1}, "sphere centre");
+        expectNone(Aabb{c, Vec3::Constant(2)}, "aabb min");
+        expectNone(Obb{c, Vec3::Ones(), Mat3::Identity()}, "obb centre");
+        expectNone(Triangle{c, Vec3(1, 1, 1), Vec3(-1, 1, 0)}, "triangle corner");
+        Vec3 n(1, 1, 1);
+        n[i] = bad;
+        expectNone(Plane{n, Real(0.5)}, "plane normal");
+        ++cases;
+        EXPECT_FALSE(closestPoint(mesh, c, kNoLimit, path).found);
+      }
+      expectNone(Sphere{Vec3::Constant(Real(0.2)), bad}, "sphere radius");
+      expectNone(Plane{Vec3(1, 1, 1), bad}, "plane offset");
+    }
+    expectNoRay(Ray{Vec3(Real(0.2), Real(0.2), -1), Vec3::Zero()}, "zero direction");
+    expectNone(Sphere{Vec3::Constant(Real(0.2)), -1}, "negative radius");
+    expectNone(Aabb{Vec3(1, 0, 0), Vec3(0, 1, 1)}, "min > max");
+    expectNone(Obb{Vec3::Constant(Real(0.2)), Vec3(1, -1, 1), Mat3::Identity()}, "negative half extent");
+    expectNone(Plane{Vec3::Zero(), 0}, "zero normal");
+    // the same inputs made good are answered
+    EXPECT_TRUE(raycastClosest(mesh, Ray{Vec3(Real(0.2), Real(0.2), -1), Vec3(0, 0, 1)}, {}, path).has_value());
+    EXPECT_TRUE(overlaps(mesh, Sphere{Vec3::Constant(Real(0.2)), 1}, path));
+    EXPECT_TRUE(overlaps(mesh, Obb{Vec3::Constant(Real(0.2)), Vec3::Ones(), Mat3::Identity()}, path));
+  }
+  EXPECT_GT(cases, 150);
+}
+
+TEST(MeshQueryPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "CRUX_CHECK_PRECONDITIONS is off in this (release) build";
+  const Mesh mesh = preconditionTetrahedron();
+  EXPECT_DEATH(raycastClosest(mesh, Ray{Vec3::Zero(), Vec3::Zero()}), "precondition violated in raycastClosest");
+  EXPECT_DEATH(overlaps(mesh, Sphere{Vec3::Zero(), -1}), "precondition violated in overlaps");
 }
 
 }  // namespace

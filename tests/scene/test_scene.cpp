@@ -8,6 +8,7 @@
 // applied to every world-space triangle.
 
 #include <crux/scene/scene.hpp>
+#include <crux/precondition.hpp>
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/mesh/mesh.hpp>
@@ -591,6 +592,47 @@ TEST(Scene, IntegerGridQueriesAndPairsAreExact) {
               " %zu model pairs (%.0f%% touching)\n",
               queries, 100 * sphereRate.rate(), 100 * boxRate.rate(), 100 * obbRate.rate(), rayRate.n,
               100 * rayRate.rate(), pairChecks, 100 * pairRate.rate());
+}
+
+// ---- preconditions ------------------------------------------------------------------------------
+
+/// Scene rays and region queries with non-finite inputs, a zero direction or a negative radius get
+/// no answer on every broad phase and on the brute-force path (an infinite ray origin crashed every
+/// one of them before the entry check).
+TEST(ScenePreconditions, InputsThatAreNotQueryableGetNoAnswer) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead";
+  const Real nan = std::numeric_limits<Real>::quiet_NaN(), inf = std::numeric_limits<Real>::infinity();
+  const auto mesh = std::make_shared<const Mesh>(
+      std::vector<Vec3>{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)},
+      std::vector<TriangleIndices>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  for (const BroadPhaseKind kind : {BroadPhaseKind::DynamicAabbTree, BroadPhaseKind::Octree, BroadPhaseKind::BruteForce}) {
+    Scene scene(kind);
+    scene.add(mesh);
+    scene.add(mesh, Transform{Quat::Identity(), Vec3(3, 0, 0)});
+    for (const ScenePath path : {ScenePath::BroadPhase, ScenePath::BruteForce}) {
+      for (const Real bad : {nan, inf, -inf}) {
+        for (int i = 0; i < 3; ++i) {
+          Vec3 v(Real(0.2), Real(0.2), -1);
+          v[i] = bad;
+          EXPECT_FALSE(scene.raycast(Ray{v, Vec3(0, 0, 1)}, {}, path).has_value());
+          Vec3 d(0, 0, 1);
+          d[i] = bad;
+          EXPECT_FALSE(scene.raycast(Ray{Vec3(Real(0.2), Real(0.2), -1), d}, {}, path).has_value());
+          Vec3 c = Vec3::Constant(Real(0.2));
+          c[i] = bad;
+          for (const RegionTest test : {RegionTest::Triangles, RegionTest::Bounds}) {
+            EXPECT_TRUE(scene.query(Sphere{c, 1}, test, path).empty());
+            EXPECT_TRUE(scene.query(Aabb{c, Vec3::Constant(4)}, test, path).empty());
+            EXPECT_TRUE(scene.query(Obb{c, Vec3::Ones(), Mat3::Identity()}, test, path).empty());
+          }
+        }
+        EXPECT_TRUE(scene.query(Sphere{Vec3::Constant(Real(0.2)), bad}, RegionTest::Triangles, path).empty());
+      }
+      EXPECT_FALSE(scene.raycast(Ray{Vec3(Real(0.2), Real(0.2), -1), Vec3::Zero()}, {}, path).has_value());
+      EXPECT_TRUE(scene.query(Sphere{Vec3::Constant(Real(0.2)), -1}, RegionTest::Triangles, path).empty());
+      EXPECT_TRUE(scene.raycast(Ray{Vec3(Real(0.2), Real(0.2), -1), Vec3(0, 0, 1)}, {}, path).has_value());
+    }
+  }
 }
 
 }  // namespace

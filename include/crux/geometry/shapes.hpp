@@ -120,6 +120,21 @@ void validate(const Triangle& triangle, const std::string& name = "triangle");
 /// Throws InvalidInput unless every coordinate of p is finite.
 void validatePoint(const Vec3& p, const std::string& name = "point");
 
+/// The cheap preconditions of the queries, without throwing: every coordinate finite, a ray's
+/// direction and a plane's normal non-zero (squared length > 0 in double), a radius and half
+/// extents >= 0, an AABB's min <= max. validate(...) checks the same (and an OBB's orthonormal
+/// axes) and throws InvalidInput naming the field. Queries given an input that fails these answer
+/// nothing (no hit, no overlap, an empty list) and, in builds with CRUX_CHECK_PRECONDITIONS
+/// (precondition.hpp), abort with a message naming the query.
+bool queryable(const Ray& ray);
+bool queryable(const Segment& segment);
+bool queryable(const Sphere& sphere);
+bool queryable(const Aabb& box);
+bool queryable(const Obb& box);
+bool queryable(const Plane& plane);
+bool queryable(const Triangle& triangle);
+bool queryable(const Vec3& point);
+
 /// Bounding box of a triangle.
 inline Aabb bounds(const Triangle& t) {
   Aabb b{t.a, t.a};

@@ -6,6 +6,12 @@
 /// Per-triangle decisions are the geometry layer's exact tests, so a boolean answer on
 /// integer-grid input is exact, and rays through shared edges/vertices are never lost
 /// (watertight).
+///
+/// Preconditions (precondition.hpp): every coordinate of the query shape finite, a ray's
+/// direction and a plane's normal non-zero, a radius and half extents >= 0, an AABB's
+/// min <= max (queryable(...), geometry/shapes.hpp). An input that fails them gets no answer —
+/// no hit, false, an empty list — and, in builds with CRUX_CHECK_PRECONDITIONS (debug builds),
+/// an abort naming the query. validate(...) throws InvalidInput naming the field instead.
 
 #include <crux/geometry/raycast.hpp>
 #include <crux/mesh/mesh.hpp>

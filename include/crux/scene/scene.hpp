@@ -101,7 +101,10 @@ class Scene {
   PlacedMesh placed(ModelId id) const { return hierarchy_.placed(id); }
   std::size_t size() const { return hierarchy_.size(); }
 
-  /// Closest hit over all models (ties: lowest model id, then the model's own rule). The broad
+  /// Preconditions of raycast and query as of the mesh queries (mesh_query.hpp, precondition.hpp):
+/// a ray, sphere, AABB or OBB that is not queryable(...) gets no hit or an empty list (an abort
+/// naming the query with CRUX_CHECK_PRECONDITIONS).
+/// Closest hit over all models (ties: lowest model id, then the model's own rule). The broad
   /// phase visits boxes front to back and prunes every box entered beyond the best hit.
   std::optional<SceneRayHit> raycast(const Ray& ray, const RayQueryOptions& options = {},
                                      ScenePath path = ScenePath::BroadPhase) const;
