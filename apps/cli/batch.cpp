@@ -424,7 +424,7 @@ const std::vector<std::string_view>& protocolOps() {
         "model_sphere", "model_aabb", "model_obb", "model_plane", "model_triangle", "children",
         // scene
         "scene_ray", "scene_query", "scene_pairs",
-        // narrow phase and volumes (issue 6; beyond the shared contract, see docs/batch.md)
+        // narrow phase and volumes (beyond the shared contract, see docs/batch.md)
         "contacts", "distance", "mesh_distance", "model_distance", "point_inside",
         // shape casts (docs/batch.md)
         "cast"};

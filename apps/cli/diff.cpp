@@ -58,10 +58,10 @@ double maxDiff(const J& a, const J& b) {
 /// How two answers to the same query differ.
 enum class Difference { None, Boolean, Numeric, List, Shape };
 
-// ---- the narrow-phase ops (issue 6): distance, contacts, mesh_distance, model_distance ------------
+// ---- the narrow-phase ops: distance, contacts, mesh_distance, model_distance ------------
 
 /// Distances, depths and witnesses of the narrow-phase ops are compared within kNarrowRelative·s
-/// (s: the case's magnitude) on top of the backends' declared tolerances: issue 6's bound, 1e-6
+/// (s: the case's magnitude) on top of the backends' declared tolerances: the narrow phase's bound, 1e-6
 /// relative, in double builds; in float builds inputs and outputs are rounded to float, so 64
 /// float ulps (7.6e-6) relative (docs/narrowphase.md "Accuracy").
 constexpr double kNarrowRelative =
@@ -439,9 +439,9 @@ const Mesh* caseMesh(const DiffCase& c, const std::string& name, std::vector<std
 
 /// rayHitOnMovedTriangle for a `mesh_ray` (no transform: mesh coordinates are world ones) whose
 /// answer and exact's hit the same triangle of the mesh: the answer is the exact hit of that
-/// triangle moved by at most `move` (session 14: grazing rays on blob-closed, |cos θ| 7.5e-5 and
+/// triangle moved by at most `move` (found on grazing rays on blob-closed, |cos θ| 7.5e-5 and
 /// 5.6e-4, t off by 6.7e-13 and 8e-14 in double builds, were reported crux-wrong for lack of this
-/// rule, which `ray_triangle` had since session 8).
+/// rule, which `ray_triangle` already had).
 bool meshRayHitOnMovedTriangle(const DiffCase& c, const J& query, const J& got, const J& exact, double move,
                                double tolerance) {
   if (!query.contains("mesh") || !query["mesh"].is_string() || !got.contains("triangle") || !exact.contains("triangle") ||
@@ -934,7 +934,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   const J query = J::parse(c.query, nullptr, false);
   const double s = std::max(caseMagnitude(c), 1e-300);
   const bool narrow = isNarrowOp(c.op);
-  // the narrow-phase ops' numbers: issue 6's relative bound on top of the declared tolerance
+  // the narrow-phase ops' numbers: the narrow phase's relative bound on top of the declared tolerance
   const double tau = tol.at(s) + (narrow ? kNarrowRelative * s : 0);
   const double numTol = tau + exactTol.at(s);
   const Difference diff = compareAnswers(c.op, query, got, exact, numTol);

@@ -1,5 +1,5 @@
 #pragma once
-/// @file diff.hpp  `crux diff`: the differential fuzzer (issue 5; user documentation: docs/diff.md).
+/// @file diff.hpp  `crux diff`: the differential fuzzer (user documentation: docs/diff.md).
 ///
 /// Generates cases in named families, runs each through the batch protocol (answerLine, one fresh
 /// BatchState per backend, so every case is replayable with `crux batch --backend X`), compares

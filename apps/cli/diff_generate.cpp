@@ -178,7 +178,7 @@ double nudgedFloat(double x, Rng& rng) {
 /// corners in a random order: a needle whose tiny edge lies near the origin (10^-8 to 10^-25)
 /// against a corner ~1 away, a needle whose tiny edge is a few float ulps long at a corner ~1
 /// from the origin, or a flat cap (the midpoint of two corners moved a few ulps). RTCD's region
-/// tests cancel on such triangles (session 11: closest points off the triangle, a sphere contact
+/// tests cancel on such triangles (found by crux diff: closest points off the triangle, a sphere contact
 /// 6 % too deep, capsules rejected by the tilted plane).
 Tri sliverTriangle(Rng& rng) {
   Tri t;
@@ -944,7 +944,7 @@ DiffCase sceneCase(std::string_view op, Rng& rng) {
   return c;
 }
 
-// ---- narrow phase (issue 6): distance, contacts, mesh_distance (model_distance: above) -------------
+// ---- narrow phase: distance, contacts, mesh_distance (model_distance: above) -------------
 
 /// A convex operand of the narrow-phase ops (docs/batch.md "Operands") around `at`: a sphere,
 /// box, capsule, hull (4–8 points) or triangle, on the grid (integer coordinates, signed

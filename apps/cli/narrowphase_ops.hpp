@@ -1,6 +1,6 @@
 #pragma once
-/// @file narrowphase_ops.hpp  Handlers of the batch protocol's narrow-phase and volume ops (issue
-/// 6; documented in docs/batch.md, "Contacts, distance and volumes"): `contacts`, `distance`,
+/// @file narrowphase_ops.hpp  Handlers of the batch protocol's narrow-phase and volume ops
+/// (documented in docs/batch.md, "Contacts, distance and volumes"): `contacts`, `distance`,
 /// `mesh_distance`, `model_distance`, `point_inside`, and `cast` (shape casts). Each reads its fields, resolves mesh and
 /// model names, and asks the batch's crux::CollisionWorld (CollisionWorld::contacts, distance,
 /// meshDistance, modelDistance, pointInside).

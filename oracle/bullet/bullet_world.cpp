@@ -300,7 +300,7 @@ class BulletWorld final : public CollisionWorld {
   }
   bool supports(WorldOp op) const override {
     // No Bullet algorithm for a static plane against a static mesh: mesh_plane, model_plane.
-    // Of the narrow-phase ops (issue 6) only contacts (contactPairTest): Bullet has no
+    // Of the narrow-phase ops only contacts (contactPairTest): Bullet has no
     // closed-volume mode, and its distances are convex-only (btGjkPairDetector).
     if (op == WorldOp::Contacts) return true;
     return isContractOp(op) && op != WorldOp::MeshPlane && op != WorldOp::ModelPlane;

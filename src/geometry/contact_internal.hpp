@@ -24,7 +24,7 @@ inline constexpr double kOnFeatureUlps = 8;
 /// which moves points projected onto its plane by that × L. A triangle is used as a REFERENCE
 /// face (or named as the feature against a shape without faces) only when this stays within
 /// kOnFeatureUlps/2 Real ulps of L, i.e. when |(b−a)×(c−a)| >= kSliverAreaRatio·L²; a sliver is
-/// clipped as its supporting edge or vertex instead (issue 6: points landed off sliver
+/// clipped as its supporting edge or vertex instead (points used to land off sliver
 /// triangles). About 0.075 (a 1:13 triangle) in double builds, about 4e-9 in float builds.
 inline constexpr double kSliverAreaRatio =
     0.3 * std::numeric_limits<double>::epsilon() / (0.5 * kOnFeatureUlps * double(std::numeric_limits<Real>::epsilon()));
@@ -235,7 +235,7 @@ int clipToReference(const Feature& ref, const Feature& inc, bool refIsA, const E
   }
   // Edge reference: two edges within the feature angle but skew (offset across the normal) have
   // no common perpendicular there, and projecting along the normal would leave the reference
-  // edge (defect 2 of issue 6: points outside a box); past the rounding budget (for a rounded
+  // edge (points used to land outside a box); past the rounding budget (for a rounded
   // reference, the offset whose effect on its surface is that budget) the pair is skew.
   const double lateralTol = ref.n == 2 ? tol + std::sqrt(2 * (refIsA ? rA : rB) * tol) : 0;
   const V3 r0 = ref.v[0];

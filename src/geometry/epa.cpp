@@ -131,7 +131,7 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
     // The polytope only grows inside A - B, so its nearest face's distance never decreases; a
     // drop beyond the rounding tolerance means the last expansion broke it (a support point a
     // few 1e-12 from a vertex, on a sliver triangle whose corners are that close, made faces
-    // with meaningless normals: `crux diff`, session 15, double build). Answer with the face of
+    // with meaningless normals: found by `crux diff` in a double build). Answer with the face of
     // the last sound polytope, which `chosen` still holds.
     if (r.iterations > 1 && faces[best].d < chosen.d - (kGjkRelativeTolerance * std::abs(chosen.d) + tolAbs)) {
       brokeDown = true;
@@ -150,7 +150,7 @@ EpaResult epa(const Placed& A, const Placed& B, const Simplex& start) {
     // plane (within tolAbs) counts as seen: were it kept, w would lie on the line of its horizon
     // edge and the new face over that edge would have no area (a "degenerate step", which left
     // the depth at the origin's face, 0, for crossing shapes on integer grids: `crux diff`,
-    // session 14, e.g. a triangle through a flat box reported touching instead of 0.316 deep).
+    // found by `crux diff`: e.g. a triangle through a flat box reported touching instead of 0.316 deep).
     int ne = 0;
     for (int f = 0; f < nf; ++f) {
       Face& g = faces[f];

@@ -684,7 +684,7 @@ struct Collector {
   }
 
   /// A box's reduced points from its frame to the mesh frame (rounded once, as every point was
-  /// before session 8 kept them in the box frame); nothing when `frame` is the mesh frame.
+  /// earlier versions kept them in the box frame); nothing when `frame` is the mesh frame.
   void toMeshFrame(MeshContactManifold& out) const {
     if (&frame == &ls) return;
     const Eigen::Matrix3d R = ls.boxToLocal.transpose();

@@ -247,7 +247,7 @@ std::pair<J, double> expectGrazingRule(DiffRunner& runner, const DiffCase& grazi
   return {exact, tau};
 }
 
-/// A grazing ray: |cos| 5e-4 between the ray and the triangle's normal (session 8's case).
+/// A grazing ray: |cos| 5e-4 between the ray and the triangle's normal (an earlier case).
 constexpr const char* kGrazingTriangle =
     R"([[-3.7787996453542023,0.265869140625,7.060639381408691],[-3.439453125,1.6386329013511354,7.08203125],)"
     R"([-7.165391951889235,2.5888671875,5.2898783683776855]])";
@@ -264,7 +264,7 @@ TEST(DiffClassify, GrazingRayHitOnATriangleMovedWithinTauIsWithinTolerance) {
   expectGrazingRule(runner, rayCase(kGrazingTriangle, kGrazingRay), rayCase(kHeadOnTriangle, kHeadOnRay));
 }
 
-// The same rule for a `mesh_ray` (session 14: two grazing hits on blob-closed in a double-build
+// The same rule for a `mesh_ray` (two grazing hits on blob-closed in a double-build
 // run were reported crux-wrong for lack of it): the triangle both answers name, taken from the
 // mesh, moved by at most tau. A hit on another triangle than exact's is not rescued by it.
 TEST(DiffClassify, GrazingMeshRayHitOnATriangleMovedWithinTauIsWithinTolerance) {
@@ -415,7 +415,7 @@ TEST(DiffRun, SameSeedSameSummary) {
   o.seed = 11;
   o.cases = 40;
   o.backends = {"native", "fcl"};
-  // issue 5's ops: FCL's narrow phase aborts or loops on some pairs, and this runner answers
+  // the primitive and mesh ops only: FCL's narrow phase aborts or loops on some pairs, and this runner answers
   // in process (no worker executable); DiffNarrowPhase covers those ops
   o.ops = {"triangle_sphere", "triangle_aabb", "triangle_obb", "triangle_triangle", "closest_point_triangle",
            "mesh_sphere", "mesh_mesh", "model_sphere", "scene_pairs"};
@@ -448,7 +448,7 @@ TEST(DiffRun, ShortRunFindsNoCruxWrong) {
   o.seed = 2026;
   o.cases = 300;
   o.backends = {"native"};
-  // the ops of issue 5 (the narrow-phase ops have their own run below: DiffNarrowPhase)
+  // the primitive and mesh ops (the narrow-phase ops have their own run below: DiffNarrowPhase)
   for (const auto family : diffFamilies())
     for (const auto op : diffFamilyOps(family))
       if (op != "distance" && op != "contacts" && op != "mesh_distance" && op != "model_distance" &&
@@ -636,7 +636,7 @@ TEST(DiffNarrowPhase, PlantedDisagreementsAreClassified) {
   // the true answer agrees
   auto k = classify(runner, c, "native", distanceAnswer(1, Vec3d(1, 0, 0), Vec3d(2, 0, 0)));
   EXPECT_EQ(k.verdict, Verdict::Agree) << describe(k);
-  // a distance 1e-3 off is far beyond issue 6's 1e-6 relative: crux wrong
+  // a distance 1e-3 off is far beyond the narrow phase's 1e-6 relative: crux wrong
   k = classify(runner, c, "native", distanceAnswer(1.001, Vec3d(0.9995, 0, 0), Vec3d(2.0005, 0, 0)));
   EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
   EXPECT_EQ(k.cause, "beyond-tolerance");

@@ -29,7 +29,7 @@
 namespace crux::fuzz {
 namespace {
 
-/// The coordinate magnitude up to which crux documents meaningful answers (issue 8, "Limits").
+/// The coordinate magnitude up to which crux documents meaningful answers (docs/limits.md, "Limits").
 constexpr Wide kCoordinateLimit = 1e15;
 /// Closest points may leave their shape by this many ulps of the operands' magnitude...
 constexpr Wide kOnShapeUlps = 256;

@@ -162,7 +162,7 @@ TEST(ClosestPointTriangle, SliverWithATinyEdgeIsNotTakenForThatEdge) {
   EXPECT_NEAR(double(squaredDistance(t, p)), (s - p).cast<double>().squaredNorm(), 1e-2);
 }
 
-// Slivers with a tiny edge (needles). (1) Found by a scratch search after session 10 (the fuzz
+// Slivers with a tiny edge (needles). (1) Found by a scratch search (the fuzz
 // check skipped slivers' in-triangle test): a tiny edge near the origin (1e-17) against edges of
 // 0.07; RTCD's products vc, vb, va cancelled, the face region was taken and p was projected onto
 // the plane 0.016 off the triangle, nearer to p than any point of it. (2) Found by fuzz_geometry

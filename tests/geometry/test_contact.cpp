@@ -289,7 +289,7 @@ TEST(Contacts, BadMarginIsInvalidInputNamingIt) {
 }  // namespace
 }  // namespace crux
 
-// ---- issue 6 regressions: sliver triangles, nearly parallel offset edges (triangle A, box B) ----
+// ---- regressions: sliver triangles, nearly parallel offset edges (triangle A, box B) ----
 
 namespace crux {
 namespace {
@@ -460,7 +460,7 @@ TEST(ContactsOnTheBoundary, RandomSliverTrianglesStayOnBothShapes) {
   std::printf("slivers: %d contacts of %d, %d with > 1 point\n", found, n, multi);
 }
 
-// ---- quarter turns on the integer grid (issue 6: found by `crux diff`) ---------------------------
+// ---- quarter turns on the integer grid (found by `crux diff`) ---------------------------
 
 /// The 24 rotations mapping coordinate axes to signed coordinate axes: the exact integer matrix
 /// (a permutation with signs, determinant +1, built here by hand) and the unit quaternion a user
@@ -588,7 +588,7 @@ TEST(ContactsOnTheBoundary, GridBoxesUnderQuarterTurnsAtSeparationEqualToTheMarg
 }
 
 
-// ---- degenerate shapes: no duplicate contact points (issue 6) ----------------------------------
+// ---- degenerate shapes: no duplicate contact points ----------------------------------
 
 /// Index pair (i, j) of two points of `m` that coincide on both bodies within `tol`, or (-1, -1).
 std::pair<int, int> coincidentPoints(const ContactManifold& m, double tol) {
@@ -783,7 +783,7 @@ struct TouchingTally {
   }
 };
 
-// Touching on the integer grid is reported by the convex pair contacts too (issue 6's exactness
+// Touching on the integer grid is reported by the convex pair contacts too (the exactness
 // on grids): an integer point X at an integer distance k from a segment s0 + t·d whose foot on
 // the line is at a rational, unrepresentable t inside it (searched: |w|²|d|² - (w·d)² = k²|d|²);
 // shapes built on X (a triangle or a capsule's segment reaching into the half-space away from the
@@ -822,7 +822,7 @@ TEST(ContactsOnTheBoundary, TouchingSimplexCoresOnTheIntegerGridHaveAContact) {
 
 // Hulls of 1-3 points (degenerate ConvexHulls: a point, a segment, a triangle) are cores of 1-3
 // points too: contacts() decides their margin exactly like the spheres', capsules' and
-// triangles' (before session 10 they kept GJK's decision and a triangle hull 5 from a capsule of
+// triangles' (earlier they kept GJK's decision and a triangle hull 5 from a capsule of
 // radius 5 at margin 0 was missed).
 TEST(ContactsOnTheBoundary, TouchingDegenerateHullsOnTheIntegerGridHaveAContact) {
   test::GridDraws draws(0x4a11u);
@@ -977,7 +977,7 @@ TEST(ContactsOnTheBoundary, TouchingPolytopesOnTheIntegerGridHaveAContact) {
 }
 
 // Two polytopes (a hull of more than 3 vertices and a box) decide the margin exactly too, on
-// their boundary triangles (contacts(), polytopesWithin): the two `crux diff` cases of session 15
+// their boundary triangles (contacts(), polytopesWithin): the two `crux diff` cases
 // (seed 15042, double build, tests/regressions/native.crux-wrong.contacts.15042-*): integer-grid
 // pairs exactly 1 apart along (0, −0.8, −0.6) and (6, 3, 2)/7, where GJK's double distance came out
 // a hair above 1 and the margin-1 contact was missed. Reported at margin 1 with separation 1 (the

@@ -143,7 +143,7 @@ TEST(ConvexHull, IntegerGridBoxWithManyCoplanarPoints) {
 
 // The build is translation invariant on integer points: a cloud moved by up to 2^21 (exact in
 // float and double) has the moved hull of the cloud at the origin, vertex for vertex and face for
-// face. Before session 11 the build's plane tests n·p − d ran on the raw coordinates, whose
+// face. Earlier the build's plane tests n·p − d ran on the raw coordinates, whose
 // rounding far from the origin exceeded its tolerance (100 ulps of the cloud's small diagonal) in
 // double builds: hulls came out with missing faces, and touching hulls were not reported
 // (ContactsOnTheBoundary.TouchingPolytopesOnTheIntegerGridHaveAContact).

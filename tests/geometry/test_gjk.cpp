@@ -490,7 +490,7 @@ void expectCrossingDepthsMatchSat(const std::vector<CrossingPair>& cases, double
   }
 }
 
-// Found by `crux diff` (session 14, tests/regressions/*.14201-*, *.14202-*): integer-grid pairs
+// Found by `crux diff` (tests/regressions/*.14201-*, *.14202-*): integer-grid pairs
 // whose Minkowski difference holds the origin on the plane of GJK's final triangle. EPA grew it
 // to a tetrahedron with the origin on a face, and the support point of its first expansion lay on
 // the line of a horizon edge (the face beyond that edge has it in its plane and was kept), so the
@@ -523,7 +523,7 @@ TEST(GjkExact, EpaExpandsPastAFaceHoldingTheNewPointInItsPlane) {
 }
 
 /// Sliver triangles (two corners ~1e-12 apart) against a flat box and a hull (`crux diff`,
-/// session 15, double build, family `sliver`): EPA's last expansion took a support point a few
+/// double build, family `sliver`): EPA's last expansion took a support point a few
 /// 1e-12 from a polytope vertex (the sliver's twin corner), the faces it made had meaningless
 /// normals and the nearest one lay *nearer* than the face before (0.102 -> -0.152: depth 0,
 /// "touching"; 0.359 -> 0.350: 2.5 % shallow). EPA's nearest-face distance never decreases in

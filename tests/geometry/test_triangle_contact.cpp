@@ -558,7 +558,7 @@ TEST(TriangleContact, CapsuleThroughTheFaceTakesTheMinimumTranslation) {
   EXPECT_GT(double(minSeparation(m)), -0.03);
 }
 
-// Touching on the integer grid must be reported (issue 6: every boolean answer on integer-grid
+// Touching on the integer grid must be reported (every boolean answer on integer-grid
 // inputs equals the exact answer; crux diff found a capsule touching a segment triangle at
 // distance exactly 1, which the double distance put at 1 + 2e-16, and dropped). Two constructions,
 // each touching at radius + margin = k exactly and apart by 1 at one less:

@@ -721,7 +721,7 @@ TEST(TriangleObbProperty, GeneralPositionMatchesExactOracle) {
 /// as {x : |u_i·(x − c)| <= h_i} (the axes as slab normals), and so must the exact oracle
 /// (exact.hpp); the parallelepiped the axes span differs from it by ~2e-5 × the extents. Small
 /// triangles are placed across the slab boundary, within ±3e-6 of it, where the readings part.
-/// Found by `crux diff` (session 15): two float-build `triangle_obb` cases, a flat box (a
+/// Found by `crux diff`: two float-build `triangle_obb` cases, a flat box (a
 /// segment) lying in a triangle's plane 1e-8 off it, crux "hit", the oracle (then reading the
 /// span) "no" — both exact, for different sets.
 TEST(TriangleObbProperty, NonOrthonormalAxesNearTheBoundaryMatchExactOracle) {

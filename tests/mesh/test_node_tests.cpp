@@ -12,7 +12,7 @@
 namespace crux::mesh_detail {
 namespace {
 
-/// The scalar test ObbBoxTest::touches was (session 14), written out: the OBB's world box grown
+/// The scalar test ObbBoxTest::touches was, written out: the OBB's world box grown
 /// by the pad against b, then the OBB's three face axes with |R| + kAxisPad, all doubled.
 bool scalarTouches(const Mat3& axes, Real pad, const Vec3& center, const Vec3& half, const Aabb& b) {
   const Mat3 absR = axes.cwiseAbs().array() + kAxisPad;

@@ -1,5 +1,5 @@
 // The exact distances and contacts of oracle/exact/exact_distance.cpp, and crux's narrow phase
-// against them (issue 6: "contacts and distances vs the exact backend").
+// against them ("contacts and distances vs the exact backend").
 //
 // 1. Hand-made cases whose answers follow from the geometry (integer grids): boxes at known gaps,
 //    touching and penetrating; spheres; crossing capsules; degenerate triangles; coplanar hulls;
@@ -598,7 +598,7 @@ Mesh terrain(Gen& g, int n) {
   return Mesh(v, t, "terrain");
 }
 
-// exact::meshDistance searches two trees of conservative triangle boxes (session 9; it tested all
+// exact::meshDistance searches two trees of conservative triangle boxes (it tested all
 // n·m pairs before). Its answer must be the minimum over every triangle pair's exact distance,
 // bit for bit, including near ties: two terrains face to face (b turned over above a), apart,
 // touching (the grids) or crossing, and a distance limit just below and just above the answer. An

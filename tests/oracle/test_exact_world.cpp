@@ -99,7 +99,7 @@ TEST(ExactWorldModels, SupportsEveryModelAndSceneOp) {
 }
 
 TEST(ExactWorldRays, AHitExactlyAtTheMaximumDistanceIsAHit) {
-  // `crux diff` (session 15, double build, family mesh): the ray from (-5,0,0) along (6,3,6)
+  // `crux diff` (double build, family mesh): the ray from (-5,0,0) along (6,3,6)
   // meets the triangle's edge at (-1,2,4), parameter 2/3, distance exactly 2/3·9 = 6 = max. The
   // oracle compared the rounded distance (6.000000000000001) with max and called it a miss;
   // hits at t <= max count (raycast.hpp: "beyond maxT are misses"), decided exactly now.

@@ -456,7 +456,7 @@ std::vector<Case> meshCases(const Frame& f) {
   return cs;
 }
 
-/// Narrow-phase and volume cases (issue 6): signed distances (t = the distance; points are not
+/// Narrow-phase and volume cases: signed distances (t = the distance; points are not
 /// compared: closest points of FCL's GJK are within its tolerance only in the distance, see
 /// docs/batch.md), contacts (t = deepest depth, normal from B to A), point_inside and volume-mode
 /// booleans. Each distance has unique closest points and a gap of at least 0.25 (canonical).
@@ -698,7 +698,7 @@ TEST_F(OracleSanity, MeshOpsAnswerAsDesigned) {
   }
 }
 
-/// Narrow phase (issue 6): distances, contacts, point_inside and volume mode, on every backend
+/// Narrow phase: distances, contacts, point_inside and volume mode, on every backend
 /// that supports them (native answers all; exact: point_inside and volume; fcl: distances;
 /// bullet: contacts).
 TEST_F(OracleSanity, NarrowPhaseOpsAnswerAsDesigned) {

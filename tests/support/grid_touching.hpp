@@ -1,5 +1,5 @@
-// Integer-grid touching constructions for the tests of the exact margin decisions (issue 6:
-// touching on integer grids must be reported exactly).
+// Integer-grid touching constructions for the tests of the exact margin decisions
+// (touching on integer grids must be reported exactly).
 #pragma once
 
 #include <crux/math.hpp>

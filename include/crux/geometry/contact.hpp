@@ -11,7 +11,7 @@
 /// keeping points whose separation along the normal is <= margin. More than 4 points are
 /// reduced to the deepest one plus the three that maximise the manifold's area.
 ///
-/// Ill-conditioned features (issue 6): a sliver triangle (|(b−a)×(c−a)| small against its longest
+/// Ill-conditioned features: a sliver triangle (|(b−a)×(c−a)| small against its longest
 /// edge squared, so its computed plane is off by more than a few ulps) is never the reference
 /// face — it is clipped against the other shape's face, or as its supporting edge. Two edges
 /// within the feature angle are clipped only when every clipped point's closest point on the

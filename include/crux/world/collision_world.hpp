@@ -83,7 +83,7 @@ enum class WorldOp : std::uint8_t {
   SceneRay,
   SceneQuery,
   ScenePairs,
-  // narrow phase for engines (issue 6): convex shapes and meshes under rigid transforms
+  // narrow phase for engines: convex shapes and meshes under rigid transforms
   Contacts,
   Distance,
   MeshDistance,
@@ -426,7 +426,7 @@ class CollisionWorld {
   /// scene_pairs: sorted name pairs (a < b) of models whose triangles touch.
   std::vector<std::pair<std::string, std::string>> scenePairs();
 
-  // ---- narrow phase (issue 6; docs/batch.md "Contacts, distance and volumes") ---------------------
+  // ---- narrow phase (docs/batch.md "Contacts, distance and volumes") ---------------------
 
   /// contacts: up to 4 contact points of A and B whose separation is <= margin (>= 0, finite),
   /// at least one operand convex (two meshes: InvalidInput). Empty when farther apart than margin.
