@@ -13,6 +13,8 @@
 #include <limits>
 #include <string>
 
+#include <crux/precondition.hpp>
+
 #include "geometry/contact_internal.hpp"
 #include "geometry/gjk_internal.hpp"
 
@@ -319,6 +321,10 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
               ContactManifold& out) {
   out.count = 0;
   validateContactMargin(margin);
+  if (!detail::entryPreconditions("contacts(ConvexShape, ConvexShape)",
+                                  "finite shapes at finite poses (validate(ConvexShape), validate(Transform))", a, ta, b,
+                                  tb))
+    return false;
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);
   out.normal = dr.normal;

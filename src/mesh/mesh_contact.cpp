@@ -2,6 +2,7 @@
 // internal-edge correction with a caller-kept adjacency, reduction to 4 points.
 
 #include <crux/mesh/mesh_contact.hpp>
+#include <crux/precondition.hpp>
 
 #include <crux/geometry/axis_aligned.hpp>
 #include <crux/geometry/box_triangle_contact.hpp>
@@ -767,6 +768,8 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency, QueryPath path) {
   out.count = 0;
   validateContactMargin(margin);
+  if (!detail::entryPreconditions("contacts(Mesh, ConvexShape)", "a finite shape (radius and half extents >= 0) and finite poses with non-zero rotations (validate(ConvexShape), validate(Transform))", meshPose, shape, shapePose))
+    return false;
   if (adjacency && (adjacency->triangleCount() != mesh.triangleCount() ||
                     adjacency->vertexCount() != mesh.vertices().size()))
     throw InvalidInput("adjacency: built for a mesh of " + std::to_string(adjacency->triangleCount()) +
@@ -875,6 +878,7 @@ MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const C
                             const Transform& shapePose, Real maxDistance, QueryPath path) {
   if (std::isnan(maxDistance)) throw InvalidInput("maxDistance: expected a number (or +inf for no limit), got NaN");
   MeshDistanceResult r;
+  if (!detail::entryPreconditions("distance(Mesh, ConvexShape)", "a finite shape (radius and half extents >= 0) and finite poses with non-zero rotations (validate(ConvexShape), validate(Transform))", meshPose, shape, shapePose)) return r;
   Real best = maxDistance;
   auto consider = [&](std::uint32_t t, const Triangle& tri) {
     const DistanceResult d = distance(ConvexShape(tri), meshPose, shape, shapePose);

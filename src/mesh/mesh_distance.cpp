@@ -4,6 +4,7 @@
 
 #include <crux/error.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/precondition.hpp>
 
 #include "geometry/bits.hpp"
 #include "lanes.hpp"
@@ -795,6 +796,9 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
                                 const MeshDistanceOptions& options) {
   validateDistanceBound(options.maxDistance, "maxDistance");
   validateDistanceBound(options.stopDistance, "stopDistance");
+  if (!detail::entryPreconditions("distance(Mesh, Mesh)", "finite poses with non-zero rotations (validate(Transform))", ta,
+                                  tb))
+    return {};
   // A foreign accelerator (another node or triangle count) would be read out of range.
   auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh,
                        const char* label) {

@@ -132,6 +132,7 @@ constexpr const char* kAabbRule = "an AABB with finite min <= max (validate(Aabb
 constexpr const char* kObbRule = "an OBB with finite centre and axes and finite half extents >= 0 (validate(Obb))";
 constexpr const char* kPlaneRule = "a plane with a finite, non-zero normal and a finite offset (validate(Plane))";
 constexpr const char* kTriangleRule = "a triangle with finite corners (validate(Triangle))";
+constexpr const char* kPoseRule = "finite poses with non-zero rotations (validate(Transform))";
 
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
   const Real scale = std::max(mesh.scale(), ray.origin.cwiseAbs().maxCoeff());
@@ -547,6 +548,7 @@ std::vector<std::uint32_t> touchingTriangles(const Mesh& mesh, const Triangle& t
 }
 
 bool overlaps(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb, QueryPath path) {
+  if (!detail::entryPreconditions("overlaps(Mesh, Mesh)", kPoseRule, ta, tb)) return false;
   const RelativeFrame frame(ta, tb);
   return path == QueryPath::BruteForce ? meshMeshBrute(a, b, frame, nullptr) : meshMeshBvh(a, b, frame, nullptr);
 }
@@ -554,6 +556,7 @@ bool overlaps(const Mesh& a, const Transform& ta, const Mesh& b, const Transform
 std::vector<std::pair<std::uint32_t, std::uint32_t>> touchingTrianglePairs(const Mesh& a, const Transform& ta,
                                                                            const Mesh& b, const Transform& tb,
                                                                            QueryPath path) {
+  if (!detail::entryPreconditions("touchingTrianglePairs(Mesh, Mesh)", kPoseRule, ta, tb)) return {};
   const RelativeFrame frame(ta, tb);
   PairList out;
   if (path == QueryPath::BruteForce) meshMeshBrute(a, b, frame, &out);

@@ -26,6 +26,8 @@
 
 #include "support/grid_touching.hpp"
 #include "support/test_scale.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
@@ -1056,6 +1058,21 @@ TEST(ContactsOnTheBoundary, ManifoldIsNeverShallowerThanTheClosestPairBeyondTheS
   std::printf("%d manifolds\n", manifolds);
   EXPECT_GT(manifolds, cases / 5);
   EXPECT_EQ(shallow, 0) << first;
+}
+
+
+// Non-queryable shapes or poses (precondition.hpp): no contact, never UB (an infinite
+// translation used to report one).
+TEST(ContactPreconditions, NonQueryableInputsGetNoContact) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const ConvexShape box = Obb{Vec3::Zero(), Vec3::Constant(Real(0.5)), Mat3::Identity()};
+  ContactManifold m;
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(contacts(box, Transform{}, box, pose, Real(0.01), m));
+    EXPECT_EQ(m.count, 0);
+  }
+  for (const ConvexShape& shape : test_support::badShapes()) EXPECT_FALSE(contacts(shape, Transform{}, box, Transform{}, Real(0.01), m));
+  EXPECT_TRUE(contacts(box, Transform{}, box, Transform{}, Real(0.01), m));
 }
 
 }  // namespace

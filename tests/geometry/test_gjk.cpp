@@ -20,6 +20,8 @@
 
 #if CRUX_HAVE_CCD_ORACLE
 #include "ccd/ccd_oracle.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #endif
 
 namespace crux {
@@ -611,6 +613,26 @@ TEST(GjkVsLibccd, IntersectBooleanAwayFromTouching) {
   EXPECT_EQ(disagreeMpr, 0);
 }
 #endif
+
+
+// Non-queryable shapes or poses (precondition.hpp): distance NaN, overlaps false, never UB.
+TEST(GjkPreconditions, NonQueryableInputsGetNoAnswer) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const ConvexShape box = Obb{Vec3::Zero(), Vec3::Constant(Real(0.5)), Mat3::Identity()};
+  int cases = 0;
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_TRUE(std::isnan(distance(box, Transform{}, box, pose).distance));
+    EXPECT_FALSE(overlaps(box, pose, box, Transform{}));
+    ++cases;
+  }
+  for (const ConvexShape& shape : test_support::badShapes()) {
+    EXPECT_TRUE(std::isnan(distance(shape, Transform{}, box, Transform{}).distance));
+    EXPECT_FALSE(overlaps(box, Transform{}, shape, Transform{}));
+    ++cases;
+  }
+  EXPECT_GT(cases, 30);
+  EXPECT_TRUE(overlaps(box, Transform{}, box, Transform{}));  // the good pair overlaps
+}
 
 }  // namespace
 }  // namespace crux

@@ -14,6 +14,8 @@
 #include <optional>
 #include <random>
 #include <vector>
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
@@ -137,6 +139,29 @@ TEST(MeshCast, FastBallDoesNotTunnelThroughAThinWall) {
   EXPECT_NEAR(double(diag->cast.t), (50 - 0.01) / 100, 1e-6);
   // beside the wall: a miss
   EXPECT_FALSE(castAny(*wall, Transform{}, ball, Transform{Quat::Identity(), Vec3(-50, Real(1.02), 0)}, Vec3(100, 0, 0)));
+}
+
+
+// Non-queryable shapes, poses or motions (precondition.hpp): no hit (an infinite pose used to
+// report one).
+TEST(MeshCastPreconditions, NonQueryableInputsGetNoHit) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const Mesh mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const ConvexShape box = Obb{Vec3::Constant(Real(0.2)), Vec3::Constant(Real(0.5)), Mat3::Identity()};
+  const Transform start{Quat::Identity(), Vec3(0, 0, 3)};
+  const Vec3 motion(0, 0, -4);
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(castClosest(mesh, pose, box, start, motion).has_value());
+    EXPECT_FALSE(castClosest(mesh, Transform{}, box, pose, motion).has_value());
+    EXPECT_FALSE(castAny(mesh, Transform{}, box, pose, motion));
+    EXPECT_FALSE(castClosest(mesh, Transform{}, box, RigidMotion{start, pose}).has_value());
+    EXPECT_FALSE(castAny(mesh, Transform{}, box, RigidMotion{pose, start}));
+  }
+  for (const ConvexShape& shape : test_support::badShapes())
+    EXPECT_FALSE(castClosest(mesh, Transform{}, shape, start, motion).has_value());
+  for (const Real bad : test_support::nonFiniteValues())
+    EXPECT_FALSE(castClosest(mesh, Transform{}, box, start, Vec3(0, bad, -4)).has_value());
+  EXPECT_TRUE(castClosest(mesh, Transform{}, box, start, motion).has_value());
 }
 
 }  // namespace

@@ -29,6 +29,8 @@
 
 #include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 #include "support/test_scale.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
@@ -1074,6 +1076,27 @@ TEST(MeshContact, BadMarginForeignAdjacencyAndNanBoundAreInvalidInput) {
   // The mesh's own adjacency is accepted.
   const MeshAdjacency own(grid);
   EXPECT_TRUE(contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &own));
+}
+
+
+// Non-queryable shapes or poses (precondition.hpp): no contact and no distance; a non-finite pose
+// used to crash the BVH walk.
+TEST(MeshContactPreconditions, NonQueryableInputsGetNoAnswer) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const Mesh mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  const ConvexShape box = Obb{Vec3::Constant(Real(0.2)), Vec3::Constant(Real(0.5)), Mat3::Identity()};
+  MeshContactManifold m;
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(contacts(mesh, Transform{}, box, pose, Real(0.01), m));
+    EXPECT_FALSE(contacts(mesh, pose, box, Transform{}, Real(0.01), m));
+    EXPECT_FALSE(distance(mesh, pose, box, Transform{}).found);
+    EXPECT_FALSE(distance(mesh, Transform{}, box, pose).found);
+  }
+  for (const ConvexShape& shape : test_support::badShapes()) {
+    EXPECT_FALSE(contacts(mesh, Transform{}, shape, Transform{}, Real(0.01), m));
+    EXPECT_FALSE(distance(mesh, Transform{}, shape, Transform{}).found);
+  }
+  EXPECT_TRUE(contacts(mesh, Transform{}, box, Transform{}, Real(0.01), m));
 }
 
 }  // namespace

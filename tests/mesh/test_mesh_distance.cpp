@@ -30,6 +30,8 @@
 #include <random>
 #include <string>
 #include <vector>
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
@@ -691,4 +693,19 @@ TEST(MeshDistance, AcceleratorLayoutMirrorsTheBvhAndTheMesh) {
   EXPECT_LT(unused, ids / 2) << "most lanes are used";
 }
 
+namespace {
+
+
+// Non-queryable poses (precondition.hpp): nothing found, never UB.
+TEST(MeshDistancePreconditions, NonQueryablePosesFindNothing) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const Mesh mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}});
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(distance(mesh, Transform{}, mesh, pose, MeshDistanceOptions{}).found);
+    EXPECT_FALSE(distance(mesh, pose, mesh, Transform{}, MeshDistanceOptions{}).found);
+  }
+  EXPECT_TRUE(distance(mesh, Transform{}, mesh, Transform{}, MeshDistanceOptions{}).found);
+}
+
+}  // namespace
 }  // namespace crux

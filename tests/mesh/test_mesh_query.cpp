@@ -30,6 +30,7 @@
 
 #include "support/allocation_counter.hpp"  // allocationCount(): queries that must not allocate
 #include "support/test_scale.hpp"          // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
@@ -1202,6 +1203,19 @@ TEST(MeshQueryPreconditions, DebugBuildsAbortNamingTheQuery) {
   const Mesh mesh = preconditionTetrahedron();
   EXPECT_DEATH(raycastClosest(mesh, Ray{Vec3::Zero(), Vec3::Zero()}), "precondition violated in raycastClosest");
   EXPECT_DEATH(overlaps(mesh, Sphere{Vec3::Zero(), -1}), "precondition violated in overlaps");
+}
+
+
+// Mesh–mesh overlap with a non-queryable pose: false and no pairs (it used to crash the walk).
+TEST(MeshQueryPreconditions, MeshMeshWithANonQueryablePoseGetsNoAnswer) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const Mesh mesh = preconditionTetrahedron();
+  for (const Transform& pose : test_support::badPoses())
+    for (const QueryPath path : {QueryPath::Bvh, QueryPath::BruteForce}) {
+      EXPECT_FALSE(overlaps(mesh, Transform{}, mesh, pose, path));
+      EXPECT_TRUE(touchingTrianglePairs(mesh, pose, mesh, Transform{}, path).empty());
+    }
+  EXPECT_TRUE(overlaps(mesh, Transform{}, mesh, Transform{}));
 }
 
 }  // namespace

@@ -72,6 +72,9 @@ struct RigidMotion {
   Transform end;
 };
 
+/// Both poses queryable (shapes.hpp).
+inline bool queryable(const RigidMotion& motion) { return queryable(motion.start) && queryable(motion.end); }
+
 /// Result of a cast. Points and normal in world space, at the time of impact.
 struct CastResult {
   bool hit = false;               ///< the shapes touch at some t in [0, 1]

@@ -52,7 +52,8 @@ inline constexpr double kGjkScaleTolerance = 1000 * std::numeric_limits<double>:
 inline constexpr int kGjkMaxIterations = 64;
 inline constexpr int kEpaMaxIterations = 64;
 
-/// Signed distance, closest points and normal of A (at pose ta) and B (at pose tb).
+/// Signed distance, closest points and normal of A (at pose ta) and B (at pose tb). Shapes or
+/// poses that are not queryable (precondition.hpp) give distance NaN.
 DistanceResult distance(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb);
 
 /// True when A and B share a point (touching counts), decided by GJK alone (no EPA): the cores'
