@@ -27,16 +27,29 @@ namespace crux::detail {
 /// Prints "crux: precondition violated in <query>: <rule>" to stderr and aborts.
 [[noreturn]] void preconditionFailed(const char* query, const char* rule);
 
-/// Whether `input` meets the query's cheap preconditions (queryable(input)); when it does not and
-/// CRUX_CHECK_PRECONDITIONS is on, preconditionFailed(query, rule) instead of returning false.
-template <class Input>
-bool entryPrecondition(const Input& input, const char* query, const char* rule) {
-  if (queryable(input)) return true;
-  if (CRUX_CHECK_PRECONDITIONS) preconditionFailed(query, rule);
-  return false;
-}
+/// The rules as the failure message states them, one text per rule.
+namespace rule {
+inline constexpr const char* kRay = "a ray with a finite origin and a finite, non-zero direction (validate(Ray))";
+inline constexpr const char* kSegment = "a segment with finite ends (validate(Segment))";
+inline constexpr const char* kSphere = "a sphere with a finite centre and a finite radius >= 0 (validate(Sphere))";
+inline constexpr const char* kAabb = "an AABB with finite min <= max (validate(Aabb))";
+inline constexpr const char* kObb = "an OBB with finite centre and axes and finite half extents >= 0 (validate(Obb))";
+inline constexpr const char* kPlane = "a plane with a finite, non-zero normal and a finite offset (validate(Plane))";
+inline constexpr const char* kTriangle = "a triangle with finite corners (validate(Triangle))";
+inline constexpr const char* kPoint = "a point with finite coordinates (validatePoint)";
+inline constexpr const char* kRegion =
+    "a finite sphere (radius >= 0), AABB (min <= max) or OBB (half extents >= 0): validate(...)";
+inline constexpr const char* kPoses = "finite poses with non-zero rotations (validate(Transform))";
+inline constexpr const char* kShapesAtPoses =
+    "finite shapes (radius and half extents >= 0) at finite poses with non-zero rotations (validate(ConvexShape), "
+    "validate(Transform))";
+inline constexpr const char* kCast =
+    "a finite shape at finite poses, a finite motion (validate(ConvexShape), validate(Transform), validateMotion)";
+}  // namespace rule
 
-/// entryPrecondition over several inputs (shapes and their poses): all queryable, else the same.
+/// Whether every input (a shape, a point, a pose, a motion) meets the query's cheap preconditions
+/// (queryable(...)); when one does not and CRUX_CHECK_PRECONDITIONS is on,
+/// preconditionFailed(query, rule) instead of returning false. The one entry check of every query.
 template <class... Inputs>
 bool entryPreconditions(const char* query, const char* rule, const Inputs&... inputs) {
   if ((queryable(inputs) && ...)) return true;

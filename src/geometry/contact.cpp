@@ -321,9 +321,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
               ContactManifold& out) {
   out.count = 0;
   validateContactMargin(margin);
-  if (!detail::entryPreconditions("contacts(ConvexShape, ConvexShape)",
-                                  "finite shapes at finite poses (validate(ConvexShape), validate(Transform))", a, ta, b,
-                                  tb))
+  if (!detail::entryPreconditions("contacts(ConvexShape, ConvexShape)", detail::rule::kShapesAtPoses, a, ta, b, tb))
     return false;
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);

@@ -392,13 +392,8 @@ DistanceResult coreQuery(const Placed& A, const Placed& B) {
 
 }  // namespace detail
 
-/// The pair queries' preconditions (precondition.hpp).
-constexpr const char* kPairRule =
-    "finite shapes (radius and half extents >= 0) at finite poses with non-zero rotations (validate(ConvexShape), "
-    "validate(Transform))";
-
 DistanceResult distance(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb) {
-  if (!detail::entryPreconditions("distance(ConvexShape, ConvexShape)", kPairRule, a, ta, b, tb)) {
+  if (!detail::entryPreconditions("distance(ConvexShape, ConvexShape)", detail::rule::kShapesAtPoses, a, ta, b, tb)) {
     DistanceResult none;
     none.distance = std::numeric_limits<Real>::quiet_NaN();
     return none;
@@ -408,7 +403,7 @@ DistanceResult distance(const ConvexShape& a, const Transform& ta, const ConvexS
 }
 
 bool overlaps(const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb) {
-  if (!detail::entryPreconditions("overlaps(ConvexShape, ConvexShape)", kPairRule, a, ta, b, tb)) return false;
+  if (!detail::entryPreconditions("overlaps(ConvexShape, ConvexShape)", detail::rule::kShapesAtPoses, a, ta, b, tb)) return false;
   const detail::Placed A(a, ta), B(b, tb);
   const double tolAbs = kGjkScaleTolerance * detail::pairScale(A, B);
   const double reach = A.radius + B.radius + tolAbs;

@@ -161,32 +161,29 @@ std::optional<MeshCastHit> rigidCast(const Mesh& mesh, const Transform& meshPose
 
 }  // namespace
 
-constexpr const char* kCastRule =
-    "a finite shape at finite poses, a finite motion (validate(ConvexShape), validate(Transform), validateMotion)";
-
 std::optional<MeshCastHit> castClosest(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                                        const Transform& shapePose, const Vec3& motion, QueryPath path) {
-  if (!detail::entryPreconditions("castClosest(Mesh, ConvexShape)", kCastRule, meshPose, shape, shapePose, motion))
+  if (!detail::entryPreconditions("castClosest(Mesh, ConvexShape)", detail::rule::kCast, meshPose, shape, shapePose, motion))
     return std::nullopt;
   return linearCast(mesh, meshPose, shape, shapePose, motion, path, false);
 }
 
 std::optional<MeshCastHit> castClosest(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                                        const RigidMotion& motion, QueryPath path) {
-  if (!detail::entryPreconditions("castClosest(Mesh, ConvexShape, RigidMotion)", kCastRule, meshPose, shape, motion))
+  if (!detail::entryPreconditions("castClosest(Mesh, ConvexShape, RigidMotion)", detail::rule::kCast, meshPose, shape, motion))
     return std::nullopt;
   return rigidCast(mesh, meshPose, shape, motion, path, false);
 }
 
 bool castAny(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
              const Vec3& motion, QueryPath path) {
-  if (!detail::entryPreconditions("castAny(Mesh, ConvexShape)", kCastRule, meshPose, shape, shapePose, motion)) return false;
+  if (!detail::entryPreconditions("castAny(Mesh, ConvexShape)", detail::rule::kCast, meshPose, shape, shapePose, motion)) return false;
   return linearCast(mesh, meshPose, shape, shapePose, motion, path, true).has_value();
 }
 
 bool castAny(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const RigidMotion& motion,
              QueryPath path) {
-  if (!detail::entryPreconditions("castAny(Mesh, ConvexShape, RigidMotion)", kCastRule, meshPose, shape, motion))
+  if (!detail::entryPreconditions("castAny(Mesh, ConvexShape, RigidMotion)", detail::rule::kCast, meshPose, shape, motion))
     return false;
   return rigidCast(mesh, meshPose, shape, motion, path, true).has_value();
 }

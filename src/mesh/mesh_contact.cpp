@@ -768,7 +768,7 @@ bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& sh
               Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency, QueryPath path) {
   out.count = 0;
   validateContactMargin(margin);
-  if (!detail::entryPreconditions("contacts(Mesh, ConvexShape)", "a finite shape (radius and half extents >= 0) and finite poses with non-zero rotations (validate(ConvexShape), validate(Transform))", meshPose, shape, shapePose))
+  if (!detail::entryPreconditions("contacts(Mesh, ConvexShape)", detail::rule::kShapesAtPoses, meshPose, shape, shapePose))
     return false;
   if (adjacency && (adjacency->triangleCount() != mesh.triangleCount() ||
                     adjacency->vertexCount() != mesh.vertices().size()))
@@ -878,7 +878,7 @@ MeshDistanceResult distance(const Mesh& mesh, const Transform& meshPose, const C
                             const Transform& shapePose, Real maxDistance, QueryPath path) {
   if (std::isnan(maxDistance)) throw InvalidInput("maxDistance: expected a number (or +inf for no limit), got NaN");
   MeshDistanceResult r;
-  if (!detail::entryPreconditions("distance(Mesh, ConvexShape)", "a finite shape (radius and half extents >= 0) and finite poses with non-zero rotations (validate(ConvexShape), validate(Transform))", meshPose, shape, shapePose)) return r;
+  if (!detail::entryPreconditions("distance(Mesh, ConvexShape)", detail::rule::kShapesAtPoses, meshPose, shape, shapePose)) return r;
   Real best = maxDistance;
   auto consider = [&](std::uint32_t t, const Triangle& tri) {
     const DistanceResult d = distance(ConvexShape(tri), meshPose, shape, shapePose);

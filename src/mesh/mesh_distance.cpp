@@ -796,7 +796,7 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
                                 const MeshDistanceOptions& options) {
   validateDistanceBound(options.maxDistance, "maxDistance");
   validateDistanceBound(options.stopDistance, "stopDistance");
-  if (!detail::entryPreconditions("distance(Mesh, Mesh)", "finite poses with non-zero rotations (validate(Transform))", ta,
+  if (!detail::entryPreconditions("distance(Mesh, Mesh)", detail::rule::kPoses, ta,
                                   tb))
     return {};
   // A foreign accelerator (another node or triangle count) would be read out of range.

@@ -46,7 +46,7 @@ struct ClosestPointVisitor {
 }  // namespace
 
 MeshClosestPoint closestPoint(const Mesh& mesh, const Vec3& p, Real maxDistance, QueryPath path) {
-  if (!detail::entryPrecondition(p, "closestPoint(Mesh, point)", "a point with finite coordinates (validatePoint)"))
+  if (!detail::entryPreconditions("closestPoint(Mesh, point)", detail::rule::kPoint, p))
     return {};
   ClosestPointVisitor v{mesh, p, maxDistance * maxDistance};
   if (path == QueryPath::BruteForce) {

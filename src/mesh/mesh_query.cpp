@@ -123,17 +123,6 @@ bool before(Real t, std::uint32_t tri, Real bestT, std::uint32_t bestTri) {
   return t < bestT || (t == bestT && tri < bestTri);
 }
 
-// The rules the entry points check (precondition.hpp: no answer, or an abort with
-// CRUX_CHECK_PRECONDITIONS).
-constexpr const char* kRayRule = "a ray with a finite origin and a finite, non-zero direction (validate(Ray))";
-constexpr const char* kSegmentRule = "a segment with finite ends (validate(Segment))";
-constexpr const char* kSphereRule = "a sphere with a finite centre and a finite radius >= 0 (validate(Sphere))";
-constexpr const char* kAabbRule = "an AABB with finite min <= max (validate(Aabb))";
-constexpr const char* kObbRule = "an OBB with finite centre and axes and finite half extents >= 0 (validate(Obb))";
-constexpr const char* kPlaneRule = "a plane with a finite, non-zero normal and a finite offset (validate(Plane))";
-constexpr const char* kTriangleRule = "a triangle with finite corners (validate(Triangle))";
-constexpr const char* kPoseRule = "finite poses with non-zero rotations (validate(Transform))";
-
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
   const Real scale = std::max(mesh.scale(), ray.origin.cwiseAbs().maxCoeff());
   return mesh_detail::RayBoxTest(ray.origin, ray.dir, scale);
@@ -203,7 +192,7 @@ struct RayAllVisitor {
 
 std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                       QueryPath path, bool stopAtFirst) {
-  if (!detail::entryPrecondition(ray, stopAtFirst ? "raycastAny(Mesh, Ray)" : "raycastClosest(Mesh, Ray)", kRayRule))
+  if (!detail::entryPreconditions(stopAtFirst ? "raycastAny(Mesh, Ray)" : "raycastClosest(Mesh, Ray)", detail::rule::kRay, ray))
     return std::nullopt;
   TriangleRayTest test(ray, options);
   test.count(options.counters);
@@ -274,7 +263,7 @@ Real shapeScale(const Mesh& mesh, std::initializer_list<Real> magnitudes) {
 Real absMax(const Vec3& v) { return v.cwiseAbs().maxCoeff(); }
 
 bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(s, "intersects / touchingTriangles(Mesh, Segment)", kSegmentRule)) return false;
+  if (!detail::entryPreconditions("intersects / touchingTriangles(Mesh, Segment)", detail::rule::kSegment, s)) return false;
   const Real scale = shapeScale(mesh, {absMax(s.start), absMax(s.end)});
   const Vec3 d = s.end - s.start;
   const mesh_detail::RayBoxTest box(s.start, d, scale);
@@ -301,7 +290,7 @@ bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vecto
 }
 
 bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(s, "overlaps / touchingTriangles(Mesh, Sphere)", kSphereRule)) return false;
+  if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Sphere)", detail::rule::kSphere, s)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {absMax(s.center), s.radius});
   auto node = [&](const Aabb& b) { return mesh_detail::sphereTouchesBox(s.center, s.radius, b, pad); };
   auto tri = [&](const Triangle& t) { return overlaps(t, s); };
@@ -309,7 +298,7 @@ bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<
 }
 
 bool aabbQuery(const Mesh& mesh, const Aabb& q, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Aabb)", kAabbRule)) return false;
+  if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Aabb)", detail::rule::kAabb, q)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {maxAbs(q)});
   auto node = [&](const Aabb& b) { return mesh_detail::boxTouchesBox(q, b, pad); };
   auto tri = [&](const Triangle& t) { return overlaps(t, q); };
@@ -317,7 +306,7 @@ bool aabbQuery(const Mesh& mesh, const Aabb& q, QueryPath path, std::vector<std:
 }
 
 bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Obb)", kObbRule)) return false;
+  if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Obb)", detail::rule::kObb, q)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {absMax(q.center) + q.half.sum()});
   const mesh_detail::ObbBoxTest box(q.axes, pad);
   const mesh_detail::ObbBoxTest::Placed placed = box.place(q.center, q.half);
@@ -328,7 +317,7 @@ bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::u
 }
 
 bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(p, "overlaps / touchingTriangles(Mesh, Plane)", kPlaneRule)) return false;
+  if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Plane)", detail::rule::kPlane, p)) return false;
   const Real scale = mesh.scale();
   auto node = [&](const Aabb& b) { return mesh_detail::planeTouchesBox(p.normal, p.d, b, kNodeBoxPad, scale); };
   auto tri = [&](const Triangle& t) { return overlaps(t, p); };
@@ -336,7 +325,7 @@ bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<st
 }
 
 bool triangleQuery(const Mesh& mesh, const Triangle& q, QueryPath path, std::vector<std::uint32_t>* out) {
-  if (!detail::entryPrecondition(q, "overlaps / touchingTriangles(Mesh, Triangle)", kTriangleRule)) return false;
+  if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Triangle)", detail::rule::kTriangle, q)) return false;
   const Aabb qb = bounds(q);
   const Real scale = shapeScale(mesh, {maxAbs(qb)});
   const Real pad = kNodeBoxPad * scale;
@@ -491,7 +480,7 @@ bool raycastAny(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options
 
 std::vector<MeshRayHit> raycastAll(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                    QueryPath path) {
-  if (!detail::entryPrecondition(ray, "raycastAll(Mesh, Ray)", kRayRule)) return {};
+  if (!detail::entryPreconditions("raycastAll(Mesh, Ray)", detail::rule::kRay, ray)) return {};
   std::vector<MeshRayHit> hits;
   const TriangleRayTest test(ray, options);
   if (path == QueryPath::BruteForce) {
@@ -548,7 +537,7 @@ std::vector<std::uint32_t> touchingTriangles(const Mesh& mesh, const Triangle& t
 }
 
 bool overlaps(const Mesh& a, const Transform& ta, const Mesh& b, const Transform& tb, QueryPath path) {
-  if (!detail::entryPreconditions("overlaps(Mesh, Mesh)", kPoseRule, ta, tb)) return false;
+  if (!detail::entryPreconditions("overlaps(Mesh, Mesh)", detail::rule::kPoses, ta, tb)) return false;
   const RelativeFrame frame(ta, tb);
   return path == QueryPath::BruteForce ? meshMeshBrute(a, b, frame, nullptr) : meshMeshBvh(a, b, frame, nullptr);
 }
@@ -556,7 +545,7 @@ bool overlaps(const Mesh& a, const Transform& ta, const Mesh& b, const Transform
 std::vector<std::pair<std::uint32_t, std::uint32_t>> touchingTrianglePairs(const Mesh& a, const Transform& ta,
                                                                            const Mesh& b, const Transform& tb,
                                                                            QueryPath path) {
-  if (!detail::entryPreconditions("touchingTrianglePairs(Mesh, Mesh)", kPoseRule, ta, tb)) return {};
+  if (!detail::entryPreconditions("touchingTrianglePairs(Mesh, Mesh)", detail::rule::kPoses, ta, tb)) return {};
   const RelativeFrame frame(ta, tb);
   PairList out;
   if (path == QueryPath::BruteForce) meshMeshBrute(a, b, frame, &out);

@@ -203,8 +203,7 @@ void Scene::setParent(ModelId id, ModelId parent) {
 }
 
 std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions& options, ScenePath path) const {
-  if (!detail::entryPrecondition(ray, "Scene::raycast",
-                                 "a ray with a finite origin and a finite, non-zero direction (validate(Ray))"))
+  if (!detail::entryPreconditions("Scene::raycast", detail::rule::kRay, ray))
     return std::nullopt;
   if (path == ScenePath::BroadPhase) {
     ClosestModelCollector collector(hierarchy_, ray, options);
@@ -222,9 +221,7 @@ std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions&
 template <class Shape>
 std::vector<ModelId> Scene::regionQuery(const Shape& shape, RegionTest test, ScenePath path) const {
   std::vector<ModelId> result;
-  if (!detail::entryPrecondition(shape, "Scene::query",
-                                 "a finite sphere (radius >= 0), AABB (min <= max) or OBB (half extents >= 0): "
-                                 "validate(...)"))
+  if (!detail::entryPreconditions("Scene::query", detail::rule::kRegion, shape))
     return result;
   if (path == ScenePath::BroadPhase) {
     std::vector<ModelId> candidates;
