@@ -406,7 +406,7 @@ void DynamicAabbTree::buildRayTree() const {
     raySlotBoxes_[k] = boxes[rayTree_.primIndices[k]];
     raySlotIds_[k] = ids[rayTree_.primIndices[k]];
   }
-  ++rayTreeBuilds_;
+  rayTreeBuilds_.fetch_add(1, std::memory_order_relaxed);
   rayTreeReady_.store(true, std::memory_order_release);
 }
 

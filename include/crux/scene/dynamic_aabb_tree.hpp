@@ -96,7 +96,7 @@ class DynamicAabbTree final : public BroadPhase {
   /// queries, as the lazy build is.
   void prepareRays() const;
   /// Builds of the wide ray tree, since construction.
-  std::size_t rayTreeBuilds() const { return rayTreeBuilds_; }
+  std::size_t rayTreeBuilds() const { return rayTreeBuilds_.load(std::memory_order_relaxed); }
   /// Whether the wide ray tree is current (the next raycast walks it).
   bool hasRayTree() const { return rayTreeReady_.load(std::memory_order_acquire); }
   /// Sum of the surface areas of the inner nodes (the SAH cost up to constant factors).
@@ -179,7 +179,7 @@ class DynamicAabbTree final : public BroadPhase {
   mutable WideBvh rayTree_;
   mutable std::vector<Aabb> raySlotBoxes_;
   mutable std::vector<ProxyId> raySlotIds_;
-  mutable std::size_t rayTreeBuilds_ = 0;
+  mutable std::atomic<std::size_t> rayTreeBuilds_{0};  // read by rayTreeBuilds() beside const queries
 };
 
 }  // namespace crux
