@@ -6,6 +6,7 @@
 #include "apps/batch_test_util.hpp"
 #include "cli/batch.hpp"
 #include "cli/json_codec.hpp"
+#include "cli/mesh_ops.hpp"
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/mesh/mesh_query.hpp>
@@ -694,6 +695,16 @@ TEST(MeshOpsTransform, ReadTransformDefaultsAndNormalises) {
   EXPECT_EQ(t.translation, Vec3(1, 2, 3));
   EXPECT_NEAR(double(t.rotation.norm()), 1.0, 4 * std::numeric_limits<Real>::epsilon());
   EXPECT_TRUE(t.apply(Vec3(1, 0, 0)).isApprox(Vec3(0, 2, 3)));  // half turn about z, then translate
+}
+
+// `crux import-mesh BUDGET PATH` (isolated mesh loading's import command) refuses a BUDGET that is
+// not a byte count before importing anything, naming it.
+TEST(ImportMeshCommand, ABudgetThatIsNotAByteCountIsRefused) {
+  for (const std::string budget : {"", "12x", "-1", "1e9", "abc"}) {
+    std::ostringstream err;
+    EXPECT_EQ(runImportMesh(budget, "/nonexistent/mesh.obj", err), 2) << budget;
+    EXPECT_NE(err.str().find("BUDGET must be a byte count, got \"" + budget + "\""), std::string::npos) << err.str();
+  }
 }
 
 }  // namespace
