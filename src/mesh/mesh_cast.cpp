@@ -1,10 +1,16 @@
 /// @file mesh_cast.cpp  Shape casts against a mesh (mesh_cast.hpp): the pair cast per triangle,
 /// through the mesh's wide BVH (mesh_detail::walkOrdered) with the swept bounds' entry time as
-/// the key.
+/// the key. Linear casts first put each triangle of a leaf through the separating-axis bound of
+/// the moving shape (detail::SweptSeparation, with the swept bounds' pad): a triangle the shape
+/// cannot come within the pad of before the best t so far is skipped without running the
+/// advancement, which leaves the answer unchanged (its hits are within the contact tolerance,
+/// which the pad exceeds). Rigid casts skip this bound: their advancement may stop at its
+/// iteration cap, short of the contact tolerance.
 
 #include <crux/mesh/mesh_cast.hpp>
 #include <crux/precondition.hpp>
 
+#include "geometry/swept_separation.hpp"
 #include "mesh_walk.hpp"
 #include "node_tests.hpp"
 #include "shape_bounds.hpp"
@@ -61,17 +67,27 @@ double maxAbs(const Aabb& b) { return double(mesh_detail::maxAbs(b)); }
 template <class CastTriangle>
 class Search {
  public:
-  Search(const Mesh& mesh, const CastTriangle& castTriangle, const SweptBox& box, bool stopAtFirst)
-      : mesh_(mesh), castTriangle_(castTriangle), box_(box), stopAtFirst_(stopAtFirst) {}
+  /// `cull`: the per-triangle separating-axis test of the linear casts (null: none).
+  Search(const Mesh& mesh, const CastTriangle& castTriangle, const SweptBox& box,
+         const detail::SweptSeparation* cull, bool stopAtFirst)
+      : mesh_(mesh), castTriangle_(castTriangle), box_(box), cull_(cull), stopAtFirst_(stopAtFirst) {}
 
   // ---- the walk's visitor (mesh_detail::walkOrdered) ----
   bool entry(const Aabb& box, Real& key) const { return box_.enter(box, key) && keep(key); }
   /// A node entered at s may hold a triangle whose reported t (rounded down to Real, the entry
   /// being a lower bound of the double t) ties the best: kept up to an ulp past it.
-  bool keep(Real key) const { return !found_ || double(key) <= double(best_.cast.t) + 2 * kEpsReal; }
+  bool keep(Real key) const { return double(key) <= limit(); }
+  /// The latest entry still kept (see keep); past 1 before the first hit.
+  double limit() const { return found_ ? double(best_.cast.t) + 2 * kEpsReal : 2; }
+  /// A triangle that the swept shape cannot come within the pad of before limit() is skipped:
+  /// its cast could only miss or report a t past the best (swept_separation.hpp).
   bool leaf(std::uint32_t first, std::uint32_t count) {
-    for (std::uint32_t k = first; k < first + count; ++k)
-      if (!consider(mesh_.slotTriangle(k), mesh_.bvh().primIndices[k])) return false;
+    for (std::uint32_t k = first; k < first + count; ++k) {
+      const Triangle tri = mesh_.slotTriangle(k);
+      double entry;
+      if (cull_ && !cull_->enter(tri, limit(), entry)) continue;
+      if (!consider(tri, mesh_.bvh().primIndices[k])) return false;
+    }
     return true;
   }
 
@@ -98,6 +114,7 @@ class Search {
   const Mesh& mesh_;
   const CastTriangle& castTriangle_;
   const SweptBox& box_;
+  const detail::SweptSeparation* cull_;
   bool stopAtFirst_;
   bool found_ = false;
   MeshCastHit best_;
@@ -105,8 +122,8 @@ class Search {
 
 template <class CastTriangle>
 std::optional<MeshCastHit> run(const Mesh& mesh, const CastTriangle& castTriangle, const SweptBox& box,
-                               QueryPath path, bool stopAtFirst) {
-  Search<CastTriangle> search(mesh, castTriangle, box, stopAtFirst);
+                               const detail::SweptSeparation* cull, QueryPath path, bool stopAtFirst) {
+  Search<CastTriangle> search(mesh, castTriangle, box, cull, stopAtFirst);
   if (path == QueryPath::BruteForce) {
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
       if (!search.consider(mesh.triangle(i), i)) break;
@@ -131,16 +148,19 @@ double sweptPad(const Mesh& mesh, const Aabb& box, const Vec3& motion, double pa
 std::optional<MeshCastHit> linearCast(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
                                       const Transform& shapePose, const Vec3& motion, QueryPath path,
                                       bool stopAtFirst) {
-  const Aabb sb = mesh_detail::shapeBoundsIn(shape, meshPose.inverse() * shapePose);
+  const Transform rel = meshPose.inverse() * shapePose;
+  const Aabb sb = mesh_detail::shapeBoundsIn(shape, rel);
   const Vec3 localMotion = meshPose.rotation.conjugate() * motion;
   const double scale = double(shape.size()) +
                        (shapePose.translation - meshPose.translation).cast<double>().norm() +
                        motion.cast<double>().norm();
-  const SweptBox box(sb, localMotion, sweptPad(mesh, sb, localMotion, scale));
+  const double pad = sweptPad(mesh, sb, localMotion, scale);
+  const SweptBox box(sb, localMotion, pad);
+  const detail::SweptSeparation cull(shape, rel, localMotion, pad);
   const auto castTriangle = [&](const Triangle& tri, const CastOptions& o) {
     return cast(shape, shapePose, motion, ConvexShape(tri), meshPose, o);
   };
-  return run(mesh, castTriangle, box, path, stopAtFirst);
+  return run(mesh, castTriangle, box, &cull, path, stopAtFirst);
 }
 
 std::optional<MeshCastHit> rigidCast(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape,
@@ -156,7 +176,7 @@ std::optional<MeshCastHit> rigidCast(const Mesh& mesh, const Transform& meshPose
   const auto castTriangle = [&](const Triangle& tri, const CastOptions& o) {
     return cast(shape, motion, ConvexShape(tri), meshPose, o);
   };
-  return run(mesh, castTriangle, box, path, stopAtFirst);
+  return run(mesh, castTriangle, box, nullptr, path, stopAtFirst);
 }
 
 }  // namespace
