@@ -14,6 +14,8 @@
 /// through the surface); the program prints steps/s and the bodies' gaps to the surface and exits
 /// 1 on any failure, 77 when the mesh cannot be loaded, 2 on bad arguments. See README.md.
 
+#include "common/bullet_crux.hpp"
+
 #include <crux/error.hpp>
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_contact.hpp>
@@ -36,13 +38,17 @@
 #include <optional>
 #include <random>
 #include <string>
-#include <time.h>
 #include <vector>
 
 namespace {
 
 using crux::Real;
 using crux::Vec3;
+using crux_example::StaticMesh;
+using crux_example::threadCpuSeconds;
+using crux_example::toBt;
+using crux_example::toCrux;
+using crux_example::toCruxShape;
 
 // ---- scene constants (SI units: metres, seconds, kilograms) --------------------------------------
 
@@ -77,49 +83,6 @@ constexpr int kActiveSteps = 60;
 constexpr int kExitFailure = 1;
 constexpr int kExitUsage = 2;
 constexpr int kExitSkip = 77;  ///< CTest SKIP_RETURN_CODE: the mesh data is missing
-
-btVector3 toBt(const Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
-Vec3 toCrux(const btVector3& v) { return Vec3(Real(v.x()), Real(v.y()), Real(v.z())); }
-crux::Transform toCrux(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  crux::Transform out;
-  out.rotation = crux::Quat(Real(q.w()), Real(q.x()), Real(q.y()), Real(q.z())).normalized();
-  out.translation = toCrux(t.getOrigin());
-  return out;
-}
-
-/// The crux view (body frame) of a Bullet convex shape with the same geometry: the sphere's and
-/// capsule's radii, the box's full half extents (Bullet's margin lies inside them). False for
-/// shape types the example does not hand to crux.
-bool toCruxShape(const btCollisionShape& shape, crux::ConvexShape& out) {
-  switch (shape.getShapeType()) {
-    case SPHERE_SHAPE_PROXYTYPE:
-      out = crux::Sphere{Vec3::Zero(), Real(static_cast<const btSphereShape&>(shape).getRadius())};
-      return true;
-    case BOX_SHAPE_PROXYTYPE: {
-      crux::Obb box;
-      box.half = toCrux(static_cast<const btBoxShape&>(shape).getHalfExtentsWithMargin());
-      out = box;
-      return true;
-    }
-    case CAPSULE_SHAPE_PROXYTYPE: {
-      const auto& capsule = static_cast<const btCapsuleShape&>(shape);
-      Vec3 axis = Vec3::Zero();
-      axis[capsule.getUpAxis()] = Real(capsule.getHalfHeight());
-      out = crux::Capsule{-axis, axis, Real(capsule.getRadius())};
-      return true;
-    }
-    default:
-      return false;
-  }
-}
-
-/// CPU time of the calling thread (POSIX CLOCK_THREAD_CPUTIME_ID).
-double threadCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 // ---- crux inside Bullet's dispatcher -------------------------------------------------------------
 
@@ -281,44 +244,6 @@ struct Spawn {
   crux::Quat rotation = crux::Quat::Identity();
 };
 
-/// The static mesh in both forms: the crux Mesh (+ adjacency, + volume view when closed) and the
-/// float arrays behind Bullet's btBvhTriangleMeshShape, with the same vertices.
-struct StaticMesh {
-  std::unique_ptr<crux::Mesh> mesh;
-  std::unique_ptr<crux::MeshAdjacency> adjacency;
-  std::unique_ptr<crux::MeshVolume> volume;  ///< null when the mesh is not closed
-  std::vector<int> indices;
-  std::vector<btScalar> positions;
-};
-
-/// The loaded mesh scaled uniformly by `scale` about its bounding-box centre (which goes to the
-/// origin), its coordinates rounded to btScalar, with every triangle's winding reversed: the bodies touch the closed mesh from inside,
-/// and Bullet's internal-edge utility (single-sided, used by the stock mode) wants them on the
-/// front side. crux's contacts and adjacency do not depend on the winding.
-StaticMesh makeStaticMesh(const crux::Mesh& loaded, double scale) {
-  StaticMesh out;
-  const Vec3 centre = (loaded.bounds().min + loaded.bounds().max) / Real(2);
-  std::vector<Vec3> vertices;
-  vertices.reserve(loaded.vertexCount());
-  // Rounded to btScalar, so that both narrow phases collide with the very same triangles (in the
-  // double build too, where crux::Real is double and Bullet float).
-  for (const Vec3& v : loaded.vertices())
-    vertices.push_back(((v - centre) * Real(scale)).cast<btScalar>().cast<Real>());
-  out.positions.reserve(3 * vertices.size());
-  for (const Vec3& v : vertices)
-    for (int i = 0; i < 3; ++i) out.positions.push_back(btScalar(v[i]));
-  out.indices.reserve(3 * loaded.triangleCount());
-  std::vector<crux::TriangleIndices> triangles;
-  triangles.reserve(loaded.triangleCount());
-  for (const crux::TriangleIndices& t : loaded.triangles()) triangles.push_back({t[0], t[2], t[1]});
-  for (const crux::TriangleIndices& t : triangles)
-    for (int i = 0; i < 3; ++i) out.indices.push_back(int(t[i]));
-  out.mesh = std::make_unique<crux::Mesh>(std::move(vertices), std::move(triangles), loaded.name());
-  out.adjacency = std::make_unique<crux::MeshAdjacency>(*out.mesh);
-  if (out.mesh->stats().closed()) out.volume = std::make_unique<crux::MeshVolume>(*out.mesh);
-  return out;
-}
-
 /// The lowest layer of grid cells (spacing kSpawnSpacing, in the scaled mesh's frame) whose ball
 /// of radius kBodyRadius + a gap is inside the closed mesh and clear of its surface: one layer over
 /// the container's floor, so that the bodies land on the mesh rather than on a heap of each other
@@ -407,12 +332,8 @@ RunResult run(const StaticMesh& m, const std::vector<Spawn>& spawns, int steps, 
       dispatcher.registerCollisionCreateFunc(a, b, timed.back().get());
     }
 
-  // Bullet reads the arrays in place; the striding interface does not write them.
-  auto& positions = const_cast<std::vector<btScalar>&>(m.positions);
-  auto& indices = const_cast<std::vector<int>&>(m.indices);
-  btTriangleIndexVertexArray array(int(indices.size() / 3), indices.data(), int(3 * sizeof(int)),
-                                   int(positions.size() / 3), positions.data(), int(3 * sizeof(btScalar)));
-  btBvhTriangleMeshShape meshShape(&array, true, true);
+  const auto array = crux_example::bulletTriangles(m);
+  btBvhTriangleMeshShape meshShape(array.get(), true, true);
   // Stock mode with Bullet's own ghost-contact fix (btInternalEdgeUtility), the counterpart of
   // crux's MeshAdjacency correction: per-triangle edge angles, applied to each new contact point
   // by the contact-added callback.
@@ -636,7 +557,7 @@ int main(int argc, char** argv) {
   StaticMesh m;
   std::vector<Vec3> cells;
   for (int attempt = 0;; ++attempt) {
-    m = makeStaticMesh(*loaded, scale);
+    m = crux_example::makeStaticMesh(*loaded, scale, crux_example::Winding::Reverse);
     cells = spawnCells(m);
     if (int(cells.size()) >= options.bodies) break;
     if (attempt == 20) {
