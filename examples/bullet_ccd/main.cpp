@@ -129,7 +129,8 @@ crux::ConvexShape core(const btCollisionShape& shape) {
 /// crux's CCD for the fast bodies of one world, run by Bullet's internal tick callbacks around
 /// each internal step: the pre-tick callback records the poses, the post-tick callback casts each
 /// awake body from its recorded pose to its new one (Bullet's integrator moves the centre along
-/// that segment and turns the body about one axis: crux::RigidMotion) and corrects the new pose:
+/// that segment and turns the body about one axis by at most π/4: crux::RigidMotion's slerp) and
+/// corrects the new pose:
 ///  1. the core's cast (the body shrunk by kSkin) hits at t < 1: the body goes back to the pose at
 ///     t less kBackOff of travel (its core clear of every surface: the cast's t is never late)
 ///     and loses its velocity into the surface (no restitution, Bullet's default);
