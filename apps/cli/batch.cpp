@@ -427,7 +427,7 @@ const std::vector<std::string_view>& protocolOps() {
         // narrow phase and volumes (beyond the shared contract, see docs/batch.md)
         "contacts", "distance", "mesh_distance", "model_distance", "point_inside",
         // shape casts (docs/batch.md)
-        "cast"};
+        "cast", "model_cast", "scene_cast"};
     std::sort(v.begin(), v.end());
     return v;
   }();
@@ -450,6 +450,14 @@ bool isBarrierOp(std::string_view op) {
 // ---- BatchState -----------------------------------------------------------------------------------
 
 BatchState::BatchState(BatchOptions opts) : options(opts), world(makeWorld(backendName(opts.backend))) {}
+
+const std::string& BatchState::modelName(ModelHandle model, WorldOp op) const {
+  const auto it = modelNames.find(model);
+  if (it == modelNames.end())
+    throw BackendFailure(op, world->backend(),
+                         "reported model handle " + std::to_string(model.index) + ", which names no model");
+  return it->second;
+}
 
 BatchState::BatchState(BatchState&& other) noexcept
     : options(other.options),

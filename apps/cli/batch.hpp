@@ -102,6 +102,9 @@ struct BatchState {
   /// Live model names -> handles, and back.
   std::map<std::string, ModelHandle, std::less<>> models;
   std::map<ModelHandle, std::string> modelNames;
+  /// The name of a model the world reported in answering `op`; a handle naming no model is the
+  /// backend's failure (BackendFailure).
+  const std::string& modelName(ModelHandle model, WorldOp op) const;
   /// Views for callers and tests (they follow the world).
   BatchMeshes meshes{this};
   BatchScene scene{this};

@@ -137,11 +137,9 @@ void modelDistanceOp(const Json& request, Answer& answer, BatchState& state) {
   if (d) writeDistance(answer, *d);
 }
 
-/// cast: a (a convex operand), exactly one of "motion" (a translation) or "end" (a transform:
-/// the rigid motion from a's pose to it), b (a convex operand or a mesh).
-void castOp(const Json& request, Answer& answer, BatchState& state) {
-  const WorldOperand a = readOperand(request, "a", state);
-  const WorldOperand b = readOperand(request, "b", state);
+/// The motion of a cast: exactly one of "motion" (a translation) or "end" (a transform: the
+/// rigid motion from a's pose to it).
+WorldMotion readMotion(const Json& request) {
   const bool hasMotion = request.contains("motion"), hasEnd = request.contains("end");
   if (hasMotion == hasEnd)
     fail(hasMotion ? "end" : "motion",
@@ -149,20 +147,63 @@ void castOp(const Json& request, Answer& answer, BatchState& state) {
   WorldMotion motion;
   if (hasMotion) motion.translation = readVec3(member(request, "motion"), "motion");
   else motion.end = readTransform(member(request, "end"), "end");
-  const WorldCast c = state.world->cast(a, motion, b);
+  return motion;
+}
+
+/// Optional "any" (a boolean; true: only whether the cast hits).
+CastFind readCastFind(const Json& request) {
+  const auto it = request.find("any");
+  if (it == request.end()) return CastFind::Closest;
+  if (!it->is_boolean()) fail("any", "expected a boolean, " + got(*it));
+  return it->get<bool>() ? CastFind::Any : CastFind::Closest;
+}
+
+/// "hit"; when hit and known "t", then (when the backend reports them) "point_a", "point_b",
+/// "normal", "starts_overlapping", "depth", and "triangle" / "model" when known.
+void writeCast(Answer& answer, const WorldCast& c, const BatchState& state, WorldOp op) {
   answer["hit"] = c.hit;
-  if (!c.hit) return;
-  if (!c.timeKnown) {
-    answer["t"] = nullptr;
+  if (!c.hit || !c.timeKnown) {
+    if (c.hit) answer["t"] = nullptr;
     return;
   }
   answer["t"] = writeDouble(c.t, "t");
-  answer["point_a"] = writeVec3d(c.pointA, "point_a");
-  answer["point_b"] = writeVec3d(c.pointB, "point_b");
-  answer["normal"] = writeVec3d(c.normal + Vec3d::Zero(), "normal");  // + 0: no "-0.0"
+  if (c.witnessKnown) {
+    answer["point_a"] = writeVec3d(c.pointA, "point_a");
+    answer["point_b"] = writeVec3d(c.pointB, "point_b");
+    answer["normal"] = writeVec3d(c.normal + Vec3d::Zero(), "normal");  // + 0: no "-0.0"
+  }
   answer["starts_overlapping"] = c.startsOverlapping;
-  answer["depth"] = writeDouble(c.depth, "depth");
+  if (c.witnessKnown) answer["depth"] = writeDouble(c.depth, "depth");
   if (c.triangleB) answer["triangle"] = *c.triangleB;
+  if (c.model.valid()) answer["model"] = state.modelName(c.model, op);
+}
+
+/// cast: a (a convex operand), a motion (readMotion), b (a convex operand or a mesh), optional
+/// "any".
+void castOp(const Json& request, Answer& answer, BatchState& state) {
+  const WorldOperand a = readOperand(request, "a", state);
+  const WorldOperand b = readOperand(request, "b", state);
+  const WorldMotion motion = readMotion(request);
+  const CastFind find = readCastFind(request);
+  writeCast(answer, state.world->cast(a, motion, b, find), state, WorldOp::Cast);
+}
+
+/// model_cast: a, a motion, model (a model name), optional "any".
+void modelCastOp(const Json& request, Answer& answer, BatchState& state) {
+  const WorldOperand a = readOperand(request, "a", state);
+  const std::string& name = readString(member(request, "model"), "model", "a model name (string)");
+  const WorldMotion motion = readMotion(request);
+  const CastFind find = readCastFind(request);
+  const ModelHandle model = resolveModel(state, "model", name);
+  writeCast(answer, state.world->modelCast(a, motion, model, find), state, WorldOp::ModelCast);
+}
+
+/// scene_cast: a, a motion, optional "any": the first model touched.
+void sceneCastOp(const Json& request, Answer& answer, BatchState& state) {
+  const WorldOperand a = readOperand(request, "a", state);
+  const WorldMotion motion = readMotion(request);
+  const CastFind find = readCastFind(request);
+  writeCast(answer, state.world->sceneCast(a, motion, find), state, WorldOp::SceneCast);
 }
 
 /// point_inside: mesh, point -> inside (the mesh must be closed).
@@ -208,6 +249,8 @@ void addNarrowPhaseOps(OpTable& table) {
   table["model_distance"] = modelDistanceOp;
   table["point_inside"] = pointInsideOp;
   table["cast"] = castOp;
+  table["model_cast"] = modelCastOp;
+  table["scene_cast"] = sceneCastOp;
 }
 
 }  // namespace crux::cli

@@ -34,15 +34,6 @@ ModelHandle findModel(const BatchState& state, const std::string& key, const std
   return it->second;
 }
 
-/// The name of a model the world reported.
-const std::string& nameOf(const BatchState& state, ModelHandle model) {
-  const auto it = state.modelNames.find(model);
-  if (it == state.modelNames.end())
-    throw BackendFailure(WorldOp::SceneRay, state.world->backend(),
-                         "reported model handle " + std::to_string(model.index) + ", which names no model");
-  return it->second;
-}
-
 /// Optional member `key`: absent or null gives nothing, else a model name.
 std::optional<std::string> readOptionalModelName(const Json& request, const std::string& key) {
   const auto it = request.find(key);
@@ -174,7 +165,7 @@ void sceneRay(const Json& request, Answer& answer, BatchState& state) {
   const std::optional<WorldRayHit> hit = hits.hit();
   answer["hit"] = hit.has_value();
   if (!hit) return;
-  answer["model"] = nameOf(state, hit->model);
+  answer["model"] = state.modelName(hit->model, WorldOp::SceneRay);
   writeRayHit(answer, *hit);
 }
 

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -229,6 +230,33 @@ struct CollectingRay : btCollisionWorld::RayResultCallback {
   bool anyHit = false;
 };
 
+/// Keeps the nearest hit of a convex sweep (Closest: returns its fraction, so Bullet only looks
+/// for nearer ones; Any: returns 0 after the first). The point is on the hit object (Bullet
+/// hands it over in world space), the normal from the hit object towards the cast shape.
+struct NearestSweep : btCollisionWorld::ConvexResultCallback {
+  explicit NearestSweep(CastFind find) : find(find) {}
+
+  btScalar addSingleResult(btCollisionWorld::LocalConvexResult& r, bool normalInWorldSpace) override {
+    hit = true;
+    fraction = r.m_hitFraction;
+    normal = normalInWorldSpace ? r.m_hitNormalLocal
+                                : r.m_hitCollisionObject->getWorldTransform().getBasis() * r.m_hitNormalLocal;
+    point = r.m_hitPointLocal;
+    triangle = r.m_localShapeInfo ? std::optional<std::uint32_t>(std::uint32_t(r.m_localShapeInfo->m_triangleIndex))
+                                  : std::nullopt;
+    user = r.m_hitCollisionObject->getUserIndex();
+    m_closestHitFraction = find == CastFind::Any ? btScalar(0) : r.m_hitFraction;
+    return m_closestHitFraction;
+  }
+
+  CastFind find;
+  bool hit = false;
+  btScalar fraction = 1;
+  btVector3 normal{0, 0, 1}, point{0, 0, 0};
+  std::optional<std::uint32_t> triangle;
+  int user = -1;
+};
+
 /// A btCollisionWorld with its own dispatcher (GImpact's algorithms registered) and a
 /// btDbvtBroadphase, over a collision configuration (algorithm factories and memory pools)
 /// shared by the world's spaces: building a btDefaultCollisionConfiguration fills pools of a
@@ -301,8 +329,10 @@ class BulletWorld final : public CollisionWorld {
   bool supports(WorldOp op) const override {
     // No Bullet algorithm for a static plane against a static mesh: mesh_plane, model_plane.
     // Of the narrow-phase ops only contacts (contactPairTest): Bullet has no
-    // closed-volume mode, and its distances are convex-only (btGjkPairDetector).
-    if (op == WorldOp::Contacts) return true;
+    // closed-volume mode, and its distances are convex-only (btGjkPairDetector). Casts: its
+    // convex sweeps (linear and rigid).
+    if (op == WorldOp::Contacts || op == WorldOp::Cast || op == WorldOp::ModelCast || op == WorldOp::SceneCast)
+      return true;
     return isContractOp(op) && op != WorldOp::MeshPlane && op != WorldOp::ModelPlane;
   }
   WorldTolerance tolerance() const override { return kBulletTolerance; }
@@ -545,12 +575,75 @@ class BulletWorld final : public CollisionWorld {
     return out;
   }
 
+  /// cast: btCollisionWorld::objectQuerySingle (convexSweepTest's per-object step:
+  /// btContinuousConvexCollision for a convex b, btTriangleConvexcastCallback over the BVH for a
+  /// mesh) from a's pose to its pose at t = 1, allowed penetration 0.
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind find) override {
+    BulletConvex cb;
+    btCollisionObject ob;
+    if (const auto* m = std::get_if<MeshHandle>(&b.shape)) {
+      ob.setCollisionShape(mesh(*m).shape.get());
+      ob.setWorldTransform(toBt(b.pose));
+    } else {
+      cb = bulletConvex(b.shape);
+      ob.setCollisionShape(cb.shape.get());
+      ob.setWorldTransform(toBt(b.pose) * cb.local);
+    }
+    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
+                                      NearestSweep& result) {
+      btCollisionWorld::objectQuerySingle(&shape, from, to, &ob, ob.getCollisionShape(), ob.getWorldTransform(), result,
+                                          0);
+    });
+  }
+  WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle h, CastFind find) override {
+    btCollisionObject& o = model(h).object;
+    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
+                                      NearestSweep& result) {
+      btCollisionWorld::objectQuerySingle(&shape, from, to, &o, o.getCollisionShape(), o.getWorldTransform(), result, 0);
+    });
+  }
+  /// scene_cast: btCollisionWorld::convexSweepTest over the scene world (its Dbvt culls by the
+  /// swept box).
+  WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) override {
+    WorldCast w = sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from,
+                                             const btTransform& to, NearestSweep& result) {
+      scene_.world.convexSweepTest(&shape, from, to, result, 0);
+    });
+    return w;
+  }
+
  private:
   BulletMesh& mesh(MeshHandle h) const { return *meshes_.at(h.index); }
   /// A model's objects; InvalidInput naming the field for an unknown handle.
   BulletModel& model(ModelHandle h) const {
     if (!table_.contains(h)) throw InvalidInput("model: unknown model handle " + std::to_string(h.index));
     return *models_.at(h.index);
+  }
+
+  /// Casts a's shape (bulletConvex) from its pose to its pose at t = 1 with test(shape, from,
+  /// to, result) and reads the nearest hit: t = Bullet's hit fraction, both points at Bullet's
+  /// hit point, the model by the hit object's user index. Bullet does not report an initial
+  /// overlap: a hit at fraction 0 is taken as one, with depth 0.
+  template <class Test>
+  WorldCast sweep(const WorldOperand& a, const WorldMotion& motion, CastFind find, Test&& test) {
+    const BulletConvex ca = bulletConvex(a.shape);
+    const btTransform from = toBt(a.pose) * ca.local;
+    btTransform to = from;
+    if (motion.end) to = toBt(*motion.end) * ca.local;
+    else to.setOrigin(from.getOrigin() + toBt(motion.translation));
+    NearestSweep result(find);
+    test(static_cast<const btConvexShape&>(*ca.shape), from, to, result);
+    WorldCast w;
+    if (!result.hit) return w;
+    w.hit = true;
+    w.t = double(result.fraction);
+    w.pointA = w.pointB = toD(result.point);
+    const Vec3d n = toD(result.normal);
+    if (n.norm() > 0) w.normal = n / n.norm();
+    w.startsOverlapping = result.fraction == 0;
+    w.triangleB = result.triangle;
+    if (result.user >= 0) w.model = ModelHandle{std::uint32_t(result.user)};
+    return w;
   }
 
   /// Moves models' objects to their world poses (table_.world) and refreshes their

@@ -81,7 +81,12 @@ std::pair<double, double> enclosure(const Q& q) {
 
 ExactCastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
                      const Transform& tb) {
-  const ExactCore ca = detail::coreOf(a, ExactRigid(ta)), cb = detail::coreOf(b, ExactRigid(tb));
+  return detail::castCores(detail::coreOf(a, ExactRigid(ta)), motion, detail::coreOf(b, ExactRigid(tb)));
+}
+
+namespace detail {
+
+ExactCastResult castCores(const ExactCore& ca, const Vec3& motion, const ExactCore& cb) {
   const bool polytopes = ca.radius == 0 && cb.radius == 0;
   CastProgram cp(ca, cb, motion, polytopes);
   ExactCastResult out;
@@ -111,5 +116,7 @@ ExactCastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& moti
   out.hit = s.objective_value() <= Quotient((ra + rb) * (ra + rb));
   return out;
 }
+
+}  // namespace detail
 
 }  // namespace crux::exact

@@ -91,6 +91,8 @@ Point commonPoint(const ExactCore& a, const ExactCore& b);
 std::optional<ExactDistance> meshDistance(const Mesh& a, const ExactRigid& ta, const Mesh& b, const ExactRigid& tb,
                                           double maxDistance);
 
+/// exact::cast (exact.hpp) of two placed cores, A translated by s·motion (exact_cast.cpp).
+ExactCastResult castCores(const ExactCore& a, const Vec3& motion, const ExactCore& b);
 /// Exact squared Euclidean gap between two (interval) boxes: a lower bound of the squared
 /// distance of whatever they enclose.
 FT squaredGap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b);

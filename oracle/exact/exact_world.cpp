@@ -127,7 +127,8 @@ class ExactWorld final : public CollisionWorld {
   bool supports(WorldOp op) const override {
     return isContractOp(op) || op == WorldOp::PointInside || isVolumeVariant(op) || op == WorldOp::Contacts ||
            op == WorldOp::Distance || op == WorldOp::MeshDistance || op == WorldOp::ModelDistance ||
-           op == WorldOp::Cast;  // linear casts (a rigid motion has no rational time: Unsupported)
+           op == WorldOp::Cast || op == WorldOp::ModelCast ||
+           op == WorldOp::SceneCast;  // linear casts (a rigid motion has no rational time: Unsupported)
   }
   WorldTolerance tolerance() const override { return kExactTolerance; }
 
@@ -201,41 +202,43 @@ class ExactWorld final : public CollisionWorld {
   /// Linear casts (exact::cast): hit or miss exact; polytopes get the exact t rounded, and the
   /// points and normal of the exact distance of the shapes placed at that t; rounded shapes the
   /// hit only (timeKnown false). Against a mesh: every triangle, the smallest t (then index).
-  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) override {
+  /// Linear casts, each pair by exact::detail::castCores; a mesh or model: every triangle, the
+  /// earliest exact t (ties: the lowest triangle index).
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind) override {
     if (motion.end) unsupported(WorldOp::Cast);
-    const ConvexShape sa = convexOf(a);
+    const ExactCore ca = coreOf(convexOf(a), ExactRigid(a.pose));
     WorldCast w;
-    auto consider = [&](const ConvexShape& sb, const Transform& tb, std::optional<std::uint32_t> triangle) {
-      const ExactCastResult r = exact::cast(sa, a.pose, motion.translation, sb, tb);
-      if (!r.hit) return;
-      if (!r.timeExact) {  // rounded shapes: the first triangle hit says hit
-        if (!w.hit) {
-          w.hit = true;
-          w.timeKnown = false;
-          w.triangleB = triangle;
-        }
-        return;
-      }
-      if (w.hit && w.timeKnown && !(r.t < w.t)) return;
-      w.hit = true;
-      w.t = r.t;
-      w.startsOverlapping = r.tUpper == 0;
-      w.triangleB = triangle;
-      Transform at = a.pose;
-      at.translation += Real(r.t) * motion.translation;
-      const ExactDistance d = exact::distance(sa, at, sb, tb);
-      w.pointA = d.pointA;
-      w.pointB = d.pointB;
-      w.normal = d.normal;
-      w.depth = w.startsOverlapping ? std::max(0.0, -d.distance) : 0.0;
-    };
     if (!b.isMesh()) {
-      consider(convexOf(b), b.pose, std::nullopt);
+      castAgainst(ca, a, motion, coreOf(convexOf(b), ExactRigid(b.pose)), std::nullopt, w);
       return w;
     }
-    const Mesh& m = mesh(std::get<MeshHandle>(b.shape));
-    for (std::uint32_t i = 0; i < m.triangleCount(); ++i) consider(ConvexShape(m.triangle(i)), b.pose, i);
+    castAgainst(ca, a, motion, mesh(std::get<MeshHandle>(b.shape)), ExactRigid(b.pose), w);
     return w;
+  }
+  /// The model's mesh placed by its exactly composed world transform.
+  WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle m, CastFind) override {
+    if (motion.end) unsupported(WorldOp::ModelCast);
+    WorldCast w;
+    castAgainst(coreOf(convexOf(a), ExactRigid(a.pose)), a, motion, *models_.meshData(m), worldOf(m), w);
+    return w;
+  }
+  /// Every model; the earliest exact t (ties: the lowest model name, then triangle index).
+  WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind) override {
+    if (motion.end) unsupported(WorldOp::SceneCast);
+    const ExactCore ca = coreOf(convexOf(a), ExactRigid(a.pose));
+    std::vector<ModelHandle> order = models_.models();
+    std::sort(order.begin(), order.end(),
+              [&](ModelHandle x, ModelHandle y) { return models_.name(x) < models_.name(y); });
+    WorldCast best;
+    for (const ModelHandle m : order) {
+      WorldCast w;
+      castAgainst(ca, a, motion, *models_.meshData(m), worldOf(m), w);
+      if (!w.hit) continue;
+      if (best.hit && (!best.timeKnown || !w.timeKnown || !(w.t < best.t))) continue;
+      best = w;
+      best.model = m;
+    }
+    return best;
   }
 
   std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
@@ -466,6 +469,49 @@ class ExactWorld final : public CollisionWorld {
       slot(*it).world = std::make_unique<ExactRigid>(p ? ExactRigid::compose(*slot(*p).world, local) : local);
     }
     return *slot(m).world;
+  }
+
+  /// Folds the exact cast of A's core (a's shape at its pose, translated by the motion) against
+  /// one core of b into w: the earliest exact t wins (ties: the first offered); rounded shapes,
+  /// whose t is irrational, say hit alone. The points and normal are the exact distance's at
+  /// the rounded t.
+  static void castAgainst(const ExactCore& ca, const WorldOperand& a, const WorldMotion& motion, const ExactCore& cb,
+                          std::optional<std::uint32_t> triangle, WorldCast& w) {
+    const ExactCastResult r = castCores(ca, motion.translation, cb);
+    if (!r.hit) return;
+    if (!r.timeExact) {
+      if (!w.hit) {
+        w.hit = true;
+        w.timeKnown = false;
+        w.triangleB = triangle;
+      }
+      return;
+    }
+    if (w.hit && w.timeKnown && !(r.t < w.t)) return;
+    w.hit = true;
+    w.timeKnown = true;
+    w.t = r.t;
+    w.startsOverlapping = r.tUpper == 0;
+    w.triangleB = triangle;
+    Transform at = a.pose;
+    at.translation += Real(r.t) * motion.translation;
+    const ExactCore moved = coreOf(convexOf(a), ExactRigid(at));
+    const RoundedDistance d = rounded(coreDistance(moved, cb), moved.radius, cb.radius);
+    w.pointA = d.pointA;
+    w.pointB = d.pointB;
+    w.normal = d.normal;
+    w.depth = w.startsOverlapping ? std::max(0.0, -d.distance) : 0.0;
+  }
+  /// Every triangle of a mesh placed by `pose`.
+  static void castAgainst(const ExactCore& ca, const WorldOperand& a, const WorldMotion& motion, const Mesh& m,
+                          const ExactRigid& pose, WorldCast& w) {
+    std::vector<Point> points;
+    points.reserve(m.vertexCount());
+    for (const Vec3& v : m.vertices()) points.push_back(pose.apply(v));
+    for (std::uint32_t i = 0; i < m.triangleCount(); ++i) {
+      const TriangleIndices& t = m.triangles()[i];
+      castAgainst(ca, a, motion, coreOf(points[t[0]], points[t[1]], points[t[2]]), i, w);
+    }
   }
 
   const PlacedSimplices& placed(ModelHandle m) {

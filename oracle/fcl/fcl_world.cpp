@@ -15,6 +15,7 @@
 #include <fcl/geometry/shape/sphere.h>
 #include <fcl/math/bv/OBBRSS.h>
 #include <fcl/narrowphase/collision.h>
+#include <fcl/narrowphase/continuous_collision.h>
 #include <fcl/narrowphase/distance.h>
 
 #include <algorithm>
@@ -277,6 +278,7 @@ class FclWorld final : public CollisionWorld {
       case WorldOp::Distance:
       case WorldOp::MeshDistance:
       case WorldOp::ModelDistance:
+      case WorldOp::Cast:  // convex pairs (FCL's conservative advancement against a BVHModel fails: doCast)
         return true;
       default:
         return false;
@@ -358,6 +360,40 @@ class FclWorld final : public CollisionWorld {
         signedDistance({oa.collisionGeometry(), oa.getTransform()}, {ob.collisionGeometry(), ob.getTransform()});
     if (r.min_distance > maxDistance) return std::nullopt;
     return toWorld(r, true, true);
+  }
+
+  // ---- casts: fcl::continuousCollide, conservative advancement (libccd GJK) ------------------
+
+  /// cast: fcl::continuousCollide of two convex shapes (CCDC_CONSERVATIVE_ADVANCEMENT, GST_LIBCCD)
+  /// under TranslationMotion (CCDM_TRANS) or, for a rigid motion, InterpMotion (CCDM_LINEAR:
+  /// rotation at constant angular velocity about the shape's FCL origin, translation linear, as
+  /// crux's slerp motion when that origin is the operand's). A triangle is cast as a one-face
+  /// fcl::Convex (FCL has no advancement for TriangleP). FCL reports the time alone: no points,
+  /// no normal. A mesh b throws: FCL 0.7's advancement against a BVHModel misses hits or crashes
+  /// (docs/bench.md, "bench_cast").
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind) override {
+    if (b.isMesh())
+      throw std::runtime_error(
+          "FCL 0.7's conservative advancement against a triangle mesh misses hits (generic BV path) or crashes "
+          "(OBBRSS path); the fcl world casts convex pairs only");
+    const FclOperand oa = castOperand(a), ob = castOperand(b);
+    const fcl::Transform3d local = toFcl(a.pose).inverse() * oa.pose;  // the shape in a's frame
+    fcl::Transform3d end = oa.pose;
+    if (motion.end) end = toFcl(*motion.end) * local;
+    else end.translation() += motion.translation.cast<double>();
+    fcl::ContinuousCollisionRequestd request;
+    request.ccd_motion_type = motion.end ? fcl::CCDM_LINEAR : fcl::CCDM_TRANS;
+    request.gjk_solver_type = fcl::GST_LIBCCD;
+    request.ccd_solver_type = fcl::CCDC_CONSERVATIVE_ADVANCEMENT;
+    fcl::ContinuousCollisionResultd result;
+    fcl::continuousCollide(oa.geometry.get(), oa.pose, end, ob.geometry.get(), ob.pose, ob.pose, request, result);
+    WorldCast w;
+    if (!result.is_collide) return w;
+    w.hit = true;
+    w.t = result.time_of_contact;
+    w.witnessKnown = false;
+    w.startsOverlapping = result.time_of_contact == 0;
+    return w;
   }
 
   // ---- models and the scene ----------------------------------------------------------------
@@ -474,6 +510,15 @@ class FclWorld final : public CollisionWorld {
       local = hullOperand(std::get<ConvexHull>(o.shape));
     }
     return {local.geometry, where * local.pose};
+  }
+
+  /// A cast operand: as operand(), but a triangle as the convex hull of its corners.
+  FclOperand castOperand(const WorldOperand& o) const {
+    if (const auto* t = std::get_if<Triangle>(&o.shape)) {
+      const FclOperand hull = hullOperand(ConvexHull::build({t->a, t->b, t->c}));
+      return {hull.geometry, toFcl(o.pose) * hull.pose};
+    }
+    return operand(o);
   }
 
   /// The model's FCL object; InvalidInput naming the field for an unknown handle.

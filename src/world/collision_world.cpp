@@ -21,7 +21,7 @@ constexpr std::array<std::string_view, kWorldOpCount> kOpNames = {
     "set_parent", "remove_model", "children", "model_ray", "model_segment", "model_sphere", "model_aabb",
     "model_obb", "model_plane", "model_triangle", "scene_ray", "scene_query", "scene_pairs", "contacts", "distance", "mesh_distance", "model_distance",
     "point_inside", "mesh_sphere volume", "mesh_aabb volume", "mesh_obb volume", "mesh_triangle volume",
-    "mesh_mesh volume", "model_sphere volume", "model_aabb volume", "model_obb volume", "model_triangle volume", "cast"};
+    "mesh_mesh volume", "model_sphere volume", "model_aabb volume", "model_obb volume", "model_triangle volume", "cast", "model_cast", "scene_cast"};
 
 std::array<WorldOp, kWorldOpCount> makeOpList() {
   std::array<WorldOp, kWorldOpCount> ops{};
@@ -445,14 +445,43 @@ std::vector<WorldContact> CollisionWorld::contacts(const WorldOperand& a, const 
   return guarded(WorldOp::Contacts, [&] { return doContacts(a, b, margin); });
 }
 
-WorldCast CollisionWorld::cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) {
+void CollisionWorld::validateCast(const WorldOperand& a, const WorldMotion& motion) const {
   validateOperand(a, "a");
-  validateOperand(b, "b");
   if (a.isMesh())
     throw InvalidInput("a: a cast moves a convex shape (a mesh cannot be cast; cast the shape against the mesh)");
   if (motion.end) validateTransform(*motion.end, "end");
   else validatePoint(motion.translation, "motion");
-  return guarded(WorldOp::Cast, [&] { return doCast(a, motion, b); });
+}
+
+template <class F>
+WorldCast CollisionWorld::castHook(WorldOp op, CastFind find, F&& hook) {
+  WorldCast c = guarded(op, std::forward<F>(hook));
+  if (find == CastFind::Any) {
+    WorldCast any;
+    any.hit = c.hit;
+    any.timeKnown = false;
+    return any;
+  }
+  return c;
+}
+
+WorldCast CollisionWorld::cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind find) {
+  validateCast(a, motion);
+  validateOperand(b, "b");
+  return castHook(WorldOp::Cast, find, [&] { return doCast(a, motion, b, find); });
+}
+
+WorldCast CollisionWorld::modelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model,
+                                   CastFind find) {
+  validateCast(a, motion);
+  WorldCast c = castHook(WorldOp::ModelCast, find, [&] { return doModelCast(a, motion, model, find); });
+  c.model = ModelHandle{};  // the caller named it
+  return c;
+}
+
+WorldCast CollisionWorld::sceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) {
+  validateCast(a, motion);
+  return castHook(WorldOp::SceneCast, find, [&] { return doSceneCast(a, motion, find); });
 }
 
 WorldDistance CollisionWorld::distance(const WorldOperand& a, const WorldOperand& b) {
@@ -582,8 +611,14 @@ std::optional<WorldDistance> CollisionWorld::doMeshDistance(MeshHandle, const Tr
                                                             const Transform&, double) {
   unsupported(WorldOp::MeshDistance);
 }
-WorldCast CollisionWorld::doCast(const WorldOperand&, const WorldMotion&, const WorldOperand&) {
+WorldCast CollisionWorld::doCast(const WorldOperand&, const WorldMotion&, const WorldOperand&, CastFind) {
   unsupported(WorldOp::Cast);
+}
+WorldCast CollisionWorld::doModelCast(const WorldOperand&, const WorldMotion&, ModelHandle, CastFind) {
+  unsupported(WorldOp::ModelCast);
+}
+WorldCast CollisionWorld::doSceneCast(const WorldOperand&, const WorldMotion&, CastFind) {
+  unsupported(WorldOp::SceneCast);
 }
 std::optional<WorldDistance> CollisionWorld::doModelDistance(ModelHandle, ModelHandle, double) {
   unsupported(WorldOp::ModelDistance);

@@ -7,6 +7,7 @@
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
 #include <crux/mesh/mesh_cast.hpp>
+#include <crux/scene/scene_cast.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 #include <crux/mesh/mesh_volume.hpp>
@@ -44,6 +45,35 @@ WorldRayHit toWorld(const MeshRayHit& h, ModelHandle model = {}) {
   w.normal = h.normal.cast<double>();
   w.triangle = h.triangle;
   w.model = model;
+  return w;
+}
+
+WorldCast toWorld(const CastResult& r) {
+  WorldCast w;
+  w.hit = true;
+  w.t = double(r.t);
+  w.pointA = r.pointA.cast<double>();
+  w.pointB = r.pointB.cast<double>();
+  w.normal = r.normal.cast<double>();
+  w.startsOverlapping = r.startsOverlapping;
+  w.depth = double(r.depth);
+  return w;
+}
+
+/// A cast against a mesh at `meshPose` (mesh_cast.hpp), linear or rigid by `motion`.
+WorldCast meshCast(const Mesh& m, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
+                   const WorldMotion& motion, CastFind find) {
+  const RigidMotion rigid{shapePose, motion.end.value_or(shapePose)};
+  if (find == CastFind::Any) {
+    WorldCast w;
+    w.hit = motion.end ? castAny(m, meshPose, shape, rigid) : castAny(m, meshPose, shape, shapePose, motion.translation);
+    return w;
+  }
+  const std::optional<MeshCastHit> h =
+      motion.end ? castClosest(m, meshPose, shape, rigid) : castClosest(m, meshPose, shape, shapePose, motion.translation);
+  if (!h) return {};
+  WorldCast w = toWorld(h->cast);
+  w.triangleB = h->triangle;
   return w;
 }
 
@@ -220,29 +250,39 @@ class NativeWorld final : public CollisionWorld {
     return w;
   }
 
-  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b) override {
+  WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind find) override {
     const ConvexShape shape = convexOf(a);
+    if (b.isMesh()) return meshCast(mesh(std::get<MeshHandle>(b.shape)), b.pose, shape, a.pose, motion, find);
+    const ConvexShape other = convexOf(b);
     const RigidMotion rigid{a.pose, motion.end.value_or(a.pose)};
-    std::optional<MeshCastHit> hit;
-    if (b.isMesh()) {
-      const Mesh& m = mesh(std::get<MeshHandle>(b.shape));
-      hit = motion.end ? castClosest(m, b.pose, shape, rigid) : castClosest(m, b.pose, shape, a.pose, motion.translation);
-    } else {
-      const CastResult r = motion.end ? crux::cast(shape, rigid, convexOf(b), b.pose)
-                                      : crux::cast(shape, a.pose, motion.translation, convexOf(b), b.pose);
-      if (r.hit) hit = MeshCastHit{r, 0};
+    if (find == CastFind::Any) {
+      WorldCast w;
+      w.hit = motion.end ? crux::castAny(shape, rigid, other, b.pose)
+                         : crux::castAny(shape, a.pose, motion.translation, other, b.pose);
+      return w;
     }
-    WorldCast w;
-    if (!hit) return w;
-    const CastResult& r = hit->cast;
-    w.hit = true;
-    w.t = double(r.t);
-    w.pointA = r.pointA.cast<double>();
-    w.pointB = r.pointB.cast<double>();
-    w.normal = r.normal.cast<double>();
-    w.startsOverlapping = r.startsOverlapping;
-    w.depth = double(r.depth);
-    if (b.isMesh()) w.triangleB = hit->triangle;
+    const CastResult r = motion.end ? crux::cast(shape, rigid, other, b.pose)
+                                    : crux::cast(shape, a.pose, motion.translation, other, b.pose);
+    return r.hit ? toWorld(r) : WorldCast{};
+  }
+  WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model, CastFind find) override {
+    const PlacedMesh m = placed(model);
+    return meshCast(*m.mesh, m.world, convexOf(a), a.pose, motion, find);
+  }
+  /// Scene::castClosest / castAny (scene_cast.hpp: ties go to the lowest model id).
+  WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) override {
+    const ConvexShape shape = convexOf(a);
+    if (find == CastFind::Any && !motion.end) {
+      WorldCast w;
+      w.hit = crux::castAny(scene_, shape, a.pose, motion.translation);
+      return w;
+    }
+    const std::optional<SceneCastHit> h = motion.end ? crux::castClosest(scene_, shape, RigidMotion{a.pose, *motion.end})
+                                                     : crux::castClosest(scene_, shape, a.pose, motion.translation);
+    if (!h) return {};
+    WorldCast w = toWorld(h->hit.cast);
+    w.triangleB = h->hit.triangle;
+    w.model = ModelHandle{h->model};
     return w;
   }
 

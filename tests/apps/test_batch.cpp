@@ -452,10 +452,11 @@ TEST(BatchErrors, SemanticValidationNamesTheField) {
 // ---------------------------------------------------------------------------------------------
 // Unsupported ops and backends.
 
-TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeTheFiveNarrowPhaseOpsAndCast) {
+TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeTheFiveNarrowPhaseOpsAndTheCasts) {
   const auto& ops = protocolOps();
-  EXPECT_EQ(ops.size(), 39u);
-  for (const char* name : {"contacts", "distance", "mesh_distance", "model_distance", "point_inside", "cast"})
+  EXPECT_EQ(ops.size(), 41u);
+  for (const char* name : {"contacts", "distance", "mesh_distance", "model_distance", "point_inside", "cast",
+                           "model_cast", "scene_cast"})
     EXPECT_TRUE(std::binary_search(ops.begin(), ops.end(), std::string_view(name))) << name;
   EXPECT_TRUE(std::is_sorted(ops.begin(), ops.end()));
   for (const char* name : {"closest_point_triangle", "segment_triangle", "mesh", "load_mesh", "mesh_mesh",
@@ -465,7 +466,7 @@ TEST(BatchUnsupported, ProtocolOpsAreTheContractsThirtyThreeTheFiveNarrowPhaseOp
 
 TEST(BatchUnsupported, NativeAnswersPrimitivesAndMeshesAndDefersTheRest) {
   const OpTable& native = opTable(Backend::Native);
-  EXPECT_EQ(native.size(), 39u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
+  EXPECT_EQ(native.size(), 41u);  // every protocol op (model and scene ops: apps/cli/scene_ops.cpp)
   for (const char* name : {"mesh", "load_mesh", "mesh_ray", "mesh_segment", "mesh_sphere", "mesh_aabb", "mesh_obb",
                            "mesh_plane", "mesh_triangle", "mesh_mesh"})
     EXPECT_EQ(native.count(name), 1u) << name;

@@ -904,5 +904,101 @@ TEST(ExactWorldNarrowPhase, MeshAndModelDistanceUnderQuarterTurnsMatchNative) {
   EXPECT_GT(zeros, 3);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Casts against models and the scene: native (mesh_cast.hpp at the model's world pose,
+// scene_cast.hpp) against the exact backend (every triangle placed by the exactly composed world
+// transform, exact::detail::castCores), on integer grids under parent/child quarter turns.
+// Polytope casts: the same hit, and native's t never later than the exact time of impact nor
+// earlier by more than kCastGridSlack (face, edge or vertex contacts converge in a few steps);
+// the any-hit variant answers the same hit.
+
+/// How much earlier than the exact time of impact native's t may be on these grid casts:
+/// δ / approach speed with δ = the contact tolerance (docs/narrowphase.md, "Shape casts"), at
+/// most ~1e-9 here in double and a few float ulps of the motion in float builds.
+constexpr double kCastGridSlack = sizeof(Real) == 4 ? 1e-5 : 1e-8;
+
+TEST(ExactWorldCasts, NativeModelAndSceneCastsMeetTheExactTimeOnGrids) {
+  std::mt19937 rng(2026);
+  auto integer = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng); };
+  auto gridPoint = [&](int r) { return v3(integer(-r, r), integer(-r, r), integer(-r, r)); };
+  const int scenes = test::scaledCases(20, 6);
+  int casts = 0, hits = 0, sceneHits = 0;
+  double worstGap = 0;
+  for (int s = 0; s < scenes; ++s) {
+    const auto native = makeNativeWorld();
+    const auto exact = exact::makeExactWorld();
+    const MeshHandle boxN = native->addMesh("box", boxMesh(2, 1, 1)), boxE = exact->addMesh("box", boxMesh(2, 1, 1));
+    const MeshHandle tetN = native->addMesh("tet", tetraMesh(2)), tetE = exact->addMesh("tet", tetraMesh(2));
+    std::vector<std::pair<ModelHandle, ModelHandle>> models;
+    for (int m = 0; m < 4; ++m) {
+      const Transform local = makeTransform(gridPoint(2), quarterTurns(integer(0, 3), integer(0, 3), integer(0, 3)));
+      const bool box = m % 2 == 0;
+      std::optional<ModelHandle> parentN, parentE;
+      if (m == 1 || m == 3) {
+        parentN = models[std::size_t(m - 1)].first;
+        parentE = models[std::size_t(m - 1)].second;
+      }
+      const std::string name = "m" + std::to_string(m);
+      models.emplace_back(native->addModel(name, box ? boxN : tetN, local, parentN),
+                          exact->addModel(name, box ? boxE : tetE, local, parentE));
+    }
+    for (int c = 0; c < 12; ++c) {
+      WorldOperand a;
+      switch (c % 3) {
+        case 0: a.shape = Obb{Vec3::Zero(), v3(0.5 * integer(1, 2), 0.5, 0.5 * integer(1, 3)), Mat3::Identity()}; break;
+        case 1: a.shape = Triangle{gridPoint(1), gridPoint(1), gridPoint(1)}; break;
+        default: a.shape = ConvexHull::build({gridPoint(1), gridPoint(1), gridPoint(1), gridPoint(1), gridPoint(1)});
+      }
+      a.pose = makeTransform(gridPoint(6), quarterTurns(integer(0, 3), 0, integer(0, 3)));
+      WorldMotion motion;  // towards the models' region (a hit or a near miss), or anywhere
+      motion.translation = c % 4 == 3 ? gridPoint(8) : Vec3(gridPoint(2) - a.pose.translation);
+      const std::string what = "scene " + std::to_string(s) + " cast " + std::to_string(c) + " from " + str(a.pose) +
+                               " by " + str(motion.translation);
+      auto compare = [&](const WorldCast& n, const WorldCast& e, const std::string& where) {
+        ++casts;
+        ASSERT_EQ(n.hit, e.hit) << where << ": " << what;
+        if (!n.hit) return;
+        ASSERT_TRUE(e.timeKnown) << where;
+        EXPECT_LE(n.t, e.t * (1 + 4e-16)) << where << ": native later than the exact time: " << what;
+        EXPECT_GE(n.t, e.t - kCastGridSlack) << where << ": " << what;
+        if (e.t - n.t > worstGap) worstGap = e.t - n.t;
+      };
+      for (std::size_t m = 0; m < models.size(); ++m) {
+        const WorldCast n = native->modelCast(a, motion, models[m].first);
+        const WorldCast e = exact->modelCast(a, motion, models[m].second);
+        compare(n, e, "model m" + std::to_string(m));
+        hits += n.hit;
+        EXPECT_EQ(native->modelCast(a, motion, models[m].first, CastFind::Any).hit, n.hit) << what;
+      }
+      const WorldCast n = native->sceneCast(a, motion), e = exact->sceneCast(a, motion);
+      compare(n, e, "scene");
+      EXPECT_EQ(native->sceneCast(a, motion, CastFind::Any).hit, n.hit) << what;
+      if (n.hit) {
+        ++sceneHits;
+        EXPECT_TRUE(n.model.valid());
+        // the model hit is one whose own cast meets the scene's time
+        const auto it = std::find_if(models.begin(), models.end(), [&](const auto& p) { return p.first == n.model; });
+        ASSERT_NE(it, models.end());
+        EXPECT_EQ(native->modelCast(a, motion, it->first).t, n.t) << what;
+      }
+    }
+  }
+  std::printf("%d model/scene casts, %d model hits, %d scene hits, worst exact - native t %.3g\n", casts, hits,
+              sceneHits, worstGap);
+  EXPECT_GT(hits, casts / 20);
+  EXPECT_GT(sceneHits, scenes);
+}
+
+TEST(ExactWorldCasts, RigidMotionsAreUnsupported) {
+  const auto exact = exact::makeExactWorld();
+  const MeshHandle box = exact->addMesh("box", boxMesh(1, 1, 1));
+  const ModelHandle m = exact->addModel("m", box, Transform{});
+  WorldMotion motion;
+  motion.end = makeTransform(v3(0, 0, 3), quarterTurns(0, 0, 1));
+  const WorldOperand a{Sphere{Vec3::Zero(), Real(0.5)}, makeTransform(v3(0.5, 0.5, -2))};
+  EXPECT_THROW(exact->modelCast(a, motion, m), Unsupported);
+  EXPECT_THROW(exact->sceneCast(a, motion), Unsupported);
+}
+
 }  // namespace
 }  // namespace crux

@@ -806,6 +806,8 @@ TEST_F(OracleSanity, UnsupportedOpsSaySo) {
           [&] { w->overlapsVolume(model, Obb{}); },
           [&] { w->overlapsVolume(model, T); },
           [&] { w->cast({Sphere{}, Transform{}}, WorldMotion{}, {cube, Transform{}}); },
+          [&] { w->modelCast({Sphere{}, Transform{}}, WorldMotion{}, model); },
+          [&] { w->sceneCast({Sphere{}, Transform{}}, WorldMotion{}); },
       };
       static_assert(std::size(calls) == kWorldOpCount, "one call per op");
       try {

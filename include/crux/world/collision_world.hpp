@@ -101,10 +101,12 @@ enum class WorldOp : std::uint8_t {
   ModelTriangleVolume, ///< model_triangle with "volume": true
   // shape casts (continuous collision; docs/narrowphase.md "Shape casts")
   Cast,
+  ModelCast,
+  SceneCast,
 };
 
 /// Number of WorldOp values.
-inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::Cast) + 1;
+inline constexpr std::size_t kWorldOpCount = std::size_t(WorldOp::SceneCast) + 1;
 /// The ops of the original protocol contract (closest_point_triangle ... scene_pairs); those after
 /// it are the narrow-phase and volume extensions of docs/batch.md.
 inline constexpr bool isContractOp(WorldOp op) { return op <= WorldOp::ScenePairs; }
@@ -302,14 +304,22 @@ struct WorldCast {
   /// Whether t, the points and the normal are known: false when the backend decides hit or miss
   /// only (the exact backend's rounded shapes, whose time of impact is irrational).
   bool timeKnown = true;
+  /// Whether the points and the normal are known (timeKnown): false when the backend reports
+  /// the time alone (FCL).
+  bool witnessKnown = true;
   double t = 0;
   Vec3d pointA = Vec3d::Zero();
   Vec3d pointB = Vec3d::Zero();
   Vec3d normal = Vec3d::UnitZ();  ///< unit, from B to A
   bool startsOverlapping = false;
   double depth = 0;               ///< penetration depth at t = 0 (startsOverlapping)
-  std::optional<std::uint32_t> triangleB;  ///< the mesh triangle hit (b a mesh)
+  std::optional<std::uint32_t> triangleB;  ///< the mesh triangle hit (b a mesh or a model)
+  ModelHandle model;              ///< the model hit (scene casts)
 };
+
+/// What a cast looks for: the first time of impact, or only whether there is one (the answer's
+/// `hit` alone, timeKnown false; the backend may stop at the first contact it finds).
+enum class CastFind { Closest, Any };
 
 /// A world of meshes, models and a scene, answering every query of the batch protocol through
 /// one collision library. Changes are exclusive; queries may run on several threads at once only
@@ -466,7 +476,15 @@ class CollisionWorld {
 
   /// cast: the first time at which the convex operand a, moved by `motion`, touches b (a convex
   /// shape or a mesh, staying at its pose). a being a mesh: InvalidInput.
-  WorldCast cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b);
+  WorldCast cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b,
+                 CastFind find = CastFind::Closest);
+  /// model_cast: the cast of a against a model's mesh placed by the model's world transform
+  /// (WorldCast::triangleB the triangle hit).
+  WorldCast modelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model,
+                      CastFind find = CastFind::Closest);
+  /// scene_cast: the cast of a against every model of the scene: the first model touched
+  /// (WorldCast::model; ties in t: the backend's choice, see docs/batch.md).
+  WorldCast sceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find = CastFind::Closest);
 
   // ---- extensions (not in the protocol contract; a backend may decline them) ---------------------
 
@@ -576,8 +594,11 @@ class CollisionWorld {
   virtual bool doOverlapsVolume(ModelHandle model, const Obb& b);
   virtual bool doOverlapsVolume(ModelHandle model, const Triangle& t);
 
-  /// cast; a is convex, operands and motion validated.
-  virtual WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b);
+  /// cast, model_cast, scene_cast; a is convex, operands and motion validated. An Any query may
+  /// answer its `hit` alone (the base sets timeKnown false afterwards).
+  virtual WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind find);
+  virtual WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model, CastFind find);
+  virtual WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find);
 
   /// Extensions; the defaults return nothing (triangles not listed).
   virtual std::optional<std::vector<std::uint32_t>> doTouchingTriangles(MeshHandle mesh, const MeshQueryShape& shape);
@@ -594,6 +615,11 @@ class CollisionWorld {
   };
   /// Validates an operand of contacts/distance named `field` ("a", "b").
   void validateOperand(const WorldOperand& o, const std::string& field) const;
+  /// Validates a cast's moving operand and its motion.
+  void validateCast(const WorldOperand& a, const WorldMotion& motion) const;
+  /// Runs a cast hook for `op`; an Any query's answer keeps its `hit` alone.
+  template <class F>
+  WorldCast castHook(WorldOp op, CastFind find, F&& hook);
   /// Throws InvalidInput("mesh: <reason>") unless the mesh is closed.
   void requireClosed(MeshHandle mesh, const std::string& field) const;
   /// Throws InvalidInput("model: model \"m\": <reason>") unless the model's mesh is closed (the
