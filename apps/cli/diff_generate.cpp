@@ -1231,6 +1231,99 @@ DiffCase narrowMeshCase(std::string_view op, Rng& rng, DiffGenerator& g) {
   return c;
 }
 
+/// The kinds of cast case, on the integer grid (exact rational times of impact for polytopes):
+/// a shape moved along a box's face plane into the box from the side (grazing: the contact is
+/// tangential to the face, or edge on edge), one lying on the face sliding along it (touching at
+/// the start: t = 0), one starting in contact or overlapping and moving anywhere, and one cast
+/// through a thin or degenerate triangle.
+enum class CastKind { Grazing, Sliding, Start, Thin };
+
+/// The moving operand of a cast case: a box, a sphere or a capsule lying along axis `u`, with
+/// the half extents of its bounding box; json(centre) places it.
+struct CastMover {
+  int shape = 0;  ///< 0 box, 1 sphere, 2 capsule
+  V half{1, 1, 1};
+  double radius = 1, capsuleHalf = 1;
+  std::size_t u = 0;
+
+  CastMover(Rng& rng, std::size_t alongU) : shape(rng.integer(0, 2)), u(alongU) {
+    if (shape == 0) half = {double(rng.integer(1, 2)), double(rng.integer(1, 2)), double(rng.integer(1, 2))};
+    if (shape == 1) radius = double(rng.integer(1, 2)), half = {radius, radius, radius};
+    if (shape == 2) capsuleHalf = double(rng.integer(1, 2)), half = {1, 1, 1}, half[u] += capsuleHalf;
+  }
+  J json(V centre) const {
+    const std::array<V, 3> identity = {V{1, 0, 0}, V{0, 1, 0}, V{0, 0, 1}};
+    if (shape == 0) return J{{"box", obbJson(centre, half, identity)}};
+    if (shape == 1) return J{{"sphere", sphereJson(centre, radius)}};
+    V e = {0, 0, 0};
+    e[u] = capsuleHalf;
+    return J{{"capsule", J{{"a", vec(sub(centre, e))}, {"b", vec(add(centre, e))}, {"radius", num(1)}}}};
+  }
+};
+
+/// A `cast` case of the cast family (linear motion; see CastKind).
+DiffCase castCase(Rng& rng) {
+  DiffCase c;
+  J q = request("cast");
+  const std::array<V, 3> identity = {V{1, 0, 0}, V{0, 1, 0}, V{0, 0, 1}};
+  const CastKind kind = CastKind(rng.integer(0, 3));
+  const std::size_t axis = std::size_t(rng.integer(0, 2)), u = (axis + 1) % 3, w = (axis + 2) % 3;
+  const double side = rng.chance(0.5) ? 1 : -1, lateral = rng.chance(0.5) ? 1 : -1;
+  const V bc = rng.gridPoint(2);
+  const V bh = {double(rng.integer(1, 3)), double(rng.integer(1, 3)), double(rng.integer(1, 3))};
+  const CastMover mover(rng, u);
+  V centre = bc, motion = {0, 0, 0};
+  if (kind == CastKind::Thin) {
+    // a triangle in the plane normal to `axis` through bc, long along u, 1 (or 0: a segment)
+    // across w; the mover starts 1..3 clear of the plane and crosses it near the thin part
+    const double length = double(rng.integer(4, 12)), height = rng.chance(0.25) ? 0 : 1;
+    V t1 = bc, t2 = bc;
+    t1[u] += length;
+    t2[u] += double(rng.integer(0, int(length)));
+    t2[w] += height;
+    q["b"] = J{{"triangle", J::array({vec(bc), vec(t1), vec(t2)})}};
+    centre[u] += double(rng.integer(-1, int(length) + 1));
+    centre[w] += double(rng.integer(-2, 2));
+    centre[axis] += side * (mover.half[axis] + double(rng.integer(1, 3)));
+    motion[axis] = -2 * (centre[axis] - bc[axis]);
+  } else {
+    q["b"] = J{{"box", obbJson(bc, bh, identity)}};
+    centre[axis] += side * (bh[axis] + mover.half[axis]);  // flush with b's face plane
+    if (kind == CastKind::Grazing) {
+      // beside the box along u by 1..3, within (or edge on edge at) its extent along w, moving
+      // along the face plane into it
+      const double gap = double(rng.integer(1, 3));
+      centre[u] += lateral * (bh[u] + mover.half[u] + gap);
+      centre[w] += rng.chance(0.3) ? lateral * (bh[w] + mover.half[w]) : double(rng.integer(-int(bh[w]), int(bh[w])));
+      motion[u] = -lateral * (gap + double(rng.integer(0, 4)));
+    } else {
+      centre[u] += double(rng.integer(-int(bh[u]), int(bh[u])));
+      centre[w] += double(rng.integer(-int(bh[w]), int(bh[w])));
+      if (kind == CastKind::Sliding) {  // on the face, moving along it
+        motion[u] = double(rng.integer(-4, 4));
+        motion[w] = double(rng.integer(-4, 4));
+        if (isZero(motion)) motion[u] = 3;
+      } else {  // Start: flush or sunk by 1, moving anywhere
+        if (rng.chance(0.5)) centre[axis] -= side;
+        motion = rng.nonZeroGrid(4);
+      }
+    }
+  }
+  q["a"] = mover.json(centre);
+  if (rng.chance(0.5)) {  // one grid placement of both (the time of impact does not change)
+    const auto& rot = gridRotations()[rng.next() % gridRotations().size()];
+    const J pose = J{{"rotation", rotationJson(rot.q)}, {"translation", vec(rng.gridPoint(2))}};
+    q["a"]["transform"] = pose;
+    q["b"]["transform"] = pose;
+    motion = apply(rot.m, motion);
+  }
+  q["motion"] = vec(motion);
+  c.exactGrid = true;
+  c.featureSize = 1;
+  c.query = q.dump();
+  return c;
+}
+
 bool isNarrowOp(std::string_view op) {
   return op == "distance" || op == "contacts" || op == "mesh_distance" || op == "model_distance";
 }
@@ -1247,13 +1340,14 @@ const std::vector<std::string_view> kModelOps = {"model_ray", "model_segment",  
                                                  "model_obb", "model_plane",    "model_triangle", "children",
                                                  "model_distance"};
 const std::vector<std::string_view> kSceneOps = {"scene_ray", "scene_query", "scene_pairs", "model_distance"};
+const std::vector<std::string_view> kCastOps = {"cast"};
 
 }  // namespace
 
 const std::vector<std::string_view>& diffFamilies() {
   static const std::vector<std::string_view> families = {"general", "grid",        "coplanar", "touching",
                                                          "degenerate", "near_degenerate", "sliver", "huge", "tiny",
-                                                         "transformed", "mesh",    "hierarchy", "scene"};
+                                                         "transformed", "mesh",    "hierarchy", "scene", "cast"};
   return families;
 }
 
@@ -1262,6 +1356,7 @@ const std::vector<std::string_view>& diffFamilyOps(std::string_view family) {
   if (family == "hierarchy") return kModelOps;
   if (family == "scene") return kSceneOps;
   if (family == "coplanar") return kPrimitiveOps;
+  if (family == "cast") return kCastOps;
   return kPrimitiveAndNarrowOps;
 }
 
@@ -1284,7 +1379,9 @@ std::optional<DiffCase> generateCase(std::string_view family, std::uint64_t seed
   Rng rng{caseSeed(seed, index)};
   const std::string_view op = ops[rng.next() % ops.size()];
   DiffCase c;
-  if (family == "hierarchy") {
+  if (family == "cast") {
+    c = castCase(rng);
+  } else if (family == "hierarchy") {
     c = hierarchyCase(op, rng);
   } else if (family == "scene") {
     c = sceneCase(op, rng);
