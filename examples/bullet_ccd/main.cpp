@@ -84,9 +84,7 @@ constexpr double kTurnTolerance = 1e-6;
 /// kSweptFraction × that radius (Bullet's advice: a sphere inside the body).
 constexpr double kSweptFraction = 0.8;
 
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
-constexpr int kExitSkip = 77;  ///< CTest SKIP_RETURN_CODE: the mesh data is missing
+using crux_example::kExitFailure;
 
 enum class BodyKind { Sphere, Box, Capsule };
 enum class Target { Bunny, Wall };
@@ -396,28 +394,19 @@ std::vector<Throw> makeThrows(const Targets& targets, int count, unsigned seed) 
 
 // ---- command line ----------------------------------------------------------------------------------
 
-struct Options {
-  std::string mesh = CRUX_EXAMPLE_DEFAULT_MESH;
-  std::vector<Mode> modes{Mode::None, Mode::Bullet, Mode::Crux};
-  int bodies = 300;
-  int steps = 90;
-  unsigned seed = 1;
-};
-
 constexpr const char* kUsage =
     "usage: bullet_ccd [--mode none|bullet|crux|all] [--bodies N] [--steps N] [--seed N] [--mesh FILE]\n";
 
-[[noreturn]] void usage(const std::string& problem) {
-  std::fprintf(stderr, "bullet_ccd: %s\n%s", problem.c_str(), kUsage);
-  std::exit(kExitUsage);
-}
-
-int positiveInt(const std::string& flag, const char* text) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > 1000000) usage(flag + ": expected an integer in [1, 1000000]");
-  return int(v);
-}
+struct Options : crux_example::CommonOptions {
+  std::vector<Mode> modes{Mode::None, Mode::Bullet, Mode::Crux};
+  Options() {
+    program = "bullet_ccd";
+    usageText = kUsage;
+    mesh = CRUX_EXAMPLE_DEFAULT_MESH;
+    bodies = 300;
+    steps = 90;
+  }
+};
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -429,24 +418,16 @@ Options parse(int argc, char** argv) {
                   kUsage);
       std::exit(0);
     }
-    if (i + 1 >= argc) usage(flag + ": missing value");
+    if (i + 1 >= argc) o.usage(flag + ": missing value");
     const std::string value = argv[++i];
     if (flag == "--mode") {
       if (value == "none") o.modes = {Mode::None};
       else if (value == "bullet") o.modes = {Mode::Bullet};
       else if (value == "crux") o.modes = {Mode::Crux};
       else if (value == "all") o.modes = {Mode::None, Mode::Bullet, Mode::Crux};
-      else usage(flag + ": expected none, bullet, crux or all, got '" + value + "'");
-    } else if (flag == "--bodies") {
-      o.bodies = positiveInt(flag, value.c_str());
-    } else if (flag == "--steps") {
-      o.steps = positiveInt(flag, value.c_str());
-    } else if (flag == "--seed") {
-      o.seed = unsigned(positiveInt(flag, value.c_str()));
-    } else if (flag == "--mesh") {
-      o.mesh = value;
+      else o.usage(flag + ": expected none, bullet, crux or all, got '" + value + "'");
     } else {
-      usage("unknown option '" + flag + "'");
+      o.read(flag, value);
     }
   }
   return o;
@@ -456,13 +437,8 @@ Options parse(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   const Options options = parse(argc, argv);
-  std::optional<crux::Mesh> loaded;
-  try {
-    loaded.emplace(crux::loadMesh(options.mesh));
-  } catch (const std::exception& e) {
-    std::printf("bullet_ccd: skipped: cannot load the mesh: %s\n", e.what());
-    return kExitSkip;
-  }
+  const std::optional<crux::Mesh> loaded = crux_example::loadMeshOrSkip(options.mesh, options.program);
+  if (!loaded) return crux_example::kExitSkip;
   const double height = double(loaded->bounds().max.y() - loaded->bounds().min.y());
   if (!(height > 0) || loaded->vertexCount() == 0) {
     std::fprintf(stderr, "bullet_ccd: %s has no height along y\n", options.mesh.c_str());

@@ -80,9 +80,7 @@ constexpr double kRestDisplacement = 0.05;  ///< m: a sixth of the smallest body
 /// do the same work.
 constexpr int kActiveSteps = 60;
 
-constexpr int kExitFailure = 1;
-constexpr int kExitUsage = 2;
-constexpr int kExitSkip = 77;  ///< CTest SKIP_RETURN_CODE: the mesh data is missing
+using crux_example::kExitFailure;
 
 // ---- crux inside Bullet's dispatcher -------------------------------------------------------------
 
@@ -479,30 +477,21 @@ bool report(const char* mode, const RunResult& r, const std::vector<Spawn>& spaw
   return r.failed.empty();
 }
 
-struct Options {
-  std::string mesh = CRUX_EXAMPLE_DEFAULT_MESH;
-  bool runBullet = true, runCrux = true;
-  int bodies = 200;
-  int steps = 600;
-  unsigned seed = 1;
-  bool trace = false;  ///< print the awake count every second of simulated time
-};
-
 constexpr const char* kUsage =
     "usage: bullet_narrowphase [--narrowphase bullet|crux|both] [--mode both] [--bodies N]\n"
     "                          [--steps N] [--seed N] [--mesh FILE] [--trace]\n";
 
-[[noreturn]] void usage(const std::string& problem) {
-  std::fprintf(stderr, "bullet_narrowphase: %s\n%s", problem.c_str(), kUsage);
-  std::exit(kExitUsage);
-}
-
-int positiveInt(const std::string& flag, const char* text) {
-  char* end = nullptr;
-  const long v = std::strtol(text, &end, 10);
-  if (end == text || *end != '\0' || v < 1 || v > 1000000) usage(flag + ": expected an integer in [1, 1000000]");
-  return int(v);
-}
+struct Options : crux_example::CommonOptions {
+  bool runBullet = true, runCrux = true;
+  bool trace = false;  ///< print the awake count every second of simulated time
+  Options() {
+    program = "bullet_narrowphase";
+    usageText = kUsage;
+    mesh = CRUX_EXAMPLE_DEFAULT_MESH;
+    bodies = 200;
+    steps = 600;
+  }
+};
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -516,23 +505,15 @@ Options parse(int argc, char** argv) {
       o.trace = true;
       continue;
     }
-    if (i + 1 >= argc) usage(flag + ": missing value");
+    if (i + 1 >= argc) o.usage(flag + ": missing value");
     const std::string value = argv[++i];
     if (flag == "--narrowphase" || flag == "--mode") {
       if (value == "bullet") o.runCrux = false, o.runBullet = true;
       else if (value == "crux") o.runCrux = true, o.runBullet = false;
       else if (value == "both") o.runCrux = o.runBullet = true;
-      else usage(flag + ": expected bullet, crux or both, got '" + value + "'");
-    } else if (flag == "--bodies") {
-      o.bodies = positiveInt(flag, value.c_str());
-    } else if (flag == "--steps") {
-      o.steps = positiveInt(flag, value.c_str());
-    } else if (flag == "--seed") {
-      o.seed = unsigned(positiveInt(flag, value.c_str()));
-    } else if (flag == "--mesh") {
-      o.mesh = value;
+      else o.usage(flag + ": expected bullet, crux or both, got '" + value + "'");
     } else {
-      usage("unknown option '" + flag + "'");
+      o.read(flag, value);
     }
   }
   return o;
@@ -542,13 +523,8 @@ Options parse(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   const Options options = parse(argc, argv);
-  std::optional<crux::Mesh> loaded;
-  try {
-    loaded.emplace(crux::loadMesh(options.mesh));
-  } catch (const std::exception& e) {
-    std::printf("bullet_narrowphase: skipped: cannot load the mesh: %s\n", e.what());
-    return kExitSkip;
-  }
+  const std::optional<crux::Mesh> loaded = crux_example::loadMeshOrSkip(options.mesh, options.program);
+  if (!loaded) return crux_example::kExitSkip;
 
   // Scale the mesh to kMeshHeight (y up, as bunny00), more if the lowest layer of the grid inside
   // it has too few cells (the floor's area grows as the scale squared).

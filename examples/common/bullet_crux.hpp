@@ -1,6 +1,7 @@
 #pragma once
 /// @file bullet_crux.hpp  What the Bullet examples share: conversions between Bullet's and crux's
-/// vectors, transforms and convex shapes, a static mesh held in both forms, and a CPU clock.
+/// vectors, transforms and convex shapes, a static mesh held in both forms, a CPU clock, and the
+/// command-line options and exit codes both take.
 
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_contact.hpp>
@@ -8,12 +9,67 @@
 
 #include <btBulletCollisionCommon.h>
 
+#include <crux/mesh/mesh_io.hpp>
+
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
 #include <memory>
+#include <optional>
+#include <string>
 #include <time.h>
 #include <utility>
 #include <vector>
 
 namespace crux_example {
+
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+constexpr int kExitSkip = 77;  ///< CTest SKIP_RETURN_CODE: the mesh data is missing
+
+/// The options every example takes (--bodies, --steps, --seed, --mesh) and its usage line; the
+/// example reads its own options first and hands the rest to read().
+struct CommonOptions {
+  const char* program = "";
+  const char* usageText = "";
+  std::string mesh;
+  int bodies = 1;
+  int steps = 1;
+  unsigned seed = 1;
+
+  /// Prints "<program>: <problem>" and the usage to stderr and exits with kExitUsage.
+  [[noreturn]] void usage(const std::string& problem) const {
+    std::fprintf(stderr, "%s: %s\n%s", program, problem.c_str(), usageText);
+    std::exit(kExitUsage);
+  }
+  /// `text` as an integer in [1, 1000000], else usage().
+  int positiveInt(const std::string& flag, const std::string& text) const {
+    char* end = nullptr;
+    const long v = std::strtol(text.c_str(), &end, 10);
+    if (end == text.c_str() || *end != '\0' || v < 1 || v > 1000000)
+      usage(flag + ": expected an integer in [1, 1000000]");
+    return int(v);
+  }
+  /// Reads one of the common options; an unknown flag is a usage error.
+  void read(const std::string& flag, const std::string& value) {
+    if (flag == "--bodies") bodies = positiveInt(flag, value);
+    else if (flag == "--steps") steps = positiveInt(flag, value);
+    else if (flag == "--seed") seed = unsigned(positiveInt(flag, value));
+    else if (flag == "--mesh") mesh = value;
+    else usage("unknown option '" + flag + "'");
+  }
+};
+
+/// crux::loadMesh(path), or nothing after printing "<program>: skipped: cannot load the mesh"
+/// (the caller exits with kExitSkip).
+inline std::optional<crux::Mesh> loadMeshOrSkip(const std::string& path, const char* program) {
+  try {
+    return crux::loadMesh(path);
+  } catch (const std::exception& e) {
+    std::printf("%s: skipped: cannot load the mesh: %s\n", program, e.what());
+    return std::nullopt;
+  }
+}
 
 inline btVector3 toBt(const crux::Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); }
 inline crux::Vec3 toCrux(const btVector3& v) {
