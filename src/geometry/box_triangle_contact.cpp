@@ -364,7 +364,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
                        (e2x * e2x + e2y * e2y) + e2z * e2z};  // |E_j|²
   const double longest = std::max({L[0], L[1], L[2]});
   const double normalLen = std::sqrt((nx * nx + ny * ny) + nz * nz);
-  const bool hasFace = normalLen > kBoxTriangleDegenerateRelative * longest && normalLen > 0;
+  const bool hasFace = !classifyTriangle(normalLen, longest).degenerate && normalLen > 0;
 
   Axis face;  // best box face: the first of the largest separations (NaN never wins)
   {

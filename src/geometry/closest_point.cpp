@@ -59,7 +59,7 @@ WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
   }
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
   const Wide longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-  constexpr Wide k = closest_detail::kSliverHeightRelative;
+  constexpr Wide k = kTriangleThinRelative;
   if ((b - a).cross(c - a).squaredNorm() <= k * k * longest2 * longest2) {
     WVec3 q;
     closest_detail::closestOnSliver(a, b, c, p, q);

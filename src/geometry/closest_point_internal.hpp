@@ -9,11 +9,12 @@
 
 #include "geometry/bits.hpp"
 
+#include <crux/geometry/triangle_class.hpp>
+
 namespace crux::closest_detail {
 
-/// A triangle is a sliver when its height is below this × its longest edge (|(b−a)×(c−a)| <=
-/// this × longest²): RTCD 5.1.5's region tests can cancel on it (see closestOnSliver).
-inline constexpr double kSliverHeightRelative = 1e-3;
+// A triangle thinner than kTriangleThinRelative (triangle_class.hpp) takes closestOnSliver:
+// RTCD 5.1.5's region tests can cancel on it.
 
 /// Closest point q of the sliver triangle (a, b, c) to p, without RTCD's region tests, whose
 /// products cancel on slivers (fuzz_geometry: an edge of 1.6e-28 against edges of 75 read its

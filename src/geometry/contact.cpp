@@ -33,7 +33,6 @@ constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 // contact_internal.hpp, shared with triangle_contact.cpp: the sliver rule, the rounding budget
 // (coincidenceTolerance) and the reference clipping with its coincident-point merge
 // (clipToReference).
-using contact_detail::kSliverAreaRatio;
 
 /// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
 struct Feature {
@@ -43,7 +42,7 @@ struct Feature {
   V3 normal = V3::Zero();  // outward unit normal of a face (n >= 3)
   double align = 0;        // normal·d for a face
   std::uint32_t id = 0;    // featureId of the whole feature
-  bool sliver = false;     // a triangle face too thin to be a reference face (kSliverAreaRatio)
+  bool sliver = false;     // a triangle face too thin to be a reference face (kTriangleFaceRelative)
 };
 
 void setVertex(Feature& f, const V3& v, int index) {
@@ -122,7 +121,7 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
       const double longest2 = std::max({(P.p[1] - P.p[0]).squaredNorm(), (P.p[2] - P.p[1]).squaredNorm(),
                                         (P.p[0] - P.p[2]).squaredNorm()});
       if (allowFace && len > 0 && std::abs(m.dot(d)) >= cosTol * len) {
-        f.sliver = !(len >= kSliverAreaRatio * longest2);
+        f.sliver = !classifyTriangle(len, longest2).referenceFace;
         m /= len;
         const bool front = m.dot(d) > 0;
         f.n = 3;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <crux/geometry/contact.hpp>
+#include <crux/geometry/triangle_class.hpp>
 #include <crux/math.hpp>
 
 #include <algorithm>
@@ -14,20 +15,7 @@
 
 namespace crux::contact_detail {
 
-/// Rounding budget, in ulps of Real × the pair's coordinate scale, within which a reference
-/// feature must place the points projected onto it (they are returned as Real, whose own
-/// rounding is one ulp): used for sliver triangles and near-parallel edge pairs.
-inline constexpr double kOnFeatureUlps = 8;
-
-/// A triangle's unit normal computed in double from (b−a)×(c−a) is tilted by about
-/// 0.3·eps_double·L²/|(b−a)×(c−a)| (L its longest edge; measured, worst of 2e5 random slivers),
-/// which moves points projected onto its plane by that × L. A triangle is used as a REFERENCE
-/// face (or named as the feature against a shape without faces) only when this stays within
-/// kOnFeatureUlps/2 Real ulps of L, i.e. when |(b−a)×(c−a)| >= kSliverAreaRatio·L²; a sliver is
-/// clipped as its supporting edge or vertex instead (points used to land off sliver
-/// triangles). About 0.075 (a 1:13 triangle) in double builds, about 4e-9 in float builds.
-inline constexpr double kSliverAreaRatio =
-    0.3 * std::numeric_limits<double>::epsilon() / (0.5 * kOnFeatureUlps * double(std::numeric_limits<Real>::epsilon()));
+// kOnFeatureUlps and the reference-face rule (kTriangleFaceRelative): triangle_class.hpp.
 
 /// sin of the feature angle (kContactFaceAngleCos, contact.hpp), from that same cosine, so the
 /// face, edge and parallel-edge tests of every contact routine draw the line in one place.

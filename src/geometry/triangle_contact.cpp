@@ -27,7 +27,7 @@ struct TriD {
   V3 m;         // (b - a) × (c - a)
   double len = 0;   // |m|
   bool degenerate = true;
-  /// Not degenerate, but thinner than closest_detail::kSliverHeightRelative: its plane from m is
+  /// Not degenerate, but thinner than kTriangleThinRelative (triangle_class.hpp): its plane from m is
   /// unreliable (the region tests and plane distances cancel; see closestOnSliver).
   bool sliver = false;
   TriD() = default;
@@ -44,10 +44,11 @@ struct TriD {
     len = m.norm();
     classify(std::max({ab.squaredNorm(), ac.squaredNorm(), (p[2] - p[1]).squaredNorm()}));
   }
-  /// degenerate and sliver from len and the longest edge's squared length.
+  /// degenerate and sliver from len and the longest edge's squared length (classifyTriangle).
   void classify(double longest2) {
-    degenerate = !(len > kTriangleContactDegenerateRelative * longest2);
-    sliver = !degenerate && len <= closest_detail::kSliverHeightRelative * longest2;
+    const TriangleClass c = classifyTriangle(len, longest2);
+    degenerate = c.degenerate;
+    sliver = c.thin;
   }
   double maxAbs() const { return std::max({p[0].norm(), p[1].norm(), p[2].norm()}); }
   V3 centroid() const { return (p[0] + p[1] + p[2]) / 3; }
@@ -87,7 +88,6 @@ void vertexOrEdge(const V3* p, const V3& d, int is, const int* others, int nOthe
   f.id = edgeId(is, others[bestK]);
 }
 
-using contact_detail::kSliverAreaRatio;  // contact.cpp's sliver rule (contact_internal.hpp)
 
 /// The triangle's feature supporting direction d (contact.cpp's rule for a Triangle core against
 /// a shape without faces: a sliver's face is replaced by its supporting edge or vertex).
@@ -96,7 +96,7 @@ void triangleFeature(const TriD& t, const V3& d, Feature& f) {
   const int is = d1 > d0 ? (d2 > d1 ? 2 : 1) : (d2 > d0 ? 2 : 0);
   const double longest2 = std::max({(t.p[1] - t.p[0]).squaredNorm(), (t.p[2] - t.p[1]).squaredNorm(),
                                     (t.p[0] - t.p[2]).squaredNorm()});
-  const bool sliver = !(t.len >= kSliverAreaRatio * longest2);
+  const bool sliver = !classifyTriangle(t.len, longest2).referenceFace;  // contact.cpp's rule
   // (a degenerate triangle has no face: its computed normal is rounding noise)
   if (!t.degenerate && !sliver && std::abs(t.m.dot(d)) >= double(kContactFaceAngleCos) * t.len) {
     const V3 m = t.m / t.len;

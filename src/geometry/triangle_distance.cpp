@@ -4,6 +4,7 @@
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
+#include <crux/geometry/triangle_class.hpp>
 
 #include "geometry/closest_point_internal.hpp"
 
@@ -17,9 +18,6 @@ namespace {
 using V3 = Eigen::Vector3d;
 
 constexpr double kDoubleEps = std::numeric_limits<double>::epsilon();
-/// A triangle whose doubled area |n| is at most this × (longest edge)² has no face: its edges
-/// (the segment it nearly is) carry the distance within rounding. 64 ulps of double.
-constexpr double kFlatTolerance = 64 * kDoubleEps;
 /// Corner signed distances within this × |n| × (length scale) of a plane count as on it when
 /// deciding whether the exact intersection test is needed (a conservative prefilter).
 constexpr double kPlaneSideTolerance = 1024 * kDoubleEps;
@@ -58,7 +56,7 @@ struct Tri {
     n = e[0].cross(v[2] - v[0]);
     n2 = n.squaredNorm();
     const double longest2 = std::max({e[0].squaredNorm(), e[1].squaredNorm(), e[2].squaredNorm()});
-    hasFace = n2 > 0 && std::sqrt(n2) > kFlatTolerance * longest2;
+    hasFace = n2 > 0 && !classifyTriangle(std::sqrt(n2), longest2).degenerate;  // else its edges carry it
   }
   /// n·(p − v0): signed distance times |n|.
   double side(const V3& p) const { return n.dot(p - v[0]); }

@@ -147,7 +147,7 @@ void compare(const Triangle& tri, const ConvexShape& shape, Real margin, const C
   {
     const Eigen::Vector3d ab = (tri.b - tri.a).cast<double>(), ac = (tri.c - tri.a).cast<double>();
     const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
-    degenerate = !(ab.cross(ac).norm() > kTriangleContactDegenerateRelative * longest);
+    degenerate = classifyTriangle(ab.cross(ac).norm(), longest).degenerate;
   }
   if (degenerate) {
     const Eigen::Vector3d v[3] = {tri.a.cast<double>(), tri.b.cast<double>(), tri.c.cast<double>()};

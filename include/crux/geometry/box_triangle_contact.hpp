@@ -11,6 +11,7 @@
 /// Vertex by sign bits, Edge min·64+max of its two vertex indices).
 
 #include <crux/geometry/contact.hpp>
+#include <crux/geometry/triangle_class.hpp>
 
 namespace crux {
 
@@ -30,9 +31,8 @@ inline constexpr double kBoxTriangleFaceBias = 1e-6;
 /// and near-parallel edges are skipped; the face axes cover them up to this × |edge|).
 inline constexpr double kBoxTriangleParallelSin = 1e-9;
 
-/// A triangle with |(b−a)×(c−a)| <= this × (longest edge)² is the segment or point it spans: its
-/// normal axis drops out (its edges remain).
-inline constexpr double kBoxTriangleDegenerateRelative = 1e-10;
+// A degenerate triangle (kTriangleDegenerateRelative, triangle_class.hpp) is the segment or
+// point it spans: its normal axis drops out (its edges remain).
 
 /// Contact manifold of a triangle (A) against a box (B) given in the box's frame: the box is
 /// centred at the origin, axis-aligned, with half extents `half` (>= 0; a zero half extent is a

@@ -17,16 +17,13 @@
 /// featureB is the sphere's Vertex 0, the capsule's end (Vertex 0/1) or its Edge (0·64+1) for a
 /// point cut out of the segment by the clipping.
 ///
-/// Degenerate triangles (|(b−a)×(c−a)| <= kTriangleContactDegenerateRelative × longest edge²)
-/// are the segment or point they span: no face, closest points over their three edges.
+/// Degenerate triangles (kTriangleDegenerateRelative, triangle_class.hpp) are the segment or
+/// point they span: no face, closest points over their three edges.
 
 #include <crux/geometry/contact.hpp>
+#include <crux/geometry/triangle_class.hpp>
 
 namespace crux {
-
-/// Relative area below which a triangle counts as degenerate (a segment or a point): 64 ulps
-/// of double (as triangle_distance.hpp).
-inline constexpr double kTriangleContactDegenerateRelative = 64 * std::numeric_limits<double>::epsilon();
 
 /// Sphere (centre, radius >= 0) against a triangle: the closest point of the triangle to the
 /// centre (Ericson, RTCD 5.1.5, Voronoi regions, in double; a degenerate triangle by its
