@@ -71,6 +71,7 @@ OperandShape centredShape(Rng& rng, int kind, double size) {
 struct Tally {
   int hits = 0, misses = 0;
   double worstSlack = 0;
+  double worstUnchecked = 0;  ///< FCL's rigid casts (verdict only)
 };
 
 /// One unambiguous cast of a (centred, size sa) from `start` against a target centred at
@@ -92,9 +93,15 @@ WorldMotion aimedMotion(Rng& rng, const Vec3& start, const Vec3& centre, bool hi
   return m;
 }
 
-/// Compares a peer's cast with native's on an unambiguous case.
-void compare(const WorldCast& peer, const WorldCast& native, bool hit, const WorldMotion& motion,
-             const std::string& what, Tally& tally) {
+/// The length of a cast's path (of the operand's origin).
+double pathLength(const WorldOperand& a, const WorldMotion& motion) {
+  return motion.end ? double((motion.end->translation - a.pose.translation).norm()) : double(motion.translation.norm());
+}
+
+/// Compares a peer's cast with native's on an unambiguous case: the verdict, and (with `time`)
+/// t as a distance along the path within kPeerCastSlack.
+void compare(const WorldCast& peer, const WorldCast& native, bool hit, double length, const std::string& what,
+             Tally& tally, bool time = true) {
   ASSERT_EQ(native.hit, hit) << "native: " << what;
   EXPECT_EQ(peer.hit, hit) << what;
   if (!hit || !peer.hit) {
@@ -103,8 +110,11 @@ void compare(const WorldCast& peer, const WorldCast& native, bool hit, const Wor
   }
   ++tally.hits;
   ASSERT_TRUE(peer.timeKnown) << what;
-  const double length = motion.end ? double((motion.end->translation).norm()) : double(motion.translation.norm());
   const double slack = std::abs(peer.t - native.t) * std::max(length, 1.0);
+  if (!time) {
+    tally.worstUnchecked = std::max(tally.worstUnchecked, slack);
+    return;
+  }
   tally.worstSlack = std::max(tally.worstSlack, slack);
   EXPECT_LE(slack, kPeerCastSlack) << what << ": peer t " << peer.t << ", native t " << native.t;
 }
@@ -147,10 +157,16 @@ TEST(PeerCasts, ConvexPairsAgreeWithNativeOnClearHitsAndMisses) {
         ++fclRoundedMisses;  // FCL's defect, below
         continue;
       }
-      compare(p, native->cast(a, motion, b), hit, motion, what, tally);
+      // FCL's rigid casts (InterpMotion): the verdict only. Their t differs from crux's and
+      // Bullet's (which agree) by up to 0.06 of the path on some turning boxes and hulls (the
+      // double build's cases; 7.5e-4 in the float build's): cause not traced (its advancement
+      // stops when a step falls under 1e-4 of a motion bound that rotation makes loose).
+      const bool time = !(std::string(name) == "fcl" && motion.end);
+      compare(p, native->cast(a, motion, b), hit, pathLength(a, motion), what, tally, time);
     }
-    std::printf("%s: %d hits, %d misses, worst |t - native t| x length %.3g; rounded hits missed: %d\n", name,
-                tally.hits, tally.misses, tally.worstSlack, fclRoundedMisses);
+    std::printf("%s: %d hits, %d misses, worst |t - native t| x length %.3g (rigid, unchecked: %.3g); rounded "
+                "hits missed: %d\n",
+                name, tally.hits, tally.misses, tally.worstSlack, tally.worstUnchecked, fclRoundedMisses);
     EXPECT_LT(fclRoundedMisses, 20) << name;
     EXPECT_GT(tally.hits, 200) << name;
     EXPECT_GT(tally.misses, 100) << name;
@@ -198,17 +214,18 @@ TEST(PeerCasts, BulletMeshModelAndSceneCastsAgreeWithNativeOnClearHitsAndMisses)
     switch (i % 4) {
       case 0: {  // the mesh at the model's pose, as a cast operand
         const WorldOperand bP{meshP, poses[m]}, bN{meshN, poses[m]};
-        compare(peer->cast(a, motion, bP), native->cast(a, motion, bN), hit, motion, what + " mesh", tally);
+        compare(peer->cast(a, motion, bP), native->cast(a, motion, bN), hit, pathLength(a, motion), what + " mesh",
+                tally);
         break;
       }
       case 1:
       case 2:
         compare(peer->modelCast(a, motion, models[m].first), native->modelCast(a, motion, models[m].second), hit,
-                motion, what + " model", tally);
+                pathLength(a, motion), what + " model", tally);
         break;
       default: {
         const WorldCast p = peer->sceneCast(a, motion), n = native->sceneCast(a, motion);
-        compare(p, n, hit, motion, what + " scene", tally);
+        compare(p, n, hit, pathLength(a, motion), what + " scene", tally);
         if (hit && p.hit) {
           EXPECT_EQ(p.model, models[m].first) << what;
           EXPECT_EQ(n.model, models[m].second) << what;
