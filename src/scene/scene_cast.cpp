@@ -114,4 +114,11 @@ bool castAny(const Scene& scene, const ConvexShape& shape, const Transform& shap
       .has_value();
 }
 
+bool castAny(const Scene& scene, const ConvexShape& shape, const RigidMotion& motion, ScenePath path) {
+  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, motion); };
+  return run(scene, castModel, motion.start.translation, motion.end.translation, double(shape.size()),
+             M_PI * double(shape.size()), path, true)
+      .has_value();
+}
+
 }  // namespace crux

@@ -55,7 +55,9 @@ TEST_P(SceneCast, BroadPhaseEqualsBruteForce) {
     }
     RigidMotion rigid{start, crux::test::randomPose(rng, 10)};
     if (i % 4 == 0) rigid.end.translation = rigid.start.translation;  // a pure rotation
-    ASSERT_TRUE(same(castClosest(scene, shape, rigid), castClosest(scene, shape, rigid, ScenePath::BruteForce))) << i;
+    const auto rigidBrute = castClosest(scene, shape, rigid, ScenePath::BruteForce);
+    ASSERT_TRUE(same(castClosest(scene, shape, rigid), rigidBrute)) << i;
+    EXPECT_EQ(castAny(scene, shape, rigid), rigidBrute.has_value()) << i;
   }
   EXPECT_GT(hits, n / 5);
   EXPECT_LT(hits, n - n / 5);

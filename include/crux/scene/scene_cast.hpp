@@ -32,5 +32,8 @@ std::optional<SceneCastHit> castClosest(const Scene& scene, const ConvexShape& s
 /// Any hit of the linear cast (stops at the first model hit).
 bool castAny(const Scene& scene, const ConvexShape& shape, const Transform& shapePose, const Vec3& motion,
              ScenePath path = ScenePath::BroadPhase);
+/// Any hit of the rigid cast (stops at the first model hit).
+bool castAny(const Scene& scene, const ConvexShape& shape, const RigidMotion& motion,
+             ScenePath path = ScenePath::BroadPhase);
 
 }  // namespace crux
