@@ -1,6 +1,6 @@
 """Type stubs of the extension module crux._crux (re-exported by the package crux)."""
 
-from typing import Any, List, NamedTuple, Optional, Sequence, Tuple, Union
+from typing import Any, List, Literal, NamedTuple, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -57,6 +57,15 @@ class CastHits(NamedTuple):
     normal: np.ndarray
     starts_overlapping: np.ndarray
 
+class SceneCastHits(NamedTuple):
+    model: np.ndarray
+    t: np.ndarray
+    triangle: np.ndarray
+    point_shape: np.ndarray
+    point_mesh: np.ndarray
+    normal: np.ndarray
+    starts_overlapping: np.ndarray
+
 class RegionHits(NamedTuple):
     offsets: np.ndarray
     models: np.ndarray
@@ -90,9 +99,54 @@ class Mesh:
     def contains(self, points: ArrayLike, threads: int = 0) -> np.ndarray: ...
     def signed_distance(self, points: ArrayLike, threads: int = 0) -> np.ndarray: ...
     def overlaps_spheres(self, spheres: ArrayLike, volume: bool = False, threads: int = 0) -> np.ndarray: ...
-    def cast_spheres(self, spheres: ArrayLike, motions: ArrayLike, threads: int = 0) -> CastHits: ...
-    def cast_capsules(self, capsules: ArrayLike, motions: ArrayLike, threads: int = 0) -> CastHits: ...
-    def cast_obbs(self, obbs: ArrayLike, motions: ArrayLike, threads: int = 0) -> CastHits: ...
+    @overload
+    def cast_spheres(
+        self, spheres: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_spheres(
+        self, spheres: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_spheres_rigid(
+        self, spheres: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_spheres_rigid(
+        self, spheres: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_capsules(
+        self, capsules: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_capsules(
+        self, capsules: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_capsules_rigid(
+        self, capsules: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_capsules_rigid(
+        self, capsules: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_obbs(
+        self, obbs: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_obbs(
+        self, obbs: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_obbs_rigid(
+        self, obbs: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> CastHits: ...
+    @overload
+    def cast_obbs_rigid(
+        self, obbs: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
     def overlaps_aabbs(self, aabbs: ArrayLike, volume: bool = False, threads: int = 0) -> np.ndarray: ...
     def overlaps_obbs(self, obbs: ArrayLike, volume: bool = False, threads: int = 0) -> np.ndarray: ...
 
@@ -116,6 +170,54 @@ class Scene:
     def query_aabbs(self, aabbs: ArrayLike, bounds_only: bool = False, threads: int = 0) -> RegionHits: ...
     def query_obbs(self, obbs: ArrayLike, bounds_only: bool = False, threads: int = 0) -> RegionHits: ...
     def overlapping_pairs(self, bounds_only: bool = False) -> np.ndarray: ...
+    @overload
+    def cast_spheres(
+        self, spheres: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_spheres(
+        self, spheres: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_spheres_rigid(
+        self, spheres: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_spheres_rigid(
+        self, spheres: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_capsules(
+        self, capsules: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_capsules(
+        self, capsules: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_capsules_rigid(
+        self, capsules: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_capsules_rigid(
+        self, capsules: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_obbs(
+        self, obbs: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_obbs(
+        self, obbs: ArrayLike, motions: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
+    @overload
+    def cast_obbs_rigid(
+        self, obbs: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[False] = False
+    ) -> SceneCastHits: ...
+    @overload
+    def cast_obbs_rigid(
+        self, obbs: ArrayLike, starts: ArrayLike, ends: ArrayLike, threads: int = 0, *, any: Literal[True]
+    ) -> np.ndarray: ...
 
 def mesh_overlap(a: Mesh, b: Mesh, pose_a: Pose = None, pose_b: Pose = None, volume: bool = False) -> bool: ...
 def touching_pairs(a: Mesh, b: Mesh, pose_a: Pose = None, pose_b: Pose = None) -> np.ndarray: ...

@@ -151,6 +151,40 @@ Transform asTransform(py::handle obj, const char* name) {
   throw InvalidInput(n + ": a pose is None, a (4, 4) matrix, (quaternion wxyz, translation) or 7 numbers");
 }
 
+std::vector<Transform> asTransforms(py::handle obj, const std::vector<py::ssize_t>& lead, const char* name) {
+  if (obj.is_none()) throw InvalidInput(std::string(name) + ": expected an array of poses, got None");
+  const DoubleArray a = asDoubles(obj, name);
+  const std::size_t n = lead.size();
+  bool leadMatches = std::size_t(a.ndim()) > n;
+  for (std::size_t d = 0; leadMatches && d < n; ++d) leadMatches = a.shape(py::ssize_t(d)) == lead[d];
+  const py::ssize_t rest = py::ssize_t(a.ndim()) - py::ssize_t(n);
+  const bool matrices = leadMatches && rest == 2 && a.shape(py::ssize_t(n)) == 4 && a.shape(py::ssize_t(n) + 1) == 4;
+  const bool rows = leadMatches && rest == 1 && a.shape(py::ssize_t(n)) == 7;
+  if (!matrices && !rows) {
+    std::string leadText;
+    for (const py::ssize_t d : lead) leadText += std::to_string(d) + ", ";
+    throw InvalidInput(std::string(name) + ": expected shape (" + leadText + "4, 4) or (" + leadText + "7), got " +
+                       shapeText(a));
+  }
+  Rows named;  // for the name of a failing row only
+  named.lead = lead;
+  named.name = name;
+  std::size_t count = 1;
+  for (const py::ssize_t d : lead) count *= std::size_t(d);
+  std::vector<Transform> poses(count);
+  const double* p = a.data();
+  for (std::size_t i = 0; i < count; ++i) {
+    try {
+      poses[i] = matrices ? fromMatrix(p + 16 * i, name) : fromQuatTranslation(p + 7 * i, p + 7 * i + 4, name);
+    } catch (const InvalidInput&) {
+      const std::string row = named.rowName(i);
+      poses[i] = matrices ? fromMatrix(p + 16 * i, row.c_str()) : fromQuatTranslation(p + 7 * i, p + 7 * i + 4, row.c_str());
+      throw;
+    }
+  }
+  return poses;
+}
+
 py::array_t<double> matrixOf(const Transform& t) {
   py::array_t<double> m({4, 4});
   auto w = m.mutable_unchecked<2>();

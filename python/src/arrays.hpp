@@ -112,6 +112,10 @@ ParallelOptions parallelOptions(long threads);
 /// (quaternion (w, x, y, z), translation (x, y, z)) or 7 numbers (w, x, y, z, tx, ty, tz).
 /// Throws InvalidInput naming `name`.
 Transform asTransform(py::handle obj, const char* name);
+/// Poses as rows, one per row of `lead`: an array of shape lead + (4, 4) (homogeneous matrices) or
+/// lead + (7,) (w, x, y, z, tx, ty, tz), each read as asTransform reads one. Throws InvalidInput
+/// naming `name` and, for an invalid pose, its row ("starts[2, 3]: ...").
+std::vector<Transform> asTransforms(py::handle obj, const std::vector<py::ssize_t>& lead, const char* name);
 /// A (4, 4) float64 homogeneous matrix of a transform.
 py::array_t<double> matrixOf(const Transform& t);
 /// Poses accepted by asTransform for 4x4 matrices: |RᵀR − I| and |det R − 1| at most this.

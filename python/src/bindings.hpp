@@ -4,11 +4,14 @@
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_volume.hpp>
+#include <crux/scene/scene.hpp>
 
 #include <pybind11/pybind11.h>
 
+#include <map>
 #include <memory>
 #include <mutex>
+#include <shared_mutex>
 
 namespace crux::python {
 
@@ -37,13 +40,28 @@ class PyMesh {
   mutable std::unique_ptr<MeshAdjacency> adjacency_;
 };
 
+/// A Python `crux.Scene`: a crux::Scene behind a reader–writer lock (scene_bindings.cpp).
+struct PyScene {
+  Scene scene;
+  std::map<ModelId, std::shared_ptr<PyMesh>> meshes;  // the Python meshes of the models (pickling)
+  /// The local pose each model was last given (add, set_transform(s)), before the hierarchy
+  /// normalised it: pickled instead of the stored one, so that the restored scene normalises the
+  /// same numbers and holds the same bits. Dropped when the hierarchy recomputes the local pose
+  /// (set_parent, removal of the parent); the stored pose is pickled then.
+  std::map<ModelId, Transform> given;
+  mutable std::shared_mutex lock;
+};
+
 /// Named tuple types of the answers, made once at import.
 struct ResultTypes {
-  py::object rayHits, rayHitsAll, closestPoints, meshDistance, contacts, sceneRayHits, regionHits, castHits;
+  py::object rayHits, rayHitsAll, closestPoints, meshDistance, contacts, sceneRayHits, regionHits, castHits,
+      sceneCastHits;
 };
 const ResultTypes& resultTypes();
 
 void bindMesh(py::module_& m);
 void bindScene(py::module_& m);
+/// The casts of Mesh and Scene (cast_bindings.cpp); after bindMesh and bindScene.
+void bindCasts(py::module_& m);
 
 }  // namespace crux::python

@@ -10,10 +10,8 @@
 
 #include <crux/error.hpp>
 #include <crux/geometry/raycast.hpp>
-#include <crux/geometry/cast.hpp>
 #include <crux/geometry/convex.hpp>
 #include <crux/mesh/batch_query.hpp>
-#include <crux/mesh/mesh_cast.hpp>
 #include <crux/mesh/mesh_distance.hpp>
 #include <crux/mesh/mesh_io.hpp>
 #include <crux/mesh/mesh_point_query.hpp>
@@ -58,6 +56,8 @@ const ResultTypes& resultTypes() {
       namedTuple("SceneRayHits", {"model", "t", "triangle", "point", "normal"}),
       namedTuple("RegionHits", {"offsets", "models"}),
       namedTuple("CastHits", {"t", "triangle", "point_shape", "point_mesh", "normal", "starts_overlapping"}),
+      namedTuple("SceneCastHits",
+                 {"model", "t", "triangle", "point_shape", "point_mesh", "normal", "starts_overlapping"}),
   };
   return *types;
 }
@@ -228,67 +228,6 @@ py::array overlapBatch(const PyMesh& self, py::handle shapesIn, std::size_t widt
     });
   }
   return std::move(out);
-}
-
-/// Linear casts of shapes (rows of `width` Reals, each a crux Shape at its own position) along
-/// motions (..., 3), the first triangle each touches (castClosest, mesh_cast.hpp).
-template <class Shape>
-py::object castBatch(const PyMesh& self, py::handle shapesIn, std::size_t width, const char* name,
-                     py::handle motionsIn, long threads) {
-  const ParallelOptions parallel = parallelOptions(threads);
-  const Rows rows = asRows(shapesIn, width, name);
-  const Rows motionRows = asRows(motionsIn, 3, "motions");
-  if (motionRows.lead != rows.lead)
-    throw InvalidInput(std::string("motions: expected the leading shape of ") + name + " (one motion per shape)");
-  validateRows<Shape>(rows);
-  const Shape* shapes = rows.as<Shape>();
-  // plain names first (no string built per row); the failing row is named on the second try
-  for (std::size_t i = 0; i < rows.count; ++i) {
-    try {
-      validate(ConvexShape(shapes[i]), rows.name);
-    } catch (const InvalidInput&) {
-      validate(ConvexShape(shapes[i]), rows.rowName(i));
-      throw;
-    }
-  }
-  const Vec3* motions = motionRows.as<Vec3>();
-  for (std::size_t i = 0; i < motionRows.count; ++i) {
-    try {
-      validateMotion(motions[i], "motions");
-    } catch (const InvalidInput&) {
-      validateMotion(motions[i], motionRows.rowName(i));
-      throw;
-    }
-  }
-  auto t = newArray<Real>(rows.lead);
-  auto tri = newArray<std::int64_t>(rows.lead);
-  auto pointShape = newArray<Real>(rows.lead, {3});
-  auto pointMesh = newArray<Real>(rows.lead, {3});
-  auto normal = newArray<Real>(rows.lead, {3});
-  auto overlap = newArray<bool>(rows.lead);
-  Real* tp = t.mutable_data();
-  std::int64_t* trip = tri.mutable_data();
-  Real* ap = pointShape.mutable_data();
-  Real* bp = pointMesh.mutable_data();
-  Real* np = normal.mutable_data();
-  bool* op = overlap.mutable_data();
-  const Mesh& mesh = self.mesh();
-  {
-    py::gil_scoped_release release;
-    parallelFor(rows.count, parallel, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        const std::optional<MeshCastHit> h =
-            castClosest(mesh, Transform::identity(), ConvexShape(shapes[i]), Transform::identity(), motions[i]);
-        tp[i] = h ? h->cast.t : kNoLimit;
-        trip[i] = h ? std::int64_t(h->triangle) : -1;
-        putVec3(ap + 3 * i, h ? h->cast.pointA : Vec3::Constant(kNaN));
-        putVec3(bp + 3 * i, h ? h->cast.pointB : Vec3::Constant(kNaN));
-        putVec3(np + 3 * i, h ? h->cast.normal : Vec3::Constant(kNaN));
-        op[i] = h && h->cast.startsOverlapping;
-      }
-    });
-  }
-  return resultTypes().castHits(t, tri, pointShape, pointMesh, normal, overlap);
 }
 
 std::shared_ptr<PyMesh> makeMesh(py::handle verticesIn, py::handle trianglesIn, const std::string& name) {
@@ -467,33 +406,6 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
           "spheres"_a, "volume"_a = false, "threads"_a = 0,
           "Whether each sphere (..., 4) = center x, y, z, radius touches the surface (volume=True: the closed\n"
           "solid, so a sphere wholly inside overlaps). Touching counts. bool array (...).")
-      .def(
-          "cast_spheres",
-          [](const PyMesh& s, py::handle shapes, py::handle motions, long threads) {
-            return castBatch<Sphere>(s, shapes, 4, "spheres", motions, threads);
-          },
-          "spheres"_a, "motions"_a, "threads"_a = 0,
-          "Linear casts: each sphere (..., 4) = center x, y, z, radius moves by its motion (..., 3) (positions\n"
-          "p + s * motion, s in [0, 1]); the first triangle it touches. Returns CastHits(t (...): the\n"
-          "fraction of the motion at impact, inf on a miss; triangle (...): -1 on a miss; point_shape,\n"
-          "point_mesh, normal (..., 3): the contact points at impact and the unit normal from the mesh to\n"
-          "the shape, NaN on a miss; starts_overlapping (...): touching or overlapping at s = 0, then t = 0).\n"
-          "Touching counts (closed sets); a zero motion is an overlap test. Same answers as C++'s\n"
-          "castClosest (mesh_cast.hpp), tolerance kCastRelativeTolerance in t.")
-      .def(
-          "cast_capsules",
-          [](const PyMesh& s, py::handle shapes, py::handle motions, long threads) {
-            return castBatch<Capsule>(s, shapes, 7, "capsules", motions, threads);
-          },
-          "capsules"_a, "motions"_a, "threads"_a = 0,
-          "As cast_spheres for capsules (..., 7) = segment end a (3), end b (3), radius.")
-      .def(
-          "cast_obbs",
-          [](const PyMesh& s, py::handle shapes, py::handle motions, long threads) {
-            return castBatch<Obb>(s, shapes, 15, "obbs", motions, threads);
-          },
-          "obbs"_a, "motions"_a, "threads"_a = 0,
-          "As cast_spheres for oriented boxes (..., 15), laid out as overlaps_obbs takes them.")
       .def(
           "overlaps_aabbs",
           [](const PyMesh& s, py::handle shapes, bool volume, long threads) {

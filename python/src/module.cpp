@@ -31,7 +31,9 @@ PYBIND11_MODULE(_crux, m) {
   m.attr("Contacts") = types.contacts;
   m.attr("SceneRayHits") = types.sceneRayHits;
   m.attr("CastHits") = types.castHits;
+  m.attr("SceneCastHits") = types.sceneCastHits;
   m.attr("RegionHits") = types.regionHits;
   bindMesh(m);
   bindScene(m);
+  bindCasts(m);
 }

@@ -23,17 +23,6 @@
 namespace crux::python {
 namespace {
 
-struct PyScene {
-  Scene scene;
-  std::map<ModelId, std::shared_ptr<PyMesh>> meshes;  // the Python meshes of the models (pickling)
-  /// The local pose each model was last given (add, set_transform(s)), before the hierarchy
-  /// normalised it: pickled instead of the stored one, so that the restored scene normalises the
-  /// same numbers and holds the same bits. Dropped when the hierarchy recomputes the local pose
-  /// (set_parent, removal of the parent); the stored pose is pickled then.
-  std::map<ModelId, Transform> given;
-  mutable std::shared_mutex lock;
-};
-
 /// The 7 numbers (w, x, y, z, tx, ty, tz) of a pose, in Real (exact).
 py::array_t<Real> poseRow(const Transform& t) {
   py::array_t<Real> row(7);
@@ -146,18 +135,11 @@ Pickles its models (ids, meshes, poses, parents).
               PyErr_Clear();
               throw InvalidInput("ids: expected a 1-D integer array");
             }
-            const py::array poses = py::array::ensure(posesIn);
-            if (!poses || poses.ndim() < 1 || poses.shape(0) != ids.shape(0)) {
-              PyErr_Clear();
-              throw InvalidInput("poses: expected one pose per id ((k, 4, 4) or (k, 7))");
-            }
+            const std::vector<Transform> poses = asTransforms(posesIn, {ids.shape(0)}, "poses");
             std::vector<std::pair<ModelId, Transform>> moves;
-            moves.reserve(std::size_t(ids.shape(0)));
-            for (py::ssize_t i = 0; i < ids.shape(0); ++i) {
-              const std::string name = "poses[" + std::to_string(i) + "]";
-              moves.emplace_back(modelId(py::int_(ids.data()[i]), "ids"),
-                                 asTransform(poses[py::int_(i)], name.c_str()));
-            }
+            moves.reserve(poses.size());
+            for (std::size_t i = 0; i < poses.size(); ++i)
+              moves.emplace_back(modelId(py::int_(ids.data()[i]), "ids"), poses[i]);
             py::gil_scoped_release release;
             std::unique_lock<std::shared_mutex> guard(s.lock);
             s.scene.setTransforms(moves);  // all or nothing

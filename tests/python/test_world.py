@@ -60,6 +60,41 @@ def test_shape_overlaps_and_mesh_mesh_equal_crux_batch(native):
         assert batch["hit"] == crux.mesh_overlap(mesh, unit_cube(), pose_b=pose)
 
 
+def test_rigid_and_linear_casts_equal_crux_batch(native, bunny):
+    native.add_mesh("bunny", bunny)
+    rng = np.random.default_rng(22)
+    lo, hi = bunny.bounds.astype(np.float64)
+    n = 80
+    q = rng.normal(size=(n, 2, 4))
+    q = (q / np.linalg.norm(q, axis=-1, keepdims=True)).astype(crux.REAL)
+    t = (lo + rng.uniform(-0.5, 1.5, size=(n, 2, 3)) * (hi - lo)).astype(crux.REAL)
+    half = (0.04 * (hi - lo)).astype(crux.REAL)
+    box = np.r_[[0, 0, 0], half, np.eye(3).ravel()].astype(crux.REAL)
+    starts, ends = np.c_[q[:, 0], t[:, 0]], np.c_[q[:, 1], t[:, 1]]
+    rigid = bunny.cast_obbs_rigid(np.tile(box, (n, 1)), starts, ends)
+    obb = {"box": {"center": [0, 0, 0], "half": half, "axes": np.eye(3)}}
+    answers = native.requests(
+        [{"op": "cast", "a": dict(obb, transform={"rotation": s[:4], "translation": s[4:]}),
+          "end": {"rotation": e[:4], "translation": e[4:]}, "b": {"mesh": "bunny"}} for s, e in zip(starts, ends)]
+    )
+    spheres = np.c_[t[:, 0], np.full(n, half[0])].astype(crux.REAL)
+    motions = (t[:, 1] - t[:, 0]).astype(crux.REAL)
+    linear = bunny.cast_spheres(spheres, motions)
+    answers += native.requests(
+        [{"op": "cast", "a": {"sphere": {"center": s[:3], "radius": s[3]}}, "motion": m, "b": {"mesh": "bunny"}}
+         for s, m in zip(spheres, motions)]
+    )
+    for hits, batch in [(rigid, answers[:n]), (linear, answers[n:])]:
+        hit = np.array([a["hit"] for a in batch])
+        assert 5 < hit.sum() < n
+        np.testing.assert_array_equal(np.isfinite(hits.t), hit)
+        for i, a in enumerate(batch):
+            if a["hit"]:
+                assert a["t"] == float(hits.t[i]) and a["triangle"] == hits.triangle[i]
+                assert a["normal"] == hits.normal[i].astype(float).tolist()
+                assert a["starts_overlapping"] == bool(hits.starts_overlapping[i])
+
+
 def test_point_inside_sign_equals_the_exact_backend():
     with world_or_skip("exact") as exact:
         for name, mesh in [("cube", unit_cube(2.0)), ("torus", torus(16, 12))]:
