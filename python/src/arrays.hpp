@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -50,18 +51,31 @@ struct Rows {
 /// cannot be converted to Real or its last dimension is not `width`.
 Rows asRows(py::handle obj, std::size_t width, const char* name);
 
+/// Whether crux's queryable(T) accepts exactly the T that validate(T) accepts (shapes.hpp): so for
+/// rays, spheres and AABBs; validate(Obb) also checks the axes, which queryable does not.
+template <class T>
+inline constexpr bool kQueryableIsValid = std::is_same_v<T, Ray> || std::is_same_v<T, Sphere> || std::is_same_v<T, Aabb>;
+
 /// Validates every row as crux's shape T (crux::validate): throws crux::InvalidInput with crux's
-/// message, naming the row ("rays[2, 3].dir ...") for the first invalid one.
+/// message, naming the row ("rays[2, 3].dir ...") for the first invalid one. Where queryable(T)
+/// decides the same, a row costs that predicate (no string is built unless a row fails);
+/// otherwise validate runs on every row under the argument's name, and again naming the row that
+/// failed.
 template <class T>
 void validateRows(const Rows& rows) {
   const T* shapes = rows.as<T>();
-  const std::string plain = rows.name;
-  for (std::size_t i = 0; i < rows.count; ++i) {
-    try {
-      validate(shapes[i], plain);
-    } catch (const InvalidInput&) {
-      validate(shapes[i], rows.rowName(i));  // the same error, naming the row
-      throw;
+  if constexpr (kQueryableIsValid<T>) {
+    for (std::size_t i = 0; i < rows.count; ++i)
+      if (!queryable(shapes[i])) validate(shapes[i], rows.rowName(i));
+  } else {
+    const std::string plain = rows.name;
+    for (std::size_t i = 0; i < rows.count; ++i) {
+      try {
+        validate(shapes[i], plain);
+      } catch (const InvalidInput&) {
+        validate(shapes[i], rows.rowName(i));  // the same error, naming the row
+        throw;
+      }
     }
   }
 }

@@ -75,14 +75,8 @@ struct LinearCasts {
     if (motionRows.lead != shapes.lead)
       throw InvalidInput(std::string("motions: expected the leading shape of ") + shapes.name + " (one motion per shape)");
     motions = motionRows.as<Vec3>();
-    for (std::size_t i = 0; i < motionRows.count; ++i) {
-      try {
-        validateMotion(motions[i], "motions");
-      } catch (const InvalidInput&) {
-        validateMotion(motions[i], motionRows.rowName(i));
-        throw;
-      }
-    }
+    for (std::size_t i = 0; i < motionRows.count; ++i)  // validateMotion's rule: every component finite
+      if (!motions[i].allFinite()) validateMotion(motions[i], motionRows.rowName(i));
   }
   ConvexShape shape(std::size_t i) const { return ConvexShape(shapes.as<Shape>()[i]); }
   const Vec3& motion(std::size_t i) const { return motions[i]; }

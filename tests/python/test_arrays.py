@@ -55,6 +55,9 @@ def test_empty_batches_give_empty_answers():
         (lambda m: m.ray_any(np.array([[0, 0, 0, 1, 0, 0], [0, 0, np.nan, 1, 0, 0]])), r"rays\[1\]"),
         (lambda m: m.ray_closest(np.zeros((2, 3, 6))), r"rays\[0, 0\]"),  # zero direction
         (lambda m: m.ray_all([[0, 0, 0, 1, 0, np.inf]]), r"rays\[0\]"),
+        (lambda m: m.ray_closest(np.r_[np.tile([0, 0, 0, 1, 0, 0], (5, 1)), [[0, 0, 0, 0, 0, 0], [np.nan] * 6]]),
+         r"rays\[5\]\.dir is the zero vector"),  # the first bad row, with crux's message
+        (lambda m: m.overlaps_spheres([[0, 0, 0, 1], [0, 0, 0, -1], [0, 0, 0, -2]]), r"spheres\[1\]\.radius is negative"),
         (lambda m: m.ray_closest([[0, 0, 0, 1, 0, 0]], max_distance=-1), r"max_distance"),
         (lambda m: m.ray_closest([[0, 0, 0, 1, 0, 0]], threads=-1), r"threads"),
         (lambda m: m.closest_point([[0, 0, np.nan]]), r"points\[0\]"),
