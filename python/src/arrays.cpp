@@ -163,8 +163,8 @@ std::vector<Transform> asTransforms(py::handle obj, const std::vector<py::ssize_
   if (!matrices && !rows) {
     std::string leadText;
     for (const py::ssize_t d : lead) leadText += std::to_string(d) + ", ";
-    throw InvalidInput(std::string(name) + ": expected shape (" + leadText + "4, 4) or (" + leadText + "7), got " +
-                       shapeText(a));
+    throw InvalidInput(std::string(name) + ": expected shape (" + leadText + "4, 4) or (" + leadText +
+                       (lead.empty() ? "7,), got " : "7), got ") + shapeText(a));
   }
   Rows named;  // for the name of a failing row only
   named.lead = lead;

@@ -207,13 +207,13 @@ py::object castBatch(const Target& target, const Casts& casts, bool anyHit, long
 constexpr const char* kLinearDoc =
     "Linear casts: each shape (rows in world space) moves by its motion (..., 3) (positions p + s * motion,\n"
     "s in [0, 1]) and stops at the first triangle it touches. Touching counts (closed sets); a zero\n"
-    "motion is an overlap test. ";
+    "motion is an overlap test.\n";
 constexpr const char* kRigidDoc =
     "Rigid casts: each shape (rows in the shape's own frame) moves from its pose starts[...] to ends[...]\n"
     "(rotation by slerp, the shorter arc; translation linear: a point x is at slerp(q0, q1, s) x +\n"
     "(1 - s) t0 + s t1 for s in [0, 1]) and stops at the first triangle it touches. Poses: (..., 4, 4)\n"
     "homogeneous matrices or (..., 7) rows w, x, y, z, tx, ty, tz, with the shapes' leading shape.\n"
-    "Touching counts (closed sets); equal start and end poses are an overlap test. ";
+    "Touching counts (closed sets); equal start and end poses are an overlap test.\n";
 constexpr const char* kMeshAnswerDoc =
     "Returns CastHits(t (...): the fraction of the motion at impact, inf on a miss; triangle (...): -1 on a\n"
     "miss; point_shape, point_mesh, normal (..., 3): the contact points at impact and the unit normal from\n"

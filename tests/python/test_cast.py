@@ -375,3 +375,5 @@ def test_pickled_meshes_and_scenes_cast_the_same():
         assert np.isfinite(before.t).any()
         for a, b in zip(before, after):
             np.testing.assert_array_equal(a, b)
+        restored = pickle.loads(pickle.dumps(before))  # the answer tuples pickle too
+        assert type(restored) is type(before) and restored._fields == before._fields

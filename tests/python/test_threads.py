@@ -1,5 +1,6 @@
-"""Tests of the batch calls' threading (python/src/mesh_bindings.cpp): the GIL is released while a
-batch runs, so other Python threads run meanwhile and two batches in two threads overlap."""
+"""Tests of the batch calls' threading (python/src/mesh_bindings.cpp, cast_bindings.cpp): the GIL is
+released while a batch runs, so other Python threads run meanwhile and two batches in two threads
+overlap."""
 
 import os
 import threading
@@ -55,6 +56,26 @@ def test_the_gil_is_released_during_a_batch(bunny):
     # long list) measured 0.03-0.09. Released, the counter runs all along: ~1 on idle cores, ~0.5
     # measured on a machine loaded 7x over its 2 cores (the batch thread takes its share).
     assert fraction > 0.25, (fraction, seconds)
+
+
+def test_the_gil_is_released_during_a_scene_cast_batch(bunny):
+    import crux
+
+    scene = crux.Scene()
+    scene.add(bunny)
+    rng = np.random.default_rng(7)
+    lo, hi = bunny.bounds.astype(np.float64)
+    n = 2000
+    spheres = np.c_[lo + rng.uniform(-0.5, 1.5, size=(n, 3)) * (hi - lo), np.full(n, 0.01)]
+    motions = (rng.random((n, 3)) - 0.5) * (hi - lo)
+    start = time.perf_counter()
+    scene.cast_spheres(spheres, motions, threads=1)
+    once = max(time.perf_counter() - start, 1e-4)
+    reps = max(1, int(np.ceil(0.5 / once)))
+    spheres, motions = np.tile(spheres, (reps, 1)), np.tile(motions, (reps, 1))
+    fraction, seconds = _counter_progress_during(lambda: scene.cast_spheres(spheres, motions, threads=1))
+    assert seconds > 0.2, "the batch must last long enough to measure"
+    assert fraction > 0.25, (fraction, seconds)  # as for rays above
 
 
 def test_two_python_threads_run_batches_faster_than_one_after_the_other(bunny):
