@@ -272,9 +272,10 @@ class NativeWorld final : public CollisionWorld {
   /// Scene::castClosest / castAny (scene_cast.hpp: ties go to the lowest model id).
   WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) override {
     const ConvexShape shape = convexOf(a);
-    if (find == CastFind::Any && !motion.end) {
+    if (find == CastFind::Any) {
       WorldCast w;
-      w.hit = crux::castAny(scene_, shape, a.pose, motion.translation);
+      w.hit = motion.end ? crux::castAny(scene_, shape, RigidMotion{a.pose, *motion.end})
+                         : crux::castAny(scene_, shape, a.pose, motion.translation);
       return w;
     }
     const std::optional<SceneCastHit> h = motion.end ? crux::castClosest(scene_, shape, RigidMotion{a.pose, *motion.end})

@@ -495,6 +495,20 @@ TEST(BatchNarrowPhase, ModelAndSceneCastsNameTheModelHitOnEveryBackend) {
     EXPECT_FALSE(miss["hit"].get<bool>()) << name;
   }
   Batch native;
+  ASSERT_EQ(errorOf(native.ask(R"({"op":"add_model","name":"high","mesh":"cube"})")), "");
+  // a rigid motion (a quarter turn about z on the way up) with "any": castAny(Scene, RigidMotion)
+  const std::string up = R"(,"end":{"translation":[0,0,5],"rotation":[0.70710678118654752,0,0,0.70710678118654752]})";
+  const std::string boxAt = R"({"box":{"center":[0,0,0],"half":[0.25,0.25,0.25],)" + kAxes +
+                            R"(},"transform":{"translation":[0.5,0.5,-5]}})";
+  const Answer rigidAny = native.ask(R"({"op":"scene_cast","a":)" + boxAt + up + R"(,"any":true})");
+  ASSERT_EQ(errorOf(rigidAny), "") << rigidAny.dump();
+  EXPECT_TRUE(rigidAny["hit"].get<bool>());
+  const Answer rigidClosest = native.ask(R"({"op":"scene_cast","a":)" + boxAt + up + "}");
+  EXPECT_TRUE(rigidClosest["hit"].get<bool>());
+  EXPECT_EQ(rigidClosest["model"], "high");
+  const Answer rigidBeside = native.ask(R"({"op":"scene_cast","a":)" + boxAt +
+                                        R"(,"end":{"translation":[5,0,5],"rotation":[0.70710678118654752,0,0,0.70710678118654752]},"any":true})");
+  EXPECT_FALSE(rigidBeside["hit"].get<bool>()) << rigidBeside.dump();
   EXPECT_EQ(errorOf(native.ask(R"({"op":"model_cast","a":)" + ball + R"(,"motion":[0,0,1],"model":"nope"})")).rfind("model: no model named", 0), 0u);
   EXPECT_EQ(errorOf(native.ask(R"({"op":"scene_cast","a":)" + ball + R"(,"motion":[0,0,1],"any":1})")),
             "any: expected a boolean, got number");
