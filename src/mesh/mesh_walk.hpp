@@ -66,7 +66,7 @@ bool walkOrdered(const Mesh& mesh, V& v) {
       }
     }
     bool keep(Real key) const { return v.keep(key); }
-    bool leaf(std::uint32_t first, std::uint32_t count) { return v.leaf(first, count); }
+    bool leaf(std::uint32_t first, std::uint32_t count, Real) { return v.leaf(first, count); }
   } w{v};
   return traverseWideBvhOrdered(mesh.bvh(), w);
 }

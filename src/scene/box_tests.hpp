@@ -54,32 +54,79 @@ struct ObbRegion {
   bool node(const Aabb& bounds) const { return boxesTouch(bounds, enclosing); }
 };
 
-/// rayBoxEntry for the four lane boxes of a wide node at once: bit i of the result is
-/// rayBoxEntry(ray, node.laneBounds(i), maxT, entry[i]), entry[i] its entry distance. Each lane
-/// goes through the same operations in the same order (grow by the margin, slab parameters,
+/// rayBoxEntry for the four lane boxes of a wide node at once, for one ray: enter() sets bit i
+/// of its result exactly when rayBoxEntry(ray, node.laneBounds(i), maxT, entry[i]) enters lane
+/// i's box, with entry[i] its entry distance. Each lane goes through the same operations in the
+/// same order (the plane grown by the margin, minus the origin, times the inverse direction;
 /// NaN-free max and min), so the answers are rayBoxEntry's, bit for bit; unused lanes (empty
 /// boxes) are never entered. Like rayBoxEntry it is monotone in the box, so a lane whose box
 /// contains a leaf's box is entered whenever the leaf's is, and no earlier entry is missed.
-inline unsigned rayLaneEntry(const RaySlabs& ray, const WideBvhNode& node, Real maxT, Real (&entry)[4]) {
-  using namespace mesh_detail;
-  const Real* mins[3] = {node.minX, node.minY, node.minZ};
-  const Real* maxs[3] = {node.maxX, node.maxY, node.maxZ};
-  Lanes tNear = {0, 0, 0, 0}, tFar = {maxT, maxT, maxT, maxT};
-  LaneBits inside = {-1, -1, -1, -1};
-  for (int i = 0; i < 3; ++i) {
-    const Lanes lo = lanesLoad(mins[i]) - ray.margin, hi = lanesLoad(maxs[i]) + ray.margin;
-    const Real o = ray.origin[i];
-    if (ray.parallel[i]) {
-      inside &= (lo <= o) & (o <= hi);
-      continue;
+/// What depends on the ray alone (which coordinate array holds each axis's entry and exit
+/// planes, the signed margins, the origin and inverse direction in all four lanes) is set up
+/// once per ray; an axis parallel to the ray takes rayBoxEntry's containment test instead.
+class RayLaneTest {
+ public:
+  explicit RayLaneTest(const RaySlabs& ray) : ray_(ray) {
+    using namespace mesh_detail;
+    for (int i = 0; i < 3; ++i) {
+      parallel_ = parallel_ || ray.parallel[i];
+      // WideBvhNode's coordinate arrays: minX, minY, minZ, maxX, maxY, maxZ (4 Reals each).
+      // rayBoxEntry's lo = min - margin and hi = max + margin, as plane + (-margin) and
+      // plane + margin (the same IEEE operation).
+      near_[i] = ray.negative[i] ? 4 * (3 + i) : 4 * i;
+      far_[i] = ray.negative[i] ? 4 * i : 4 * (3 + i);
+      nearMargin_[i] = ray.negative[i] ? splat(ray.margin) : splat(-ray.margin);
+      farMargin_[i] = ray.negative[i] ? splat(-ray.margin) : splat(ray.margin);
+      origin_[i] = splat(ray.origin[i]);
+      invDir_[i] = splat(ray.invDir[i]);
     }
-    const Lanes t1 = ((ray.negative[i] ? hi : lo) - o) * ray.invDir[i];
-    const Lanes t2 = ((ray.negative[i] ? lo : hi) - o) * ray.invDir[i];
-    tNear = lanesSelect(t1 > tNear, t1, tNear);
-    tFar = lanesSelect(t2 < tFar, t2, tFar);
   }
-  std::memcpy(entry, &tNear, sizeof entry);
-  return laneMask(inside & (tNear <= tFar));
-}
+
+  unsigned enter(const WideBvhNode& node, Real maxT, Real (&entry)[4]) const {
+    using namespace mesh_detail;
+    if (parallel_) return enterParallel(node, maxT, entry);
+    const Real* coords = node.minX;
+    Lanes tNear = {0, 0, 0, 0}, tFar = splat(maxT);
+    for (int i = 0; i < 3; ++i) {
+      const Lanes t1 = ((lanesLoad(coords + near_[i]) + nearMargin_[i]) - origin_[i]) * invDir_[i];
+      const Lanes t2 = ((lanesLoad(coords + far_[i]) + farMargin_[i]) - origin_[i]) * invDir_[i];
+      tNear = lanesMax(t1, tNear);  // t1 > tNear ? t1 : tNear, as rayBoxEntry
+      tFar = lanesMin(t2, tFar);    // t2 < tFar ? t2 : tFar
+    }
+    std::memcpy(entry, &tNear, sizeof entry);
+    return laneMask(tNear <= tFar);
+  }
+
+ private:
+  static mesh_detail::Lanes splat(Real x) { return mesh_detail::Lanes{x, x, x, x}; }
+
+  /// The general form (some axis parallel to the ray: containment on that axis).
+  unsigned enterParallel(const WideBvhNode& node, Real maxT, Real (&entry)[4]) const {
+    using namespace mesh_detail;
+    const Real* mins[3] = {node.minX, node.minY, node.minZ};
+    const Real* maxs[3] = {node.maxX, node.maxY, node.maxZ};
+    Lanes tNear = {0, 0, 0, 0}, tFar = splat(maxT);
+    LaneBits inside = {-1, -1, -1, -1};
+    for (int i = 0; i < 3; ++i) {
+      const Lanes lo = lanesLoad(mins[i]) - ray_.margin, hi = lanesLoad(maxs[i]) + ray_.margin;
+      const Real o = ray_.origin[i];
+      if (ray_.parallel[i]) {
+        inside &= (lo <= o) & (o <= hi);
+        continue;
+      }
+      const Lanes t1 = ((ray_.negative[i] ? hi : lo) - o) * ray_.invDir[i];
+      const Lanes t2 = ((ray_.negative[i] ? lo : hi) - o) * ray_.invDir[i];
+      tNear = lanesMax(t1, tNear);
+      tFar = lanesMin(t2, tFar);
+    }
+    std::memcpy(entry, &tNear, sizeof entry);
+    return laneMask(inside & (tNear <= tFar));
+  }
+
+  const RaySlabs& ray_;
+  bool parallel_ = false;
+  int near_[3], far_[3];
+  mesh_detail::Lanes nearMargin_[3], farMargin_[3], origin_[3], invDir_[3];
+};
 
 }  // namespace crux::detail

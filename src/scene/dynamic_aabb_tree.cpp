@@ -384,9 +384,11 @@ bool DynamicAabbTree::query(const Obb& box, ProxyCollector& collector) const {
 }
 
 // Builds the wide ray tree over the exact boxes, once per change (the first caller past the
-// threshold; the others wait on the mutex and find it built). The build runs isolated: a TBB
-// worker holding the mutex must not pick up another ray of an enclosing batch, which would wait
-// on the same mutex.
+// threshold; the others wait on the mutex and find it built). One box per leaf lane, so a leaf
+// is decided by its lane's test; the leaf lanes are set to the boxes themselves (the builder
+// fits them exactly already; writing them makes the lane test rayBoxEntry's on the box by
+// construction). The build runs isolated: a TBB worker holding the mutex must not pick up
+// another ray of an enclosing batch, which would wait on the same mutex.
 void DynamicAabbTree::buildRayTree() const {
   const std::lock_guard<std::mutex> lock(rayTreeMutex_);
   if (rayTreeReady_.load(std::memory_order_relaxed)) return;
@@ -399,13 +401,18 @@ void DynamicAabbTree::buildRayTree() const {
       boxes.push_back(entries_[id].box);
       ids.push_back(ProxyId(id));
     }
-  tbb::this_task_arena::isolate([&] { rayTree_ = buildWideBvh(boxes); });
-  raySlotBoxes_.resize(boxes.size());
+  BvhBuildOptions options;
+  options.maxLeafSize = 1;
+  tbb::this_task_arena::isolate([&] { rayTree_ = buildWideBvh(boxes, options); });
+  for (WideBvhNode& node : rayTree_.nodes)
+    for (int i = 0; i < 4; ++i) {
+      if (node.count[i] == 0) continue;
+      const Aabb& b = boxes[rayTree_.primIndices[node.child[i]]];
+      node.minX[i] = b.min.x(), node.minY[i] = b.min.y(), node.minZ[i] = b.min.z();
+      node.maxX[i] = b.max.x(), node.maxY[i] = b.max.y(), node.maxZ[i] = b.max.z();
+    }
   raySlotIds_.resize(boxes.size());
-  for (std::size_t k = 0; k < boxes.size(); ++k) {
-    raySlotBoxes_[k] = boxes[rayTree_.primIndices[k]];
-    raySlotIds_[k] = ids[rayTree_.primIndices[k]];
-  }
+  for (std::size_t k = 0; k < boxes.size(); ++k) raySlotIds_[k] = ids[rayTree_.primIndices[k]];
   rayTreeBuilds_.fetch_add(1, std::memory_order_relaxed);
   rayTreeReady_.store(true, std::memory_order_release);
 }
@@ -414,40 +421,22 @@ void DynamicAabbTree::prepareRays() const {
   if (!rayTreeReady_.load(std::memory_order_acquire)) buildRayTree();
 }
 
-// The wide ray tree, nearest lane first (traverseWideBvhOrdered); a leaf's boxes are handed to
-// the collector nearest first as well.
+// The wide ray tree, nearest lane first (traverseWideBvhOrdered). A leaf lane holds one box and
+// its lane's entry is rayBoxEntry's for that box: the walk hands it to the collector as it pops
+// (after keep() has checked it against the collector's current maxT).
 bool DynamicAabbTree::raycastWide(const Ray& ray, RayProxyCollector& collector) const {
   struct Visitor {
     const DynamicAabbTree& tree;
-    const RaySlabs slabs;
+    const detail::RayLaneTest lanes;
     RayProxyCollector& collector;
-    unsigned enter(const WideBvhNode& node, Real (&keys)[4]) const {
-      return detail::rayLaneEntry(slabs, node, collector.maxT, keys);
-    }
+    unsigned enter(const WideBvhNode& node, Real (&keys)[4]) const { return lanes.enter(node, collector.maxT, keys); }
     bool keep(Real key) const { return key <= collector.maxT; }
-    bool leaf(std::uint32_t first, std::uint32_t count) {
-      // Entered boxes sorted by entry distance (insertion sort; ties keep slot order).
-      constexpr std::uint32_t kMax = 16;
-      std::uint32_t order[kMax];
-      Real entry[kMax];
-      std::uint32_t n = 0;
-      for (std::uint32_t k = first, end = first + count; k < end; ++k) {
-        Real t;
-        if (!rayBoxEntry(slabs, tree.raySlotBoxes_[k], collector.maxT, t)) continue;
-        if (n == kMax) {  // (leaves hold BvhBuildOptions::maxLeafSize boxes; never taken)
-          if (!collector.add(tree.raySlotIds_[k], t)) return false;
-          continue;
-        }
-        std::uint32_t j = n++;
-        for (; j > 0 && entry[j - 1] > t; --j) order[j] = order[j - 1], entry[j] = entry[j - 1];
-        order[j] = k, entry[j] = t;
-      }
-      for (std::uint32_t j = 0; j < n; ++j)
-        if (entry[j] <= collector.maxT && !collector.add(tree.raySlotIds_[order[j]], entry[j])) return false;
-      return true;
+    bool leaf(std::uint32_t first, std::uint32_t /*count: 1*/, Real key) {
+      return collector.add(tree.raySlotIds_[first], key);
     }
   };
-  Visitor visitor{*this, RaySlabs(ray, collector.boxMargin), collector};
+  const RaySlabs slabs(ray, collector.boxMargin);
+  Visitor visitor{*this, detail::RayLaneTest(slabs), collector};
   return traverseWideBvhOrdered(rayTree_, visitor);
 }
 

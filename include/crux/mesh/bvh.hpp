@@ -263,9 +263,9 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
 ///   `unsigned enter(const WideBvhNode& node, Real (&keys)[4])` — bit i set: enter lane i,
 ///       whose key (e.g. the ray's entry parameter) is keys[i] (unused lanes must be left out);
 ///   `bool keep(Real key)` — whether a deferred lane with this key still matters;
-///   `bool leaf(std::uint32_t first, std::uint32_t count)` — visits the slots [first, first +
-///       count) of a leaf together (so their triangles can be tested in SIMD lanes); false
-///       stops the traversal.
+///   `bool leaf(std::uint32_t first, std::uint32_t count, Real key)` — visits the slots [first,
+///       first + count) of a leaf together (so their triangles can be tested in SIMD lanes),
+///       entered with the lane's key; false stops the traversal.
 /// The root node is always entered (its key is −∞, so even a visitor whose limit is negative,
 /// as signed distances may be, keeps it). Lanes with equal keys are visited in lane order. The
 /// same monotonicity rule as
@@ -279,28 +279,43 @@ bool traverseWideBvhOrdered(const WideBvh& bvh, Visitor& visitor) {
   };
   Entry stack[kWideBvhStackSize];
   int top = 0;
-  stack[top++] = {0, 0, -std::numeric_limits<Real>::infinity()};  // the root: kept by every visitor
-  while (top > 0) {
-    const Entry e = stack[--top];
-    if (!visitor.keep(e.key)) continue;
-    if (e.count > 0) {
-      if (!visitor.leaf(e.child, e.count)) return false;
-      continue;
+  Entry e = {0, 0, -std::numeric_limits<Real>::infinity()};  // the root: kept by every visitor
+  for (;;) {
+    // `e` is the next subtree in visiting order: the nearest lane of the node just tested goes
+    // straight here (the same order as pushing it last and popping it next, with one stack
+    // round trip fewer), the others wait on the stack.
+    if (visitor.keep(e.key)) {
+      if (e.count > 0) {
+        if (!visitor.leaf(e.child, e.count, e.key)) return false;
+      } else {
+        const WideBvhNode& node = bvh.nodes[e.child];
+        Real keys[4];
+        unsigned hits = visitor.enter(node, keys) & 15u;
+        if (hits != 0) {
+          int i = __builtin_ctz(hits);
+          hits &= hits - 1;
+          if (hits == 0) {  // one lane entered (the common case)
+            e = {node.child[i], node.count[i], keys[i]};
+            continue;
+          }
+          // Entered lanes sorted by key (insertion sort of at most four, stable: equal keys keep
+          // lane order); all but the nearest pushed farthest first.
+          int order[4] = {i, 0, 0, 0}, n = 1;
+          while (hits) {
+            i = __builtin_ctz(hits);
+            hits &= hits - 1;
+            int j = n++;
+            for (; j > 0 && keys[order[j - 1]] > keys[i]; --j) order[j] = order[j - 1];
+            order[j] = i;
+          }
+          for (int j = n - 1; j > 0; --j) stack[top++] = {node.child[order[j]], node.count[order[j]], keys[order[j]]};
+          e = {node.child[order[0]], node.count[order[0]], keys[order[0]]};
+          continue;
+        }
+      }
     }
-    const WideBvhNode& node = bvh.nodes[e.child];
-    Real keys[4];
-    unsigned hits = visitor.enter(node, keys) & 15u;
-    // Entered lanes sorted by key (insertion sort of at most four, stable: equal keys keep lane
-    // order), then pushed farthest first so that the nearest is popped next.
-    int order[4], n = 0;
-    while (hits) {
-      const int i = __builtin_ctz(hits);
-      hits &= hits - 1;
-      int j = n++;
-      for (; j > 0 && keys[order[j - 1]] > keys[i]; --j) order[j] = order[j - 1];
-      order[j] = i;
-    }
-    for (int j = n - 1; j >= 0; --j) stack[top++] = {node.child[order[j]], node.count[order[j]], keys[order[j]]};
+    if (top == 0) break;
+    e = stack[--top];
   }
   return true;
 }

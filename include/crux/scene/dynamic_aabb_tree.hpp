@@ -171,13 +171,12 @@ class DynamicAabbTree final : public BroadPhase {
   std::vector<std::uint8_t> mergedOverlap_;
 
   // The wide ray tree (see the file comment): built by the first const raycast past the
-  // threshold, under rayTreeMutex_; rayTreeReady_ publishes it. Slot-ordered exact boxes and ids,
-  // so a leaf reads them without an index gather.
+  // threshold, under rayTreeMutex_; rayTreeReady_ publishes it. One box per leaf lane (the lane
+  // is the box); slot-ordered ids, so a leaf reads its id without an index gather.
   mutable std::mutex rayTreeMutex_;
   mutable std::atomic<bool> rayTreeReady_{false};
   mutable std::atomic<std::size_t> raysSinceChange_{0};
   mutable WideBvh rayTree_;
-  mutable std::vector<Aabb> raySlotBoxes_;
   mutable std::vector<ProxyId> raySlotIds_;
   mutable std::atomic<std::size_t> rayTreeBuilds_{0};  // read by rayTreeBuilds() beside const queries
 };
