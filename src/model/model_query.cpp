@@ -44,12 +44,16 @@ Real generalPad(const RigidFrame& f, const Aabb& local) {
 
 }  // namespace
 
-std::optional<MeshRayHit> raycastClosest(const PlacedMesh& m, const Ray& worldRay, const RayQueryOptions& options) {
-  const RigidFrame f(m.world);
-  if (f.identity()) return raycastClosest(*m.mesh, worldRay, options);
-  std::optional<MeshRayHit> h = raycastClosest(*m.mesh, toMesh(f, worldRay), options);
+std::optional<MeshRayHit> model_detail::raycastClosest(const Mesh& mesh, const RigidFrame& f, const Ray& worldRay,
+                                                      const RayQueryOptions& options) {
+  if (f.identity()) return crux::raycastClosest(mesh, worldRay, options);
+  std::optional<MeshRayHit> h = crux::raycastClosest(mesh, toMesh(f, worldRay), options);
   if (h) *h = toWorld(f, *h);
   return h;
+}
+
+std::optional<MeshRayHit> raycastClosest(const PlacedMesh& m, const Ray& worldRay, const RayQueryOptions& options) {
+  return model_detail::raycastClosest(*m.mesh, RigidFrame(m.world), worldRay, options);
 }
 
 bool raycastAny(const PlacedMesh& m, const Ray& worldRay, const RayQueryOptions& options) {

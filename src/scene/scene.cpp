@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "box_tests.hpp"
+#include "../model/rigid.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,15 +16,17 @@ namespace {
 /// the best hit (plus slack) so farther boxes are pruned.
 class ClosestModelCollector final : public RayProxyCollector {
  public:
-  ClosestModelCollector(const ModelHierarchy& models, const Ray& ray, const RayQueryOptions& options)
-      : models_(models), ray_(ray), options_(options), originScale_(ray.origin.cwiseAbs().maxCoeff()) {
+  ClosestModelCollector(const ModelHierarchy& models, const std::vector<model_detail::RigidFrame>& frames, const Ray& ray,
+                        const RayQueryOptions& options)
+      : models_(models), frames_(frames), ray_(ray), options_(options), originScale_(ray.origin.cwiseAbs().maxCoeff()) {
     maxT = withSlack(options.maxDistance);
     boxMargin = kSceneQuerySlack * originScale_;
   }
   bool add(ProxyId id, Real) override {
     RayQueryOptions o = options_;
     if (best) o.maxDistance = best->hit.t;
-    const std::optional<MeshRayHit> h = raycastClosest(models_.placed(id), ray_, o);
+    // raycastClosest(models_.placed(id), ray_, o) with the model's stored frame
+    const std::optional<MeshRayHit> h = model_detail::raycastClosest(*models_.mesh(id), frames_[id], ray_, o);
     if (h && (!best || h->t < best->hit.t || (h->t == best->hit.t && id < best->model))) {
       best = SceneRayHit{id, *h};
       maxT = withSlack(h->t);
@@ -35,6 +38,7 @@ class ClosestModelCollector final : public RayProxyCollector {
  private:
   Real withSlack(Real t) const { return t + kSceneQuerySlack * (t + originScale_); }
   const ModelHierarchy& models_;
+  const std::vector<model_detail::RigidFrame>& frames_;
   const Ray& ray_;
   const RayQueryOptions& options_;
   Real originScale_;
@@ -121,8 +125,14 @@ Aabb checkedSceneBounds(const ModelHierarchy& hierarchy, ModelId id) {
 
 void Scene::upsert(ModelId id) {
   const Aabb box = checkedSceneBounds(hierarchy_, id);
+  store(id, box);
+}
+
+void Scene::store(ModelId id, const Aabb& box) {
   if (broadPhase_->contains(id)) broadPhase_->update(id, box);
   else broadPhase_->insert(id, box);
+  if (id >= frames_.size()) frames_.resize(std::size_t(id) + 1);
+  frames_[id] = model_detail::RigidFrame(hierarchy_.world(id));
 }
 
 void Scene::sync() {
@@ -136,9 +146,7 @@ void Scene::sync() {
   std::size_t next = 0;
   for (const ModelId id : moved) {
     if (hierarchy_.contains(id)) {
-      const Aabb& box = boxes[next++];
-      if (broadPhase_->contains(id)) broadPhase_->update(id, box);
-      else broadPhase_->insert(id, box);
+      store(id, boxes[next++]);
     } else if (broadPhase_->contains(id)) {
       broadPhase_->remove(id);
     }
@@ -206,7 +214,7 @@ std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions&
   if (!detail::entryPreconditions("Scene::raycast", detail::rule::kRay, ray))
     return std::nullopt;
   if (path == ScenePath::BroadPhase) {
-    ClosestModelCollector collector(hierarchy_, ray, options);
+    ClosestModelCollector collector(hierarchy_, frames_, ray, options);
     broadPhase_->raycast(ray, collector);
     return collector.best;
   }

@@ -22,6 +22,7 @@
 /// and region queries test triangles unless RegionTest::Bounds is asked for.
 
 #include <crux/model/hierarchy.hpp>
+#include <crux/model/rigid_frame.hpp>
 #include <crux/scene/broad_phase.hpp>
 
 #include <limits>
@@ -126,12 +127,17 @@ class Scene {
 
  private:
   void upsert(ModelId id);
+  /// Puts a model's box into the broad phase and its frame into frames_.
+  void store(ModelId id, const Aabb& box);
   void sync();
   template <class Shape>
   std::vector<ModelId> regionQuery(const Shape& shape, RegionTest test, ScenePath path) const;
 
   ModelHierarchy hierarchy_;
   std::unique_ptr<BroadPhase> broadPhase_;
+  /// Each model's world frame (by id), made when the broad phase takes its box: the rays map
+  /// into a model through it without re-deriving the rotation matrix per ray and model.
+  std::vector<model_detail::RigidFrame> frames_;
 };
 
 }  // namespace crux
