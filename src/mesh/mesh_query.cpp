@@ -53,11 +53,15 @@ class TriangleRayTest {
     RayCrossing crossing;
   };
 
-  TriangleRayTest(const Ray& ray, const RayQueryOptions& options)
-      : ray_(ray), options_(options), filter_(ray), length_(geometry_detail::rayLength(ray.dir)) {}
+  /// The filter's products are taken about the line's point nearest the mesh's box centre
+  /// (RayTriangleFilter's anchored form: far origins leave fewer triangles undecided). The
+  /// filter and the ray's length are made at the first triangle: a ray that reaches no leaf
+  /// (most candidates of a scene ray) never pays for them.
+  TriangleRayTest(const Ray& ray, const RayQueryOptions& options, const Mesh& mesh)
+      : ray_(ray), options_(options), mesh_(mesh) {}
 
   /// Whether the ray hits triangle t within maxDistance (then `out` is set).
-  bool operator()(const Triangle& t, Candidate& out) const { return test(t, filter_.classify(t), out); }
+  bool operator()(const Triangle& t, Candidate& out) const { return test(t, setup().filter.classify(t), out); }
 
   /// Tests the triangles of slots [first, first + count) of mesh's BVH, four at a time through
   /// the filter (the same verdict per triangle as one at a time), calling f(slot, candidate)
@@ -69,7 +73,7 @@ class TriangleRayTest {
       Triangle tris[4];
       for (int j = 0; j < n; ++j) tris[j] = mesh.slotTriangle(k0 + std::uint32_t(j));
       mesh_detail::RayTriangleFilter::Verdict verdicts[4];
-      filter_.classify(tris, n, verdicts);
+      setup().filter.classify(tris, n, verdicts);
       for (int j = 0; j < n; ++j) {
         if (verdicts[j] == mesh_detail::RayTriangleFilter::kMisses) continue;
         Candidate c;
@@ -96,7 +100,7 @@ class TriangleRayTest {
       out.crossing = *c;
     }
     // the distance rayHitAt (makeHit) reports; beyond maxDistance or not finite: no hit
-    out.t = Real(out.crossing.s * length_);
+    out.t = Real(out.crossing.s * setup().length);
     return out.t <= options_.maxDistance && std::isfinite(out.t);
   }
 
@@ -111,10 +115,20 @@ class TriangleRayTest {
   void count(RayQueryCounters* counters) { counters_ = counters; }
 
  private:
+  struct Setup {
+    mesh_detail::RayTriangleFilter filter;
+    Wide length;  // rayLength(dir): a crossing's parameter times it is its world distance
+  };
+  const Setup& setup() const {
+    if (!setup_) setup_.emplace(Setup{mesh_detail::RayTriangleFilter(ray_, mesh_.bounds().center()),
+                                      geometry_detail::rayLength(ray_.dir)});
+    return *setup_;
+  }
+
   const Ray& ray_;
   const RayQueryOptions& options_;
-  mesh_detail::RayTriangleFilter filter_;
-  Wide length_;
+  const Mesh& mesh_;
+  mutable std::optional<Setup> setup_;  // made by the first triangle test (one query, one thread)
   RayQueryCounters* counters_ = nullptr;
 };
 
@@ -194,7 +208,7 @@ std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const Ra
                                       QueryPath path, bool stopAtFirst) {
   if (!detail::entryPreconditions(stopAtFirst ? "raycastAny(Mesh, Ray)" : "raycastClosest(Mesh, Ray)", detail::rule::kRay, ray))
     return std::nullopt;
-  TriangleRayTest test(ray, options);
+  TriangleRayTest test(ray, options, mesh);
   test.count(options.counters);
   const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
   RayVisitor v{mesh, box, test, stopAtFirst, box.parameterLimit(options.maxDistance), options.counters};
@@ -482,7 +496,7 @@ std::vector<MeshRayHit> raycastAll(const Mesh& mesh, const Ray& ray, const RayQu
                                    QueryPath path) {
   if (!detail::entryPreconditions("raycastAll(Mesh, Ray)", detail::rule::kRay, ray)) return {};
   std::vector<MeshRayHit> hits;
-  const TriangleRayTest test(ray, options);
+  const TriangleRayTest test(ray, options, mesh);
   if (path == QueryPath::BruteForce) {
     TriangleRayTest::Candidate c;
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)

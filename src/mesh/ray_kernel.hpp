@@ -36,9 +36,37 @@ inline constexpr Wide kWideFilterMargin = 64 * std::numeric_limits<Wide>::epsilo
 /// verdict does not depend on its lane or its neighbours).
 class RayTriangleFilter {
  public:
+  /// The filter of the ray's line, its products taken about the ray's origin.
   explicit RayTriangleFilter(const Ray& ray)
       : ox_(ray.origin.x()), oy_(ray.origin.y()), oz_(ray.origin.z()), dx_(ray.dir.x()), dy_(ray.dir.y()),
         dz_(ray.dir.z()), dNorm1_(ray.dir.cwiseAbs().sum()), dNormInf_(ray.dir.cwiseAbs().maxCoeff()) {}
+
+  /// The same filter with its products taken about o' ≈ the point of the line nearest `anchor`
+  /// (a point among the triangles to come, e.g. the mesh's box centre). An edge product is the
+  /// same about every point of the line (d × d = 0), so only o''s distance from the line, δ,
+  /// enters the bound; but the products' rounding then scales with the triangles' distance
+  /// from o' instead of from the origin, which is what keeps a far origin (a scene ray mapped
+  /// into a model) from leaving near-edge triangles undecided. o' = o + s·d is formed in Wide
+  /// and rounded to Real: |δ|∞ <= 4ε_W(|o|∞ + |s||d|∞) + ε_R|o'|∞. Falls back to o when any
+  /// of it is not finite.
+  RayTriangleFilter(const Ray& ray, const Vec3& anchor) : RayTriangleFilter(ray) {
+    const WVec3 o = wide(ray.origin), d = wide(ray.dir);
+    const Wide dd = d.squaredNorm();
+    if (!(dd > 0) || !std::isfinite(dd)) return;
+    const Wide s = d.dot(wide(anchor) - o) / dd;
+    if (!std::isfinite(s)) return;
+    const Vec3 shifted = (o + s * d).template cast<Real>();
+    if (!shifted.allFinite()) return;
+    const Wide delta = 4 * std::numeric_limits<Wide>::epsilon() *
+                           (o.cwiseAbs().maxCoeff() + std::abs(s) * d.cwiseAbs().maxCoeff()) +
+                       Wide(std::numeric_limits<Real>::epsilon()) * Wide(shifted.cwiseAbs().maxCoeff());
+    const Wide shift = (wide(shifted) - o).cwiseAbs().maxCoeff();  // |o' − o|∞
+    if (!std::isfinite(delta) || !std::isfinite(shift)) return;
+    ox_ = shifted.x(), oy_ = shifted.y(), oz_ = shifted.z();
+    constexpr Wide up = 1 + Wide(kRayFilterMargin);  // rounding the bounds up to Real
+    delta_ = Real(delta * up);
+    shift_ = Real(shift * up);
+  }
 
   /// What the signs of the three edge products prove about the ray's line and a closed
   /// triangle: kMisses (two of opposite signs beyond the bound), kCrossesFront / kCrossesBack
@@ -69,8 +97,12 @@ class RayTriangleFilter {
                              maxAbs3(cx - ox_, cy - oy_, cz - oz_));
     const Lanes edges = lanesMax(lanesMax(sumAbs3(bx - ax, by - ay, bz - az), sumAbs3(cx - bx, cy - by, cz - bz)),
                                  sumAbs3(ax - cx, ay - cy, az - cz));
-    const Lanes own = kRayFilterMargin * 2 * edges * dNormInf_ * m;
-    const Lanes geometry = Real(kWideFilterMargin * 2) * m * m * dNorm1_;
+    // About o' (see the anchored constructor): the products of the line through o' differ from
+    // the true ones by at most |ℓ|₁·2·|d|∞·|δ|∞, and the geometry layer's |v − o| is at most
+    // the |v − o'| above plus |o' − o|∞ (both 0 without an anchor).
+    const Lanes own = kRayFilterMargin * 2 * edges * dNormInf_ * m + 2 * edges * dNormInf_ * delta_;
+    const Lanes mo = (m + shift_) * (1 + kRayFilterMargin);
+    const Lanes geometry = Real(kWideFilterMargin * 2) * mo * mo * dNorm1_;
     const Lanes bound = lanesMax(own, geometry) * (1 + kRayFilterMargin) + std::numeric_limits<Real>::min();
     const unsigned misses = laneMask((lo < -bound) & (hi > bound));
     const unsigned back = laneMask(lo > bound), front = laneMask(hi < -bound);
@@ -103,8 +135,10 @@ class RayTriangleFilter {
     return (lanesAbs(x) + lanesAbs(y)) + lanesAbs(z);
   }
 
-  Real ox_, oy_, oz_, dx_, dy_, dz_;
+  Real ox_, oy_, oz_, dx_, dy_, dz_;  // o (or o' with an anchor) and d
   Real dNorm1_, dNormInf_;
+  Real delta_ = 0;  // |o' − (the line's point)|∞, rounded up (0: o' = o)
+  Real shift_ = 0;  // |o' − o|∞, rounded up
 };
 
 }  // namespace crux::mesh_detail
