@@ -16,17 +16,17 @@ namespace {
 /// the best hit (plus slack) so farther boxes are pruned.
 class ClosestModelCollector final : public RayProxyCollector {
  public:
-  ClosestModelCollector(const ModelHierarchy& models, const std::vector<model_detail::RigidFrame>& frames, const Ray& ray,
-                        const RayQueryOptions& options)
-      : models_(models), frames_(frames), ray_(ray), options_(options), originScale_(ray.origin.cwiseAbs().maxCoeff()) {
+  ClosestModelCollector(const std::vector<model_detail::PreparedModel>& models, const Ray& ray, const RayQueryOptions& options)
+      : models_(models), ray_(ray), options_(options), originScale_(ray.origin.cwiseAbs().maxCoeff()) {
     maxT = withSlack(options.maxDistance);
     boxMargin = kSceneQuerySlack * originScale_;
   }
   bool add(ProxyId id, Real) override {
     RayQueryOptions o = options_;
     if (best) o.maxDistance = best->hit.t;
-    // raycastClosest(models_.placed(id), ray_, o) with the model's stored frame
-    const std::optional<MeshRayHit> h = model_detail::raycastClosest(*models_.mesh(id), frames_[id], ray_, o);
+    // raycastClosest(placed(id), ray_, o) with the model's stored mesh and frame
+    const model_detail::PreparedModel& m = models_[id];
+    const std::optional<MeshRayHit> h = model_detail::raycastClosest(*m.mesh, m.frame, ray_, o);
     if (h && (!best || h->t < best->hit.t || (h->t == best->hit.t && id < best->model))) {
       best = SceneRayHit{id, *h};
       maxT = withSlack(h->t);
@@ -37,8 +37,7 @@ class ClosestModelCollector final : public RayProxyCollector {
 
  private:
   Real withSlack(Real t) const { return t + kSceneQuerySlack * (t + originScale_); }
-  const ModelHierarchy& models_;
-  const std::vector<model_detail::RigidFrame>& frames_;
+  const std::vector<model_detail::PreparedModel>& models_;
   const Ray& ray_;
   const RayQueryOptions& options_;
   Real originScale_;
@@ -131,8 +130,8 @@ void Scene::upsert(ModelId id) {
 void Scene::store(ModelId id, const Aabb& box) {
   if (broadPhase_->contains(id)) broadPhase_->update(id, box);
   else broadPhase_->insert(id, box);
-  if (id >= frames_.size()) frames_.resize(std::size_t(id) + 1);
-  frames_[id] = model_detail::RigidFrame(hierarchy_.world(id));
+  if (id >= rayModels_.size()) rayModels_.resize(std::size_t(id) + 1);
+  rayModels_[id] = {hierarchy_.mesh(id).get(), model_detail::RigidFrame(hierarchy_.world(id))};
 }
 
 void Scene::sync() {
@@ -214,7 +213,7 @@ std::optional<SceneRayHit> Scene::raycast(const Ray& ray, const RayQueryOptions&
   if (!detail::entryPreconditions("Scene::raycast", detail::rule::kRay, ray))
     return std::nullopt;
   if (path == ScenePath::BroadPhase) {
-    ClosestModelCollector collector(hierarchy_, frames_, ray, options);
+    ClosestModelCollector collector(rayModels_, ray, options);
     broadPhase_->raycast(ray, collector);
     return collector.best;
   }

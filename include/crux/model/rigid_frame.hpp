@@ -6,6 +6,10 @@
 #include <crux/geometry/axis_aligned.hpp>
 #include <crux/math.hpp>
 
+namespace crux {
+class Mesh;
+}
+
 namespace crux::model_detail {
 
 /// A rigid transform prepared for mapping many points: the rotation as a matrix (the exact
@@ -37,6 +41,13 @@ class RigidFrame {
   Vec3 t_;
   bool aligned_ = false;
   bool identity_ = false;
+};
+
+/// What a query needs of a placed model, in one cache line (float builds): its mesh and its
+/// frame. The scene keeps one per model for its rays.
+struct alignas(64) PreparedModel {
+  const Mesh* mesh = nullptr;
+  RigidFrame frame;
 };
 
 }  // namespace crux::model_detail

@@ -127,7 +127,7 @@ class Scene {
 
  private:
   void upsert(ModelId id);
-  /// Puts a model's box into the broad phase and its frame into frames_.
+  /// Puts a model's box into the broad phase and its mesh and frame into rayModels_.
   void store(ModelId id, const Aabb& box);
   void sync();
   template <class Shape>
@@ -135,9 +135,10 @@ class Scene {
 
   ModelHierarchy hierarchy_;
   std::unique_ptr<BroadPhase> broadPhase_;
-  /// Each model's world frame (by id), made when the broad phase takes its box: the rays map
-  /// into a model through it without re-deriving the rotation matrix per ray and model.
-  std::vector<model_detail::RigidFrame> frames_;
+  /// Each model's mesh and world frame (by id, one cache line each), made when the broad phase
+  /// takes its box: a ray maps into a model through it without re-deriving the rotation matrix
+  /// per ray and model, and without the hierarchy's checked look-ups.
+  std::vector<model_detail::PreparedModel> rayModels_;
 };
 
 }  // namespace crux
