@@ -346,6 +346,75 @@ bool endpointOnPlane(const J& query, const std::vector<std::array<V, 3>>& tris) 
   return false;
 }
 
+/// Bullet's raycast edge tolerance (btTriangleRaycastCallback::processTriangle): a crossing point
+/// counts as inside an edge when cross(v_i − p, v_j − p)·n >= −1e-4·|n|², i.e. its barycentric
+/// coordinate opposite that edge is at least −1e-4.
+constexpr long double kBulletRayEdgeTolerance = 1e-4L;
+
+/// A ray or segment that crosses the plane of a (non-degenerate) triangle outside it, but by at
+/// most Bullet's edge tolerance: every barycentric coordinate of the crossing point >= −1e-4
+/// (long double; the crossing's parameter within the ray or segment).
+bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tris) {
+  using L = long double;
+  std::array<L, 3> o{}, d{};
+  L tMax = 0;
+  if (query.contains("ray")) {
+    const V a = readV(query["ray"]["origin"]), b = readV(query["ray"]["dir"]);
+    for (std::size_t i = 0; i < 3; ++i) o[i] = a[i], d[i] = b[i];
+    tMax = std::numeric_limits<L>::infinity();
+  } else if (query.contains("segment")) {
+    const V a = readV(query["segment"]["start"]), b = readV(query["segment"]["end"]);
+    for (std::size_t i = 0; i < 3; ++i) o[i] = a[i], d[i] = L(b[i]) - a[i];
+    tMax = 1;
+  } else {
+    return false;
+  }
+  using P = std::array<L, 3>;
+  auto sub = [](const P& a, const P& b) { return P{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  auto cross = [](const P& a, const P& b) {
+    return P{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  };
+  auto dot = [](const P& a, const P& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  for (const auto& t : tris) {
+    if (degenerate(t)) continue;
+    const P v[3] = {{t[0][0], t[0][1], t[0][2]}, {t[1][0], t[1][1], t[1][2]}, {t[2][0], t[2][1], t[2][2]}};
+    const P n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+    const L nn = dot(n, n), nd = dot(n, d);
+    if (nd == 0) continue;
+    const L u = dot(n, sub(v[0], o)) / nd;
+    if (!(u >= 0 && u <= tMax)) continue;
+    const P p = {o[0] + u * d[0], o[1] + u * d[1], o[2] + u * d[2]};
+    L lowest = 1;
+    for (std::size_t i = 0; i < 3; ++i)
+      lowest = std::min(lowest, dot(cross(sub(v[(i + 1) % 3], p), sub(v[(i + 2) % 3], p)), n) / nn);
+    if (lowest < 0 && lowest >= -kBulletRayEdgeTolerance) return true;
+  }
+  return false;
+}
+
+/// A triangle operand against a sphere operand whose normal (b − a)×(c − a), computed in float
+/// as Bullet does, has |n|² < FLT_EPSILON²: Bullet's SphereTriangleDetector::collide treats such
+/// a triangle (twice its area below 1.2e-7, an absolute threshold) as having no normal and
+/// reports no contact.
+bool sphereTriangleFloatNormalTooSmall(const J& query) {
+  const J* triangle = nullptr;
+  bool sphere = false;
+  for (const char* side : {"a", "b"}) {
+    if (!query.contains(side) || !query[side].is_object()) continue;
+    if (query[side].contains("triangle")) triangle = &query[side]["triangle"];
+    if (query[side].contains("sphere")) sphere = true;
+  }
+  if (!triangle || !sphere) return false;
+  std::array<std::array<float, 3>, 3> v{};
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 3; ++k) v[i][k] = float((*triangle)[i][k].get<double>());
+  float e1[3], e2[3];
+  for (std::size_t k = 0; k < 3; ++k) e1[k] = v[1][k] - v[0][k], e2[k] = v[2][k] - v[0][k];
+  const float n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  const float eps = std::numeric_limits<float>::epsilon();
+  return n[0] * n[0] + n[1] * n[1] + n[2] * n[2] < eps * eps;
+}
+
 /// The smallest non-zero size across of the query's shapes (sphere diameter, box extents),
 /// or +inf.
 double smallestShape(const J& query) {
@@ -626,6 +695,38 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
     }
   }
   return out.str();
+}
+
+/// A mesh_distance or model_distance answer of exact whose witness triangle (triangle_a or
+/// triangle_b) is degenerate (collinear or repeated corners).
+bool exactWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J& exact) {
+  if (!isMeshPairDistance(c.op) || !exact.value("found", false)) return false;
+  for (const char* side : {"a", "b"}) {
+    const std::string key = std::string("triangle_") + side;
+    if (!query.contains(side) || !query[side].is_string() || !exact.contains(key) || !exact[key].is_number_unsigned())
+      continue;
+    std::string name = query[side].get<std::string>();
+    if (c.op == "model_distance") {
+      const J operand = modelOperand(c, name);
+      if (operand.is_null() || !operand["mesh"].is_string()) continue;
+      name = operand["mesh"].get<std::string>();
+    }
+    const std::size_t index = exact[key].get<std::size_t>();
+    std::vector<std::array<Vec3d, 3>> inline_;
+    const Mesh* mesh = caseMesh(c, name, inline_);
+    std::array<Vec3d, 3> t;
+    if (mesh && index < mesh->triangleCount()) {
+      const Triangle m = mesh->triangle(std::uint32_t(index));
+      t = {m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()};
+    } else if (!mesh && index < inline_.size()) {
+      t = inline_[index];
+    } else {
+      continue;
+    }
+    if (degenerate({V{t[0].x(), t[0].y(), t[0].z()}, V{t[1].x(), t[1].y(), t[1].z()}, V{t[2].x(), t[2].y(), t[2].z()}}))
+      return true;
+  }
+  return false;
 }
 
 /// A zero-radius sphere, a flat box, a capsule with a = b, a hull of fewer than 4 points or a
@@ -1074,10 +1175,31 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // (ghost) contacts with their own normals and depths
     if (bullet && c.op == "contacts" && meshOperand && diff == Difference::Numeric) return peer("ghost-contacts");
     if (degenerateOperand(query)) return peer("degenerate-shape");
+    // exact's nearest triangle pair includes a collinear or repeated-corner triangle
+    if (exactWitnessOnDegenerateTriangle(c, query, exact)) return peer("degenerate-triangle");
+    // Bullet's sphere–triangle detector skips a triangle whose float normal is below FLT_EPSILON
+    if (bullet && c.op == "contacts" && diff == Difference::Boolean && !narrowVerdict(c.op, got) &&
+        sphereTriangleFloatNormalTooSmall(query))
+      return peer("sphere-triangle-small-normal");
     // the fcl world casts a triangle as a one-face fcl::Convex (FCL has no advancement for
     // TriangleP): a flat shape, whose casts FCL sometimes ends late, well inside it
     if (fcl && (query["a"].contains("triangle") || query["b"].contains("triangle"))) return peer("flat-shape");
     if (within) return peer("boundary");
+    // a sphere whose centre lies on the other shape's surface (exact depth = its radius): Bullet's
+    // GJK/EPA sees the sphere as its centre with the radius as margin, a point touching the other
+    // shape, and EPA on a Minkowski difference with the origin on its boundary returns an
+    // imprecise normal and depth
+    if (bullet && c.op == "contacts" && diff == Difference::Numeric) {
+      for (const char* side : {"a", "b"})
+        if (query[side].contains("sphere") &&
+            std::fabs(narrowNumber(c.op, exact) - query[side]["sphere"]["radius"].get<double>()) <= tau)
+          return peer("sphere-centre-on-surface");
+    }
+    // shapes that touch (exact distance within τ of 0): libccd's GJK, with its absolute 1e-6
+    // tolerance, declares them colliding, and its EPA, run on a Minkowski difference with the
+    // origin on its boundary, reports a depth that is not there
+    if (fcl && c.op == "distance" && std::fabs(narrowNumber(c.op, exact)) <= tau && narrowNumber(c.op, got) < -tau)
+      return peer("touching-depth");
     // the shapes only graze (b moved by up to 1e-3 × s makes exact miss): the peers' absolute
     // tolerances lose or delay such contacts (libccd's 1e-6, Bullet's float GJK)
     if (exact.value("hit", false)) {
@@ -1103,6 +1225,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
       maxDiff(exact["point"], query["point"]) <= tau)
     return peer("nearest-points-in-collision");
   if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, tris)) return peer("plane-endpoint");
+  // Bullet hits a triangle whose plane the ray or segment crosses just outside it
+  if (bullet && isRayOrSegmentOp(c.op) && diff == Difference::Boolean && got.value("hit", false) &&
+      withinFattenedEdges(query, tris))
+    return peer("fattened-edges");
   for (const auto& t : caseTriangles(c, query, true))
     if (degenerate(t)) return peer("degenerate-triangle");
   // a sliver thinner than the peer's tolerance: within τ of the segment it nearly is

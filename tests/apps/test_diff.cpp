@@ -152,6 +152,113 @@ TEST(DiffClassify, FlatShapeAndPointSphere) {
   EXPECT_EQ(k.cause, "point-sphere");
 }
 
+TEST(DiffClassify, BulletFattenedEdges) {
+  // found by crux diff (seed 4242, case 26353, near_degenerate family): the ray crosses the
+  // triangle's plane 2.9e-6 past the corner (18,12,12.0000029) (barycentric −1.4e-6); Bullet's
+  // edge test accepts barycentrics down to −1e-4
+  DiffRunner runner;
+  const J got = J{{"op", "ray_triangle"},
+                  {"hit", true},
+                  {"t", 18.02773907571497},
+                  {"point", J::array({17.999985604194485, 11.999992322237059, 11.999994241677793})}};
+  const auto c = primitive(
+      R"({"op":"ray_triangle","triangle":[[18,12,12.00000286102295],[-6,6,18],[0,6,12]],"ray":{"origin":[3,4,6],"dir":[15,8,6]}})",
+      false);
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.cause, "fattened-edges") << describe(k);
+  // a crossing 5 % of the triangle's height outside an edge is not explained by it
+  const auto far = primitive(
+      R"({"op":"ray_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"ray":{"origin":[2.1,2.1,1],"dir":[0,0,-1]}})", false);
+  const J farGot = J{{"op", "ray_triangle"}, {"hit", true}, {"t", 1.0}, {"point", J::array({2.1, 2.1, 0})}};
+  k = classify(runner, far, "bullet", farGot);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_NE(k.cause, "fattened-edges");
+}
+
+TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
+  // found by crux diff (seed 4242, case 2806, sliver family): two corners 1.1e-7 apart, |n|² in
+  // float 8e-15 < FLT_EPSILON²; the sphere holds the triangle 1.1 deep, Bullet reports nothing
+  DiffRunner runner;
+  const J none = J{{"op", "contacts"}, {"contacts", J::array()}};
+  const auto c = primitive(
+      R"({"op":"contacts","a":{"triangle":[[-0.6583632957356882,-0.44971894745650753,0.7052482482572691],[0.3928041529710644,0.20370286015512096,0.9547554850578308],[0.39280426502227783,0.20370283722877502,0.954755425453186]]},"b":{"sphere":{"center":[-0.11986818679541633,-0.3027603652502089,1.3175917863845825],"radius":1.6529942750930786}}})",
+      false);
+  auto k = classify(runner, c, "bullet", none);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "sphere-triangle-small-normal");
+  // the same miss on a fat triangle is not explained by it
+  const auto fat = primitive(
+      R"({"op":"contacts","a":{"triangle":[[-0.6583632957356882,-0.44971894745650753,0.7052482482572691],[0.3928041529710644,0.20370286015512096,0.9547554850578308],[0.39280426502227783,0.4,0.754755425453186]]},"b":{"sphere":{"center":[-0.11986818679541633,-0.3027603652502089,1.3175917863845825],"radius":1.6529942750930786}}})",
+      false);
+  k = classify(runner, fat, "bullet", none);
+  EXPECT_NE(k.cause, "sphere-triangle-small-normal") << describe(k);
+}
+
+TEST(DiffClassify, BulletSphereCentreOnSurface) {
+  // found by crux diff (seed 4242, case 19069, grid family): the sphere's centre is a corner of
+  // the box (exact depth = radius 1); Bullet answers depth 0.9947 along a tilted normal
+  DiffRunner runner;
+  const J got = J{{"op", "contacts"},
+                  {"contacts",
+                   J::array({J{{"point_a", J::array({0.0, -1.0, 3.0})},
+                               {"point_b", J::array({0.5456857085227966, -0.17588961124420166, 2.888019561767578})},
+                               {"normal", J::array({0.5485814809799194, 0.8284837007522583, -0.11257468909025192})},
+                               {"depth", 0.9947212934494019},
+                               {"feature_a", nullptr},
+                               {"feature_b", nullptr}}})}};
+  auto c = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[1,1,1],"half":[2,2,1],"axes":[[0,-1,0],[0,0,-1],[1,0,0]]}},"b":{"sphere":{"center":[0,-1,3],"radius":1}},"margin":1})",
+      true);
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "sphere-centre-on-surface");
+  // the centre 0.5 inside the box (exact depth 1.5): the same answer is not explained by it
+  c = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[1,1,1],"half":[2,2,1],"axes":[[0,-1,0],[0,0,-1],[1,0,0]]}},"b":{"sphere":{"center":[0.5,-0.5,2.5],"radius":1}},"margin":1})",
+      true);
+  k = classify(runner, c, "bullet", got);
+  EXPECT_NE(k.cause, "sphere-centre-on-surface") << describe(k);
+}
+
+TEST(DiffClassify, FclTouchingDepth) {
+  // found by crux diff (seed 4242, case 21815, touching family): the sphere touches the box's
+  // face y = −1; FCL reports a depth of 2.24
+  DiffRunner runner;
+  const J got = J{{"op", "distance"},
+                  {"distance", -2.23606797749979},
+                  {"point_a", J::array({0.0, -1.0, 0.0})},
+                  {"point_b", J::array({2.0, -1.0, 1.0})},
+                  {"normal", J::array({0.8944271909999159, 0.0, 0.4472135954999579})}};
+  auto c = primitive(
+      R"({"op":"distance","a":{"sphere":{"center":[0,-2,0],"radius":1}},"b":{"box":{"center":[0,1,-1],"half":[2,2,2],"axes":[[1,0,0],[0,1,0],[0,0,1]]}}})",
+      true);
+  auto k = classify(runner, c, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "touching-depth");
+  // overlapping by 0.5, the same wrong depth is not explained by touching
+  c = primitive(
+      R"({"op":"distance","a":{"sphere":{"center":[0,-1.5,0],"radius":1}},"b":{"box":{"center":[0,1,-1],"half":[2,2,2],"axes":[[1,0,0],[0,1,0],[0,0,1]]}}})",
+      true);
+  k = classify(runner, c, "fcl", got);
+  EXPECT_NE(k.cause, "touching-depth") << describe(k);
+}
+
+TEST(DiffClassify, MeshDistanceOnADegenerateWitnessTriangle) {
+  // found by crux diff (seed 4242, case 445, hierarchy family): exact's nearest pair is triangle
+  // 0 of n1, whose corners 0 and 2 coincide, touching n0; FCL finds nothing within max 0
+  DiffRunner runner;
+  DiffCase c;
+  c.setup = {
+      R"({"op":"mesh","name":"m0","vertices":[[1,-3,3],[1,-1,4],[1,-3,3],[-2,3,-1],[4,4,-2],[3,-1,3],[-3,1,-1],[-1,1,-2],[1,0,-4],[1,-3,3],[1,-4,3],[4,-4,1],[-1,1,0],[-2,1,4],[1,-1,4],[-1,4,0],[0,4,4],[2,1,4]],"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17]]})",
+      R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[0.7071067811865476,0,0,0.7071067811865476],"translation":[-2,-3,-1]}})",
+      R"({"op":"add_model","name":"n1","mesh":"m0","transform":{"rotation":[0,0,0,1],"translation":[3,-2,1]},"parent":"n0"})"};
+  c.query = R"({"op":"model_distance","a":"n1","b":"n0","max":0})";
+  c.op = "model_distance";
+  c.exactGrid = true;
+  const auto k = classify(runner, c, "fcl", J{{"op", "model_distance"}, {"found", false}});
+  EXPECT_EQ(k.cause, "degenerate-triangle") << describe(k);
+}
+
 TEST(DiffClassify, FclNearestPointsInCollision) {
   DiffRunner runner;
   const auto c = primitive(R"({"op":"closest_point_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"point":[1,1,0]})", true);
