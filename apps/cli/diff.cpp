@@ -697,6 +697,45 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
+/// mesh_plane / model_plane: the mesh (placed in the world) reaches the plane, and every triangle
+/// that reaches it only touches it (no triangle has corners more than `tau` on both sides): a
+/// model lying on both sides of the plane through two triangles that each touch it stays a hit
+/// under any small move, though no single triangle crosses.
+bool planeOnlyTouchesTriangles(const DiffCase& c, const J& query, double tau) {
+  if ((c.op != "mesh_plane" && c.op != "model_plane") || !query.contains("plane")) return false;
+  J operand;
+  if (c.op == "model_plane") {
+    if (!query.contains("model") || !query["model"].is_string()) return false;
+    operand = modelOperand(c, query["model"].get<std::string>());
+  } else if (query.contains("mesh") && query["mesh"].is_string()) {
+    operand = J{{"mesh", query["mesh"]}};
+    if (query.contains("transform")) operand["transform"] = query["transform"];
+  }
+  if (operand.is_null() || !operand["mesh"].is_string()) return false;
+  const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
+  std::vector<std::array<Vec3d, 3>> tris;
+  if (const Mesh* mesh = caseMesh(c, operand["mesh"].get<std::string>(), tris)) {
+    for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
+      const Triangle t = mesh->triangle(i);
+      tris.push_back({t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()});
+    }
+  }
+  const Vec3d n = toVec(query["plane"]["normal"]);
+  const double d = query["plane"]["d"].get<double>(), len = n.norm();
+  if (tris.empty() || !(len > 0)) return false;
+  bool touches = false;
+  for (const auto& t : tris) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const Vec3d& v : t) {
+      const double side = (n.dot(place.r * v + place.t) - d) / len;
+      lo = std::min(lo, side), hi = std::max(hi, side);
+    }
+    if (lo < -tau && hi > tau) return false;
+    if (lo <= tau && hi >= -tau) touches = true;
+  }
+  return touches;
+}
+
 /// A mesh_distance or model_distance answer of exact whose witness triangle (triangle_a or
 /// triangle_b) is degenerate (collinear or repeated corners).
 bool exactWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J& exact) {
@@ -1185,15 +1224,16 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // TriangleP): a flat shape, whose casts FCL sometimes ends late, well inside it
     if (fcl && (query["a"].contains("triangle") || query["b"].contains("triangle"))) return peer("flat-shape");
     if (within) return peer("boundary");
-    // a sphere whose centre lies on the other shape's surface (exact depth = its radius): Bullet's
-    // GJK/EPA sees the sphere as its centre with the radius as margin, a point touching the other
-    // shape, and EPA on a Minkowski difference with the origin on its boundary returns an
-    // imprecise normal and depth
-    if (bullet && c.op == "contacts" && diff == Difference::Numeric) {
+    // a sphere or capsule whose core (centre, segment) touches the other shape (exact depth = its
+    // radius): Bullet's GJK/EPA sees it as the core with the radius as margin, and EPA on a
+    // Minkowski difference with the origin on its boundary returns an imprecise normal and depth,
+    // or no contact
+    if (bullet && c.op == "contacts" && narrowVerdict(c.op, exact)) {
       for (const char* side : {"a", "b"})
-        if (query[side].contains("sphere") &&
-            std::fabs(narrowNumber(c.op, exact) - query[side]["sphere"]["radius"].get<double>()) <= tau)
-          return peer("sphere-centre-on-surface");
+        for (const char* rounded : {"sphere", "capsule"})
+          if (query[side].contains(rounded) &&
+              std::fabs(narrowNumber(c.op, exact) - query[side][rounded]["radius"].get<double>()) <= tau)
+            return peer("core-on-surface");
     }
     // shapes that touch (exact distance within τ of 0): libccd's GJK, with its absolute 1e-6
     // tolerance, declares them colliding, and its EPA, run on a Minkowski difference with the
@@ -1259,6 +1299,8 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
   }
   if (probeFlips(c, query, exact, got, 1e-3 * s, numTol, probeExact, false)) return peer("touching");
+  if (diff == Difference::Boolean && exact.value("hit", false) && planeOnlyTouchesTriangles(c, query, tau))
+    return peer("touching");
   if (bullet && probeFlips(c, query, exact, got, 0.04, numTol, probeExact, false)) return peer("margin");
   if (bullet && c.op == "mesh_mesh") return peer("gimpact-miss");
   return peer("unexplained");

@@ -194,7 +194,7 @@ TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
   EXPECT_NE(k.cause, "sphere-triangle-small-normal") << describe(k);
 }
 
-TEST(DiffClassify, BulletSphereCentreOnSurface) {
+TEST(DiffClassify, BulletCoreOnSurface) {
   // found by crux diff (seed 4242, case 19069, grid family): the sphere's centre is a corner of
   // the box (exact depth = radius 1); Bullet answers depth 0.9947 along a tilted normal
   DiffRunner runner;
@@ -211,13 +211,45 @@ TEST(DiffClassify, BulletSphereCentreOnSurface) {
       true);
   auto k = classify(runner, c, "bullet", got);
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "sphere-centre-on-surface");
+  EXPECT_EQ(k.cause, "core-on-surface");
   // the centre 0.5 inside the box (exact depth 1.5): the same answer is not explained by it
   c = primitive(
       R"({"op":"contacts","a":{"box":{"center":[1,1,1],"half":[2,2,1],"axes":[[0,-1,0],[0,0,-1],[1,0,0]]}},"b":{"sphere":{"center":[0.5,-0.5,2.5],"radius":1}},"margin":1})",
       true);
   k = classify(runner, c, "bullet", got);
-  EXPECT_NE(k.cause, "sphere-centre-on-surface") << describe(k);
+  EXPECT_NE(k.cause, "core-on-surface") << describe(k);
+  // seed 777, case 5705 (huge family): the capsule's segment lies on an edge of the box (exact
+  // depth = radius 1e6); Bullet reports no contact
+  c = primitive(
+      R"({"op":"contacts","a":{"capsule":{"a":[-1000000,1000000,0],"b":[2000000,1000000,0],"radius":1000000}},"b":{"box":{"center":[0,2000000,2000000],"half":[2000000,1000000,1000000],"axes":[[0,0,1],[1,0,0],[0,1,0]]}}})",
+      false);
+  k = classify(runner, c, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}});
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "core-on-surface");
+}
+
+TEST(DiffClassify, ModelPlaneTouchingTwoTrianglesFromEitherSide) {
+  // found by crux diff (seed 777, case 21781, hierarchy family): one triangle of n1 has an edge
+  // in the plane and lies below it, another has a corner in it and lies above: the model stays a
+  // hit under any small move, but each triangle only touches; FCL misses
+  DiffRunner runner;
+  DiffCase c;
+  c.setup = {
+      R"({"op":"mesh","name":"m0","vertices":[[0,0,0],[0,1,0],[1,0,0]],"triangles":[[0,1,2]]})",
+      R"({"op":"mesh","name":"m1","vertices":[[0,0,0],[0,3,1],[0,0,1],[0,0,4],[1,0,4],[0,3,2]],"triangles":[[0,1,2],[3,4,5]]})",
+      R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[0.7071067811865476,0,0.7071067811865476,0],"translation":[0,0,0]}})",
+      R"({"op":"add_model","name":"n1","mesh":"m1","transform":{"rotation":[0.7071067811865476,0.7071067811865476,0,0],"translation":[0,-1,1]},"parent":"n0"})",
+      R"({"op":"set_transform","model":"n0","transform":{"rotation":[0.7071067811865476,0,-0.7071067811865476,0],"translation":[-2,2,0]}})"};
+  c.query = R"({"op":"model_plane","model":"n1","plane":{"normal":[1,1,0],"d":-6}})";
+  c.op = "model_plane";
+  c.exactGrid = true;
+  auto k = classify(runner, c, "fcl", answer("model_plane", false));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "touching");
+  // the plane x + y = -5 crosses triangle 0: a miss there stays unexplained
+  c.query = R"({"op":"model_plane","model":"n1","plane":{"normal":[1,1,0],"d":-5}})";
+  k = classify(runner, c, "fcl", answer("model_plane", false));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
 }
 
 TEST(DiffClassify, FclTouchingDepth) {
