@@ -353,18 +353,21 @@ constexpr long double kBulletRayEdgeTolerance = 1e-4L;
 
 /// A ray or segment that crosses the plane of a (non-degenerate) triangle outside it, but by at
 /// most Bullet's edge tolerance: every barycentric coordinate of the crossing point >= −1e-4
-/// (long double; the crossing's parameter within the ray or segment).
+/// (long double, on the coordinates rounded to Real as the backends read them: a segment through
+/// a corner in double may pass 7.5e-8 outside an edge in float; the crossing's parameter within
+/// the ray or segment).
 bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tris) {
   using L = long double;
+  const auto real = [](double x) { return L(Real(x)); };
   std::array<L, 3> o{}, d{};
   L tMax = 0;
   if (query.contains("ray")) {
     const V a = readV(query["ray"]["origin"]), b = readV(query["ray"]["dir"]);
-    for (std::size_t i = 0; i < 3; ++i) o[i] = a[i], d[i] = b[i];
+    for (std::size_t i = 0; i < 3; ++i) o[i] = real(a[i]), d[i] = real(b[i]);
     tMax = std::numeric_limits<L>::infinity();
   } else if (query.contains("segment")) {
     const V a = readV(query["segment"]["start"]), b = readV(query["segment"]["end"]);
-    for (std::size_t i = 0; i < 3; ++i) o[i] = a[i], d[i] = L(b[i]) - a[i];
+    for (std::size_t i = 0; i < 3; ++i) o[i] = real(a[i]), d[i] = real(b[i]) - real(a[i]);
     tMax = 1;
   } else {
     return false;
@@ -377,7 +380,8 @@ bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tr
   auto dot = [](const P& a, const P& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
   for (const auto& t : tris) {
     if (degenerate(t)) continue;
-    const P v[3] = {{t[0][0], t[0][1], t[0][2]}, {t[1][0], t[1][1], t[1][2]}, {t[2][0], t[2][1], t[2][2]}};
+    P v[3];
+    for (std::size_t i = 0; i < 3; ++i) v[i] = {real(t[i][0]), real(t[i][1]), real(t[i][2])};
     const P n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
     const L nn = dot(n, n), nd = dot(n, d);
     if (nd == 0) continue;

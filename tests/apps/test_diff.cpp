@@ -166,6 +166,15 @@ TEST(DiffClassify, BulletFattenedEdges) {
       false);
   auto k = classify(runner, c, "bullet", got);
   EXPECT_EQ(k.cause, "fattened-edges") << describe(k);
+  // seed 9001, case 2016 (general family): the segment's midpoint is the corner (−0.4923, ...)
+  // in double; rounded to float it passes 7.5e-8 outside an edge
+  const auto corner = primitive(
+      R"({"op":"segment_triangle","triangle":[[-0.492308646440506,-0.21886156499385834,-0.27624693512916565],[0,-1,-0.5625],[0,-1,-0.5]],"segment":{"start":[3.3485012394909504,-0.2300995776539141,-0.884813666343689],"end":[-4.333118532371962,-0.20762355233380259,0.33231979608535767]}})",
+      false);
+  if (sizeof(Real) == sizeof(float)) {
+    k = classify(runner, corner, "bullet", answer("segment_triangle", true));
+    EXPECT_EQ(k.cause, "fattened-edges") << describe(k);
+  }
   // a crossing 5 % of the triangle's height outside an edge is not explained by it
   const auto far = primitive(
       R"({"op":"ray_triangle","triangle":[[0,0,0],[4,0,0],[0,4,0]],"ray":{"origin":[2.1,2.1,1],"dir":[0,0,-1]}})", false);
