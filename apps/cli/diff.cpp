@@ -701,41 +701,72 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
-/// mesh_plane / model_plane: the mesh (placed in the world) reaches the plane, and every triangle
-/// that reaches it only touches it (no triangle has corners more than `tau` on both sides): a
-/// model lying on both sides of the plane through two triangles that each touch it stays a hit
-/// under any small move, though no single triangle crosses.
-bool planeOnlyTouchesTriangles(const DiffCase& c, const J& query, double tau) {
-  if ((c.op != "mesh_plane" && c.op != "model_plane") || !query.contains("plane")) return false;
+/// The triangles of a mesh_* / model_* query's mesh, placed in the world (the model's world
+/// transform, or the query's `transform`); empty when the mesh is unknown.
+std::vector<std::array<Vec3d, 3>> placedQueryTriangles(const DiffCase& c, const J& query) {
   J operand;
-  if (c.op == "model_plane") {
-    if (!query.contains("model") || !query["model"].is_string()) return false;
-    operand = modelOperand(c, query["model"].get<std::string>());
+  if (startsWith(c.op, "model_")) {
+    if (query.contains("model") && query["model"].is_string()) operand = modelOperand(c, query["model"].get<std::string>());
   } else if (query.contains("mesh") && query["mesh"].is_string()) {
     operand = J{{"mesh", query["mesh"]}};
     if (query.contains("transform")) operand["transform"] = query["transform"];
   }
-  if (operand.is_null() || !operand["mesh"].is_string()) return false;
-  const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
   std::vector<std::array<Vec3d, 3>> tris;
+  if (operand.is_null() || !operand["mesh"].is_string()) return tris;
+  const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
   if (const Mesh* mesh = caseMesh(c, operand["mesh"].get<std::string>(), tris)) {
     for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
       const Triangle t = mesh->triangle(i);
       tris.push_back({t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()});
     }
   }
-  const Vec3d n = toVec(query["plane"]["normal"]);
-  const double d = query["plane"]["d"].get<double>(), len = n.norm();
-  if (tris.empty() || !(len > 0)) return false;
+  for (auto& t : tris)
+    for (Vec3d& v : t) v = place.r * v + place.t;
+  return tris;
+}
+
+/// mesh_plane / model_plane, mesh_triangle / model_triangle: the mesh (placed in the world)
+/// reaches the query's plane or triangle, and every contact only touches: no triangle has
+/// corners more than `tau` on both sides of the plane; for a triangle, exact's signed distance
+/// (`probeExact`) of every mesh triangle within `tau` of it is at least −tau. A model on both
+/// sides of a plane through two triangles that each touch it stays a hit under any small move,
+/// though no single triangle crosses.
+bool meshOnlyTouches(const DiffCase& c, const J& query, double tau,
+                     const std::function<Answer(const DiffCase&)>& probeExact) {
+  const bool plane = c.op == "mesh_plane" || c.op == "model_plane";
+  const bool triangle = c.op == "mesh_triangle" || c.op == "model_triangle";
+  if (!(plane && query.contains("plane")) && !(triangle && query.contains("triangle"))) return false;
+  const auto tris = placedQueryTriangles(c, query);
+  if (tris.empty()) return false;
   bool touches = false;
-  for (const auto& t : tris) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (const Vec3d& v : t) {
-      const double side = (n.dot(place.r * v + place.t) - d) / len;
-      lo = std::min(lo, side), hi = std::max(hi, side);
+  if (plane) {
+    const Vec3d n = toVec(query["plane"]["normal"]);
+    const double d = query["plane"]["d"].get<double>(), len = n.norm();
+    if (!(len > 0)) return false;
+    for (const auto& t : tris) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (const Vec3d& v : t) {
+        const double side = (n.dot(v) - d) / len;
+        lo = std::min(lo, side), hi = std::max(hi, side);
+      }
+      if (lo < -tau && hi > tau) return false;
+      if (lo <= tau && hi >= -tau) touches = true;
     }
-    if (lo < -tau && hi > tau) return false;
-    if (lo <= tau && hi >= -tau) touches = true;
+    return touches;
+  }
+  const std::array<Vec3d, 3> q = {toVec(query["triangle"][0]), toVec(query["triangle"][1]), toVec(query["triangle"][2])};
+  const Triangle qr{q[0].cast<Real>(), q[1].cast<Real>(), q[2].cast<Real>()};
+  for (const auto& t : tris) {
+    const Triangle tr{t[0].cast<Real>(), t[1].cast<Real>(), t[2].cast<Real>()};
+    if (!(double(closestPoints(qr, tr).distance) <= tau)) continue;
+    J pair = J{{"op", "distance"}, {"a", {{"triangle", J::array()}}}, {"b", {{"triangle", query["triangle"]}}}};
+    for (const Vec3d& v : t) pair["a"]["triangle"].push_back({v.x(), v.y(), v.z()});
+    DiffCase d;
+    d.op = "distance";
+    d.query = pair.dump();
+    const Answer a = probeExact(d);
+    if (hasError(a) || !a.contains("distance") || !(a["distance"].get<double>() >= -tau)) return false;
+    touches = true;
   }
   return touches;
 }
@@ -1303,7 +1334,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
   }
   if (probeFlips(c, query, exact, got, 1e-3 * s, numTol, probeExact, false)) return peer("touching");
-  if (diff == Difference::Boolean && exact.value("hit", false) && planeOnlyTouchesTriangles(c, query, tau))
+  if (diff == Difference::Boolean && exact.value("hit", false) && meshOnlyTouches(c, query, tau, probeExact))
     return peer("touching");
   if (bullet && probeFlips(c, query, exact, got, 0.04, numTol, probeExact, false)) return peer("margin");
   if (bullet && c.op == "mesh_mesh") return peer("gimpact-miss");

@@ -237,7 +237,7 @@ TEST(DiffClassify, BulletCoreOnSurface) {
   EXPECT_EQ(k.cause, "core-on-surface");
 }
 
-TEST(DiffClassify, ModelPlaneTouchingTwoTrianglesFromEitherSide) {
+TEST(DiffClassify, ModelTouchingThroughTrianglesThatOnlyTouch) {
   // found by crux diff (seed 777, case 21781, hierarchy family): one triangle of n1 has an edge
   // in the plane and lies below it, another has a corner in it and lies above: the model stays a
   // hit under any small move, but each triangle only touches; FCL misses
@@ -255,6 +255,23 @@ TEST(DiffClassify, ModelPlaneTouchingTwoTrianglesFromEitherSide) {
   auto k = classify(runner, c, "fcl", answer("model_plane", false));
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "touching");
+  // seed 9001, case 8579: a triangle with an edge lying on a face of n2 (z = 1) and the rest above
+  DiffCase t;
+  t.exactGrid = true;
+  t.setup = {
+      R"({"op":"mesh","name":"m0","vertices":[[0,0,0],[0,1,0],[2,-2,-2],[2,0,0],[0,0,0],[0,0,1],[2,0,-1]],"triangles":[[0,1,2],[3,4,5],[2,6,3]]})",
+      R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[1,0,0,0],"translation":[-2,1,3]}})",
+      R"({"op":"add_model","name":"n1","mesh":"m0","transform":{"rotation":[1,0,0,0],"translation":[0,0,0]},"parent":"n0"})",
+      R"({"op":"add_model","name":"n2","mesh":"m0","transform":{"rotation":[0.7071067811865476,0,0.7071067811865476,0],"translation":[0,3,-3]},"parent":"n1"})",
+      R"({"op":"set_transform","model":"n1","transform":{"rotation":[0,0,0,1],"translation":[-1,1,3]}})"};
+  t.query = R"({"op":"model_triangle","model":"n2","triangle":[[0,-2,3],[0,0,1],[-2,1,1]]})";
+  t.op = "model_triangle";
+  k = classify(runner, t, "fcl", answer("model_triangle", false));
+  EXPECT_EQ(k.cause, "touching") << describe(k);
+  // the same triangle sunk by 0.5 crosses that face: a miss stays unexplained
+  t.query = R"({"op":"model_triangle","model":"n2","triangle":[[0,-2,2.5],[0,0,0.5],[-2,1,0.5]]})";
+  k = classify(runner, t, "fcl", answer("model_triangle", false));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
   // the plane x + y = -5 crosses triangle 0: a miss there stays unexplained
   c.query = R"({"op":"model_plane","model":"n1","plane":{"normal":[1,1,0],"d":-5}})";
   k = classify(runner, c, "fcl", answer("model_plane", false));
