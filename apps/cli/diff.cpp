@@ -265,6 +265,11 @@ std::vector<std::array<V, 3>> caseTriangles(const DiffCase& c, const J& query, b
   for (const char* key : {"triangle", "a", "b"})
     if (query.contains(key) && query[key].is_array() && query[key].size() == 3)
       out.push_back({readV(query[key][0]), readV(query[key][1]), readV(query[key][2])});
+  for (const char* key : {"a", "b"})  // triangle operands of the narrow-phase ops and casts (own frame)
+    if (query.contains(key) && query[key].is_object() && query[key].contains("triangle")) {
+      const J& t = query[key]["triangle"];
+      out.push_back({readV(t[0]), readV(t[1]), readV(t[2])});
+    }
   if (allMeshes || (startsWith(c.op, "mesh_") && c.op != "mesh_mesh")) {
     for (const auto& line : c.setup) {
       const J m = J::parse(line, nullptr, false);
@@ -1101,6 +1106,28 @@ WorldTolerance DiffRunner::tolerance(std::string_view backend) {
 
 // ---- classification ------------------------------------------------------------------------------
 
+/// Whether a triangle of the case is a sliver thinner than τ (the peer's tolerance): within τ of
+/// the segment it nearly is.
+bool thinnerThan(const std::vector<std::array<V, 3>>& tris, double tau) {
+  for (const auto& t : tris)
+    if (smallestHeight(t) <= tau) return true;
+  return false;
+}
+
+/// Whether exact's hit is a contact the shapes only graze: b moved by up to 1e-3 × s (the
+/// lattice of probeOffsets) makes exact miss. The peers' absolute tolerances lose or delay such
+/// contacts (libccd's 1e-6, Bullet's float GJK).
+bool onlyGrazes(const DiffCase& c, const J& exact, double s, const std::function<Answer(const DiffCase&)>& probeExact) {
+  if (!exact.value("hit", false)) return false;
+  for (const Vec3d& off : probeOffsets(1e-3 * s, false)) {
+    const auto moved = translatedCase(c, off, "");
+    if (!moved) return false;
+    const Answer p = probeExact(*moved);
+    if (!hasError(p) && p.contains("hit") && !p["hit"].get<bool>()) return true;
+  }
+  return false;
+}
+
 /// Whether native's cast time keeps its guarantee (docs/narrowphase.md, "Shape casts"): never
 /// later than exact's t, and the shapes placed at it within the contact tolerance δ =
 /// kCastRelativeTolerance × S (S, the sizes plus the distance between the origins plus the
@@ -1226,14 +1253,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (within) return peer("boundary");
     // the shapes only graze (b moved by up to 1e-3 × s makes exact miss): the peers' absolute
     // tolerances lose or delay such contacts (libccd's 1e-6, Bullet's float GJK)
-    if (exact.value("hit", false)) {
-      for (const Vec3d& off : probeOffsets(1e-3 * s, false)) {
-        const auto moved = translatedCase(c, off, "");
-        if (!moved) break;
-        const Answer p = probeExact(*moved);
-        if (!hasError(p) && p.contains("hit") && !p["hit"].get<bool>()) return peer("touching");
-      }
-    }
+    if (onlyGrazes(c, exact, s, probeExact)) return peer("touching");
     if (diff == Difference::Numeric) {  // both hit; t differs beyond the tolerance
       const V m = readV(query["motion"]);
       const double along = std::fabs(got["t"].get<double>() - exact["t"].get<double>()) *
@@ -1244,7 +1264,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   if (narrow) {
     const bool meshOperand = isMeshPairDistance(c.op) || query["a"].contains("mesh") || query["b"].contains("mesh");
     // FCL 0.7: a mesh (BVHModel) against a penetrating shape gets a bogus distance (docs/batch.md)
-    if (fcl && c.op == "distance" && meshOperand && narrowNumber(c.op, exact) < 0) return peer("mesh-penetration");
+    // (the fcl world makes a triangle operand a one-triangle BVHModel: a mesh to FCL, whose
+    // crossing mesh pairs answer 0, never a depth)
+    const bool fclMesh = meshOperand || query["a"].contains("triangle") || query["b"].contains("triangle");
+    if (fcl && c.op == "distance" && fclMesh && narrowNumber(c.op, exact) < 0) return peer("mesh-penetration");
     // Bullet's contactPairTest: one unreduced point per touching triangle, internal-edge
     // (ghost) contacts with their own normals and depths
     if (bullet && c.op == "contacts" && meshOperand && diff == Difference::Numeric) return peer("ghost-contacts");
@@ -1255,9 +1278,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (bullet && c.op == "contacts" && diff == Difference::Boolean && !narrowVerdict(c.op, got) &&
         sphereTriangleFloatNormalTooSmall(query))
       return peer("sphere-triangle-small-normal");
-    // the fcl world casts a triangle as a one-face fcl::Convex (FCL has no advancement for
-    // TriangleP): a flat shape, whose casts FCL sometimes ends late, well inside it
-    if (fcl && (query["a"].contains("triangle") || query["b"].contains("triangle"))) return peer("flat-shape");
+    if (thinnerThan(caseTriangles(c, query), tau)) return peer("sliver-triangle");
     if (within) return peer("boundary");
     // a sphere or capsule whose core (centre, segment) touches the other shape (exact depth = its
     // radius): Bullet's GJK/EPA sees it as the core with the radius as margin, and EPA on a
@@ -1275,16 +1296,6 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // origin on its boundary, reports a depth that is not there
     if (fcl && c.op == "distance" && std::fabs(narrowNumber(c.op, exact)) <= tau && narrowNumber(c.op, got) < -tau)
       return peer("touching-depth");
-    // the shapes only graze (b moved by up to 1e-3 × s makes exact miss): the peers' absolute
-    // tolerances lose or delay such contacts (libccd's 1e-6, Bullet's float GJK)
-    if (exact.value("hit", false)) {
-      for (const Vec3d& off : probeOffsets(1e-3 * s, false)) {
-        const auto moved = translatedCase(c, off, "");
-        if (!moved) break;
-        const Answer p = probeExact(*moved);
-        if (!hasError(p) && p.contains("hit") && !p["hit"].get<bool>()) return peer("touching");
-      }
-    }
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));
       return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
@@ -1306,9 +1317,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer("fattened-edges");
   for (const auto& t : caseTriangles(c, query, true))
     if (degenerate(t)) return peer("degenerate-triangle");
-  // a sliver thinner than the peer's tolerance: within τ of the segment it nearly is
-  for (const auto& t : caseTriangles(c, query, true))
-    if (smallestHeight(t) <= tau) return peer("sliver-triangle");
+  if (thinnerThan(caseTriangles(c, query, true), tau)) return peer("sliver-triangle");
   bool pointSphere = false;
   if (flatShape(query, &pointSphere)) return peer(bullet && pointSphere ? "point-sphere" : "flat-shape");
   if (bullet && (c.op == "mesh_mesh" || c.op == "scene_pairs") && diff == Difference::Boolean &&

@@ -301,6 +301,45 @@ TEST(DiffClassify, FclTouchingDepth) {
   EXPECT_NE(k.cause, "touching-depth") << describe(k);
 }
 
+TEST(DiffClassify, FclTriangleOperandsAreMeshesAndSliversAreThin) {
+  // found by crux diff (seed 4242, cases 16174 and 5704): two crossing triangles, which the fcl
+  // world passes as one-triangle BVHModels (FCL answers 0, exact a depth); and a sliver (two
+  // corners ~1e-24 apart) that FCL answers with distance 0 and a point 1e189 away
+  DiffRunner runner;
+  const J crossing = J{{"op", "distance"},
+                       {"distance", 0.0},
+                       {"point_a", J::array({0.0, -2.0, 0.0})},
+                       {"point_b", J::array({0.5454545454545454, -1.1818181818181817, -1.1818181818181817})},
+                       {"normal", J::array({-0.3547874375934496, -0.5321811563901745, 0.7687061147858074})}};
+  auto k = classify(runner,
+                    primitive(R"({"op":"distance","a":{"triangle":[[0,-2,0],[2,2,-1],[2,-2,2]]},)"
+                              R"("b":{"triangle":[[0,-2,-2],[3,1,2],[2,1,1]]}})",
+                              true),
+                    "fcl", crossing);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "mesh-penetration");
+  const J far = J{{"op", "distance"},
+                  {"distance", 0.0},
+                  {"point_a", J::array({0.24794549414527722, 0.0, 1.0})},
+                  {"point_b", J::array({0.0, 1.0093624195236208e+189, 1.0})},
+                  {"normal", J::array({0.0, 0.0, 0.0})}};
+  k = classify(runner,
+               primitive(R"({"op":"distance","a":{"sphere":{"center":[-1.6258142321795306,0.7136889447308816,0.8899767398834229],"radius":0.19784562289714813}},)"
+                         R"("b":{"triangle":[[-3.4167270487399034e-24,-3.0750213077153037e-24,-1.6476233668993364e-24],)"
+                         R"([-0.8579664241187486,0.240276096318486,-0.2789391942776731],)"
+                         R"([2.6793949008044636e-24,6.344977911911385e-25,-2.8199570523268816e-24]]}})",
+                         false),
+               "fcl", far);
+  EXPECT_EQ(k.cause, "sliver-triangle") << describe(k);
+  // the same wrong answer for a proper triangle stays unexplained
+  k = classify(runner,
+               primitive(R"({"op":"distance","a":{"sphere":{"center":[-1.6258142321795306,0.7136889447308816,0.8899767398834229],"radius":0.19784562289714813}},)"
+                         R"("b":{"triangle":[[0,0,0],[-0.8579664241187486,0.240276096318486,-0.2789391942776731],[0,0.5,0]]}})",
+                         false),
+               "fcl", far);
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+}
+
 TEST(DiffClassify, MeshDistanceOnADegenerateWitnessTriangle) {
   // found by crux diff (seed 4242, case 445, hierarchy family): exact's nearest pair is triangle
   // 0 of n1, whose corners 0 and 2 coincide, touching n0; FCL finds nothing within max 0
