@@ -2,6 +2,7 @@
 /// along the shape origin's path, the model casts per candidate.
 
 #include <crux/scene/scene_cast.hpp>
+#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -90,35 +91,50 @@ std::optional<SceneCastHit> run(const Scene& scene, const CastModel& castModel, 
   return best.best;
 }
 
+/// A linear cast: the path of the shape's origin, no rotation.
+std::optional<SceneCastHit> runLinear(const Scene& scene, const ConvexShape& shape, const Transform& shapePose,
+                                      const Vec3& motion, ScenePath path, bool stopAtFirst) {
+  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, shapePose, motion); };
+  return run(scene, castModel, shapePose.translation, Vec3(shapePose.translation + motion), double(shape.size()), 0,
+             path, stopAtFirst);
+}
+
+/// A rigid cast: the path of the shape's origin, and a rotation that moves its points by at most
+/// π × its size.
+std::optional<SceneCastHit> runRigid(const Scene& scene, const ConvexShape& shape, const RigidMotion& motion,
+                                     ScenePath path, bool stopAtFirst) {
+  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, motion); };
+  return run(scene, castModel, motion.start.translation, motion.end.translation, double(shape.size()),
+             M_PI * double(shape.size()), path, stopAtFirst);
+}
+
 }  // namespace
 
 std::optional<SceneCastHit> castClosest(const Scene& scene, const ConvexShape& shape, const Transform& shapePose,
                                         const Vec3& motion, ScenePath path) {
-  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, shapePose, motion); };
-  return run(scene, castModel, shapePose.translation, Vec3(shapePose.translation + motion), double(shape.size()), 0,
-             path, false);
+  if (!detail::entryPreconditions("castClosest(Scene, ConvexShape)", detail::rule::kCast, shape, shapePose, motion))
+    return std::nullopt;
+  return runLinear(scene, shape, shapePose, motion, path, false);
 }
 
 std::optional<SceneCastHit> castClosest(const Scene& scene, const ConvexShape& shape, const RigidMotion& motion,
                                         ScenePath path) {
-  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, motion); };
-  return run(scene, castModel, motion.start.translation, motion.end.translation, double(shape.size()),
-             M_PI * double(shape.size()), path, false);
+  if (!detail::entryPreconditions("castClosest(Scene, ConvexShape, RigidMotion)", detail::rule::kCast, shape, motion))
+    return std::nullopt;
+  return runRigid(scene, shape, motion, path, false);
 }
 
 bool castAny(const Scene& scene, const ConvexShape& shape, const Transform& shapePose, const Vec3& motion,
              ScenePath path) {
-  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, shapePose, motion); };
-  return run(scene, castModel, shapePose.translation, Vec3(shapePose.translation + motion), double(shape.size()), 0,
-             path, true)
-      .has_value();
+  if (!detail::entryPreconditions("castAny(Scene, ConvexShape)", detail::rule::kCast, shape, shapePose, motion))
+    return false;
+  return runLinear(scene, shape, shapePose, motion, path, true).has_value();
 }
 
 bool castAny(const Scene& scene, const ConvexShape& shape, const RigidMotion& motion, ScenePath path) {
-  const auto castModel = [&](const PlacedMesh& m) { return castClosest(m, shape, motion); };
-  return run(scene, castModel, motion.start.translation, motion.end.translation, double(shape.size()),
-             M_PI * double(shape.size()), path, true)
-      .has_value();
+  if (!detail::entryPreconditions("castAny(Scene, ConvexShape, RigidMotion)", detail::rule::kCast, shape, motion))
+    return false;
+  return runRigid(scene, shape, motion, path, true).has_value();
 }
 
 }  // namespace crux

@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <support/scene_fixtures.hpp>
+#include "support/bad_inputs.hpp"
+
+#include <crux/precondition.hpp>
 
 #include <memory>
 #include <optional>
@@ -61,6 +64,27 @@ TEST_P(SceneCast, BroadPhaseEqualsBruteForce) {
   }
   EXPECT_GT(hits, n / 5);
   EXPECT_LT(hits, n - n / 5);
+}
+
+// Non-queryable shapes, poses or motions (precondition.hpp): no hit, on every broad phase (an
+// infinite ray origin used to crash their walks; scene casts walk them with the shape's path).
+TEST_P(SceneCast, NonQueryableInputsGetNoHit) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  Rng rng(7);
+  Scene scene(GetParam());
+  crux::test::populate(scene, crux::test::bumpySphere(6, 8), 4, rng);
+  const ConvexShape box = Obb{Vec3::Zero(), Vec3::Constant(Real(0.3)), Mat3::Identity()};
+  const Transform start{Quat::Identity(), Vec3(-20, 0, 0)};
+  const Vec3 motion(40, 0, 0);
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(castClosest(scene, box, pose, motion).has_value());
+    EXPECT_FALSE(castAny(scene, box, pose, motion));
+    EXPECT_FALSE(castClosest(scene, box, RigidMotion{start, pose}).has_value());
+    EXPECT_FALSE(castAny(scene, box, RigidMotion{pose, start}));
+  }
+  for (const ConvexShape& shape : test_support::badShapes()) EXPECT_FALSE(castAny(scene, shape, start, motion));
+  for (const Real bad : test_support::nonFiniteValues())
+    EXPECT_FALSE(castClosest(scene, box, start, Vec3(bad, 0, 0)).has_value());
 }
 
 INSTANTIATE_TEST_SUITE_P(AllBroadPhases, SceneCast,

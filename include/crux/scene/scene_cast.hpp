@@ -8,7 +8,8 @@
 /// tolerance at the scene's largest scale, nearest box first, and prunes the boxes entered after
 /// the best impact; a pure rotation (or no motion) asks the broad phase for the boxes touching the
 /// ball the shape sweeps. ScenePath::BruteForce casts against every model. Both give identical
-/// answers. Queries never throw; they assume a validated shape and motion.
+/// answers. Queries never throw: a non-finite shape, pose or motion gets no hit (precondition.hpp;
+/// debug builds abort naming the query).
 
 #include <crux/model/model_cast.hpp>
 #include <crux/scene/scene.hpp>
