@@ -550,19 +550,8 @@ class BulletWorld final : public CollisionWorld {
   std::vector<WorldContact> doContacts(const WorldOperand& a, const WorldOperand& b, double margin) override {
     BulletConvex ca, cb;
     btCollisionObject oa, ob;
-    const auto setUp = [&](const WorldOperand& o, BulletConvex& c, btCollisionObject& object) {
-      const btTransform pose = toBt(o.pose);
-      if (const auto* m = std::get_if<MeshHandle>(&o.shape)) {
-        object.setCollisionShape(mesh(*m).shape.get());
-        object.setWorldTransform(pose);
-      } else {
-        c = bulletConvex(o.shape);
-        object.setCollisionShape(c.shape.get());
-        object.setWorldTransform(pose * c.local);
-      }
-    };
-    setUp(a, ca, oa);
-    setUp(b, cb, ob);
+    place(a, ca, oa);
+    place(b, cb, ob);
     ContactCollector collector;
     collector.objectA = &oa;
     collector.aIsMesh = a.isMesh();
@@ -581,35 +570,19 @@ class BulletWorld final : public CollisionWorld {
   WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind find) override {
     BulletConvex cb;
     btCollisionObject ob;
-    if (const auto* m = std::get_if<MeshHandle>(&b.shape)) {
-      ob.setCollisionShape(mesh(*m).shape.get());
-      ob.setWorldTransform(toBt(b.pose));
-    } else {
-      cb = bulletConvex(b.shape);
-      ob.setCollisionShape(cb.shape.get());
-      ob.setWorldTransform(toBt(b.pose) * cb.local);
-    }
-    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
-                                      NearestSweep& result) {
-      btCollisionWorld::objectQuerySingle(&shape, from, to, &ob, ob.getCollisionShape(), ob.getWorldTransform(), result,
-                                          0);
-    });
+    place(b, cb, ob);
+    return sweepObject(a, motion, find, ob);
   }
   WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle h, CastFind find) override {
-    btCollisionObject& o = model(h).object;
-    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
-                                      NearestSweep& result) {
-      btCollisionWorld::objectQuerySingle(&shape, from, to, &o, o.getCollisionShape(), o.getWorldTransform(), result, 0);
-    });
+    WorldCast w = sweepObject(a, motion, find, model(h).object);
+    w.model = ModelHandle{};  // a model cast names no model (the caller gave it)
+    return w;
   }
   /// scene_cast: btCollisionWorld::convexSweepTest over the scene world (its Dbvt culls by the
   /// swept box).
   WorldCast doSceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) override {
-    WorldCast w = sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from,
-                                             const btTransform& to, NearestSweep& result) {
-      scene_.world.convexSweepTest(&shape, from, to, result, 0);
-    });
-    return w;
+    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
+                                      NearestSweep& result) { scene_.world.convexSweepTest(&shape, from, to, result, 0); });
   }
 
  private:
@@ -620,6 +593,27 @@ class BulletWorld final : public CollisionWorld {
     return *models_.at(h.index);
   }
 
+  /// An operand of contacts or a cast as a Bullet object at its world pose: a mesh's
+  /// btBvhTriangleMeshShape, or bulletConvex(shape) (kept alive in `convex`) placed by its local
+  /// pose.
+  void place(const WorldOperand& o, BulletConvex& convex, btCollisionObject& object) const {
+    const btTransform pose = toBt(o.pose);
+    if (const auto* m = std::get_if<MeshHandle>(&o.shape)) {
+      object.setCollisionShape(mesh(*m).shape.get());
+      object.setWorldTransform(pose);
+    } else {
+      convex = bulletConvex(o.shape);
+      object.setCollisionShape(convex.shape.get());
+      object.setWorldTransform(pose * convex.local);
+    }
+  }
+  /// sweep() against one object: btCollisionWorld::objectQuerySingle, allowed penetration 0.
+  WorldCast sweepObject(const WorldOperand& a, const WorldMotion& motion, CastFind find, btCollisionObject& o) {
+    return sweep(a, motion, find, [&](const btConvexShape& shape, const btTransform& from, const btTransform& to,
+                                      NearestSweep& result) {
+      btCollisionWorld::objectQuerySingle(&shape, from, to, &o, o.getCollisionShape(), o.getWorldTransform(), result, 0);
+    });
+  }
   /// Casts a's shape (bulletConvex) from its pose to its pose at t = 1 with test(shape, from,
   /// to, result) and reads the nearest hit: t = Bullet's hit fraction, both points at Bullet's
   /// hit point, the model by the hit object's user index. Bullet does not report an initial

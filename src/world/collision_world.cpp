@@ -474,9 +474,7 @@ WorldCast CollisionWorld::cast(const WorldOperand& a, const WorldMotion& motion,
 WorldCast CollisionWorld::modelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model,
                                    CastFind find) {
   validateCast(a, motion);
-  WorldCast c = castHook(WorldOp::ModelCast, find, [&] { return doModelCast(a, motion, model, find); });
-  c.model = ModelHandle{};  // the caller named it
-  return c;
+  return castHook(WorldOp::ModelCast, find, [&] { return doModelCast(a, motion, model, find); });
 }
 
 WorldCast CollisionWorld::sceneCast(const WorldOperand& a, const WorldMotion& motion, CastFind find) {
