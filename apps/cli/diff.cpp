@@ -125,6 +125,19 @@ Difference compareNarrow(std::string_view op, const J& got, const J& exact, doub
 
 bool isCastOp(std::string_view op) { return op == "cast" || op == "model_cast" || op == "scene_cast"; }
 
+/// The length of a linear cast's motion (0 for a rigid one, whose query has "end" instead).
+double motionLength(const J& query) {
+  if (!query.contains("motion")) return 0;
+  const V m = readV(query["motion"]);
+  return std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+}
+
+/// How far apart two casts' times of impact are, as a distance along the motion (at least 1
+/// unit long: a short motion's t is compared as a fraction).
+double castTimeGap(const J& query, const J& got, const J& exact) {
+  return std::fabs(got["t"].get<double>() - exact["t"].get<double>()) * std::max(motionLength(query), 1.0);
+}
+
 /// Compares cast answers: the hit exactly; when both give a time of impact (exact gives none for
 /// spheres and capsules, FCL no points), t as a distance along the motion within `tolerance`.
 Difference compareCast(const J& query, const J& got, const J& exact, double tolerance) {
@@ -133,14 +146,7 @@ Difference compareCast(const J& query, const J& got, const J& exact, double tole
   if (!exact["hit"].get<bool>() || !exact.contains("t") || !exact["t"].is_number()) return Difference::None;
   if (!got.contains("t")) return Difference::Shape;
   if (!got["t"].is_number()) return Difference::None;  // hit alone
-  double length = 1;
-  if (query.contains("motion")) {
-    const V m = readV(query["motion"]);
-    length = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-  }
-  return std::fabs(got["t"].get<double>() - exact["t"].get<double>()) * std::max(length, 1.0) > tolerance
-             ? Difference::Numeric
-             : Difference::None;
+  return castTimeGap(query, got, exact) > tolerance ? Difference::Numeric : Difference::None;
 }
 
 /// Compares answers (neither an error). Booleans and lists exactly (a bounds-only scene query
@@ -1147,8 +1153,7 @@ bool castWithinContactTolerance(const DiffCase& c, const J& query, const J& got,
   at.query = J{{"op", "distance"}, {"a", a}, {"b", query["b"]}}.dump();
   const Answer d = probeExact(at);
   if (hasError(d) || !d.contains("distance")) return false;
-  const double length = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-  return d["distance"].get<double>() <= kCastRelativeTolerance * (4 * s + length) + tol.at(s);
+  return d["distance"].get<double>() <= kCastRelativeTolerance * (4 * s + motionLength(query)) + tol.at(s);
 }
 
 
@@ -1254,12 +1259,8 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // the shapes only graze (b moved by up to 1e-3 × s makes exact miss): the peers' absolute
     // tolerances lose or delay such contacts (libccd's 1e-6, Bullet's float GJK)
     if (onlyGrazes(c, exact, s, probeExact)) return peer("touching");
-    if (diff == Difference::Numeric) {  // both hit; t differs beyond the tolerance
-      const V m = readV(query["motion"]);
-      const double along = std::fabs(got["t"].get<double>() - exact["t"].get<double>()) *
-                           std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
-      return peer(along <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
-    }
+    if (diff == Difference::Numeric)  // both hit; t differs beyond the tolerance
+      return peer(castTimeGap(query, got, exact) <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
   }
   if (narrow) {
     const bool meshOperand = isMeshPairDistance(c.op) || query["a"].contains("mesh") || query["b"].contains("mesh");

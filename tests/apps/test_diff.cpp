@@ -301,6 +301,40 @@ TEST(DiffClassify, FclTouchingDepth) {
   EXPECT_NE(k.cause, "touching-depth") << describe(k);
 }
 
+TEST(DiffClassify, CastTimesKeepTheirGuaranteeOrAreWrong) {
+  // A box of half 1 from z = 4 down by 8 onto a box of half 1 at the origin: exact t = 2/8.
+  // Native's t a hair early (the shapes 1e-11 apart at it: within the contact tolerance) is
+  // cast-tolerance; later than exact's, or early by 0.1 of the motion, it is crux wrong.
+  DiffRunner runner;
+  const std::string box = R"({"box":{"center":[0,0,0],"half":[1,1,1],"axes":[[1,0,0],[0,1,0],[0,0,1]]})";
+  const DiffCase c = primitive(R"({"op":"cast","a":)" + box + R"(,"transform":{"translation":[0,0,4]}},"motion":[0,0,-8],"b":)" +
+                                   box + "}}",
+                               true);
+  auto native = [](double t) {
+    return J{{"op", "cast"}, {"hit", true}, {"t", t}, {"point_a", J::array({0.0, 0.0, 1.0})},
+             {"point_b", J::array({0.0, 0.0, 1.0})}, {"normal", J::array({0.0, 0.0, 1.0})},
+             {"starts_overlapping", false}, {"depth", 0.0}};
+  };
+  auto k = classify(runner, c, "native", native(0.25 - 1.25e-12));
+  if (k.verdict != Verdict::Agree) {  // beyond the float build's own tolerance only in double builds
+    EXPECT_EQ(k.verdict, Verdict::WithinTolerance) << describe(k);
+    EXPECT_EQ(k.cause, "cast-tolerance") << describe(k);
+  }
+  k = classify(runner, c, "native", native(0.25 + 1e-3));  // late: the boxes overlap at it
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  k = classify(runner, c, "native", native(0.15));  // early by 0.8 units along the motion
+  EXPECT_EQ(k.verdict, Verdict::CruxWrong) << describe(k);
+  // a peer that misses a cast starting in contact: cast-start; the same miss of a cast starting
+  // 2 apart is not
+  const DiffCase resting = primitive(R"({"op":"cast","a":)" + box + R"(,"transform":{"translation":[0,0,2]}},"motion":[0,0,3],"b":)" +
+                                         box + "}}",
+                                     true);
+  k = classify(runner, resting, "bullet", answer("cast", false));
+  EXPECT_EQ(k.cause, "cast-start") << describe(k);
+  k = classify(runner, c, "bullet", answer("cast", false));
+  EXPECT_NE(k.cause, "cast-start") << describe(k);
+}
+
 TEST(DiffClassify, FclTriangleOperandsAreMeshesAndSliversAreThin) {
   // found by crux diff (seed 4242, cases 16174 and 5704): two crossing triangles, which the fcl
   // world passes as one-triangle BVHModels (FCL answers 0, exact a depth); and a sliver (two
