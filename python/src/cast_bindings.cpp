@@ -47,21 +47,12 @@ struct ShapeRows<Obb> {
   static constexpr const char* name = "obbs";
 };
 
-/// Reads and validates the shape rows (validate(Shape), then as a ConvexShape).
+/// Reads and validates the shape rows (validateRows: validate(Shape), which is all that
+/// validate(ConvexShape) checks for these kinds).
 template <class Shape>
 Rows shapeRows(py::handle shapesIn) {
   const Rows rows = asRows(shapesIn, ShapeRows<Shape>::width, ShapeRows<Shape>::name);
   validateRows<Shape>(rows);
-  const Shape* shapes = rows.as<Shape>();
-  // plain names first (no string built per row); the failing row is named on the second try
-  for (std::size_t i = 0; i < rows.count; ++i) {
-    try {
-      validate(ConvexShape(shapes[i]), rows.name);
-    } catch (const InvalidInput&) {
-      validate(ConvexShape(shapes[i]), rows.rowName(i));
-      throw;
-    }
-  }
   return rows;
 }
 

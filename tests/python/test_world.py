@@ -125,3 +125,54 @@ def test_unsupported_ops_raise_not_implemented():
         with pytest.raises(NotImplementedError, match="unsupported: mesh_ray on fcl"):
             fcl.request("mesh_ray", mesh="probe", ray={"origin": [0, 0, 1], "dir": [0, 0, -1]})
         assert fcl.request("mesh_sphere", mesh="probe", sphere={"center": [0.2, 0.2, 0.5], "radius": 0.5})["hit"]
+
+
+def test_scene_casts_equal_crux_batch_scene_cast(native, bunny):
+    # three placed copies of bunny00 (one turned a quarter about z); linear and rigid box casts,
+    # closest and any, against the same models added to crux batch
+    lo, hi = bunny.bounds.astype(np.float64)
+    native.add_mesh("bunny", bunny)
+    scene = crux.Scene()
+    h = np.sqrt(0.5)
+    poses = [([1.0, 0, 0, 0], [0.0, 0, 0]), ([h, 0, 0, h], 1.5 * (hi - lo) * [1, 0, 0]),
+             ([1.0, 0, 0, 0], 1.5 * (hi - lo) * [0, 1, 0])]
+    for i, (q, t) in enumerate(poses):
+        model = scene.add(bunny, (np.array(q), np.array(t)))
+        native.request("add_model", name=f"m{model}", mesh="bunny",
+                       transform={"rotation": list(q), "translation": list(map(float, t))})
+    rng = np.random.default_rng(23)
+    n = 60
+    q = rng.normal(size=(n, 2, 4))
+    q = (q / np.linalg.norm(q, axis=-1, keepdims=True)).astype(crux.REAL)
+    t = (lo + rng.uniform(-0.5, 2.5, size=(n, 2, 3)) * (hi - lo)).astype(crux.REAL)
+    half = (0.04 * (hi - lo)).astype(crux.REAL)
+    box = np.tile(np.r_[[0, 0, 0], half, np.eye(3).ravel()].astype(crux.REAL), (n, 1))
+    starts, ends = np.c_[q[:, 0], t[:, 0]], np.c_[q[:, 1], t[:, 1]]
+    obb = {"box": {"center": [0, 0, 0], "half": half, "axes": np.eye(3)}}
+    rigid = scene.cast_obbs_rigid(box, starts, ends)
+    rigid_any = scene.cast_obbs_rigid(box, starts, ends, any=True)
+    world_box = box.copy()
+    world_box[:, :3] = t[:, 0]
+    motions = (t[:, 1] - t[:, 0]).astype(crux.REAL)
+    linear = scene.cast_obbs(world_box, motions)
+    for end_field, hits, any_hits in [(True, rigid, rigid_any), (False, linear, None)]:
+        requests = []
+        for i in range(n):
+            if end_field:
+                requests.append({"op": "scene_cast", "a": dict(obb, transform={"rotation": starts[i, :4],
+                                                                              "translation": starts[i, 4:]}),
+                                 "end": {"rotation": ends[i, :4], "translation": ends[i, 4:]}})
+            else:
+                requests.append({"op": "scene_cast", "a": {"box": dict(obb["box"], center=world_box[i, :3])},
+                                 "motion": motions[i]})
+        answers = native.requests(requests)
+        hit = np.array([a["hit"] for a in answers])
+        assert 5 < hit.sum() < n
+        np.testing.assert_array_equal(hits.model >= 0, hit)
+        for i, a in enumerate(answers):
+            if a["hit"]:
+                assert a["model"] == f"m{hits.model[i]}"
+                assert a["t"] == float(hits.t[i]) and a["triangle"] == hits.triangle[i]
+        if any_hits is not None:
+            answers = native.requests([dict(r, any=True) for r in requests])
+            np.testing.assert_array_equal(any_hits, [a["hit"] for a in answers])
