@@ -130,7 +130,8 @@ TEST(PeerCasts, ConvexPairsAgreeWithNativeOnClearHitsAndMisses) {
     // never): its advancement step (ShapeConservativeAdvancementTraversalNode::leafTesting) is
     // the distance over a motion bound along the direction between shapeDistance's nearest
     // points, and for these pairs it steps past the contact to toc = 1 (which of the points is
-    // off was not traced). Recorded as fcl.cast-rounded-miss (docs/batch.md, "Shape casts").
+    // off was not traced). Counted here; crux diff names the cause cast-rounded-miss
+    // (oracle/README.md, "Pitfalls").
     int fclRoundedMisses = 0;
     for (int i = 0; i < 400; ++i) {
       const double sa = rng.uniform(0.2, 1), sb = rng.uniform(0.2, 1.5);
@@ -151,6 +152,7 @@ TEST(PeerCasts, ConvexPairsAgreeWithNativeOnClearHitsAndMisses) {
       }
       const std::string what = std::string(name) + " case " + std::to_string(i);
       const WorldCast p = peer->cast(a, motion, b);
+      EXPECT_EQ(native->cast(a, motion, b, CastFind::Any).hit, hit) << "native any: " << what;
       const bool rounded = std::holds_alternative<Sphere>(a.shape) || std::holds_alternative<Capsule>(a.shape) ||
                            std::holds_alternative<Sphere>(b.shape) || std::holds_alternative<Capsule>(b.shape);
       if (std::string(name) == "fcl" && rounded && hit && !p.hit) {
@@ -214,6 +216,8 @@ TEST(PeerCasts, BulletMeshModelAndSceneCastsAgreeWithNativeOnClearHitsAndMisses)
     switch (i % 4) {
       case 0: {  // the mesh at the model's pose, as a cast operand
         const WorldOperand bP{meshP, poses[m]}, bN{meshN, poses[m]};
+        EXPECT_EQ(native->cast(a, motion, bN, CastFind::Any).hit, hit) << "native any: " << what;
+        EXPECT_EQ(peer->cast(a, motion, bP, CastFind::Any).hit, hit) << "bullet any: " << what;
         compare(peer->cast(a, motion, bP), native->cast(a, motion, bN), hit, pathLength(a, motion), what + " mesh",
                 tally);
         break;
