@@ -1,9 +1,10 @@
 #pragma once
 /// @file narrowphase_ops.hpp  Handlers of the batch protocol's narrow-phase and volume ops
 /// (documented in docs/batch.md, "Contacts, distance and volumes"): `contacts`, `distance`,
-/// `mesh_distance`, `model_distance`, `point_inside`, and `cast` (shape casts). Each reads its fields, resolves mesh and
-/// model names, and asks the batch's crux::CollisionWorld (CollisionWorld::contacts, distance,
-/// meshDistance, modelDistance, pointInside).
+/// `mesh_distance`, `model_distance`, `point_inside`, and the shape casts `cast`, `model_cast`,
+/// `scene_cast` (docs/batch.md, "Shape casts"). Each reads its fields, resolves mesh and model
+/// names, and asks the batch's crux::CollisionWorld (CollisionWorld::contacts, distance,
+/// meshDistance, modelDistance, pointInside, cast, modelCast, sceneCast).
 
 #include "cli/batch.hpp"
 

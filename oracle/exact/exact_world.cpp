@@ -199,10 +199,9 @@ class ExactWorld final : public CollisionWorld {
     w.triangleA = d.triangleA;
     return w;
   }
-  /// Linear casts (exact::cast): hit or miss exact; polytopes get the exact t rounded, and the
-  /// points and normal of the exact distance of the shapes placed at that t; rounded shapes the
-  /// hit only (timeKnown false). Against a mesh: every triangle, the smallest t (then index).
-  /// Linear casts, each pair by exact::detail::castCores; a mesh or model: every triangle, the
+  /// Linear casts, each pair by exact::detail::castCores: hit or miss exact; polytopes get the
+  /// exact t rounded, and the points and normal of the exact distance of the shapes placed at that
+  /// t; rounded shapes the hit only (timeKnown false). A mesh or model: every triangle, the
   /// earliest exact t (ties: the lowest triangle index).
   WorldCast doCast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b, CastFind) override {
     if (motion.end) unsupported(WorldOp::Cast);

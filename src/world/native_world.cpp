@@ -265,6 +265,8 @@ class NativeWorld final : public CollisionWorld {
                                     : crux::cast(shape, a.pose, motion.translation, other, b.pose);
     return r.hit ? toWorld(r) : WorldCast{};
   }
+  /// The mesh cast at the model's world pose (as castClosest / castAny of a PlacedMesh,
+  /// model_cast.hpp).
   WorldCast doModelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model, CastFind find) override {
     const PlacedMesh m = placed(model);
     return meshCast(*m.mesh, m.world, convexOf(a), a.pose, motion, find);

@@ -10,7 +10,7 @@ namespace crux {
 /// Closest point of triangle t to p by Voronoi-region classification (Ericson, RTCD 5.1.5,
 /// ClosestPtPointTriangle), with ties resolved inclusively so a vertex region wins where two
 /// edge tests tie. A degenerate triangle is treated as the segment or point it spans. A sliver
-/// (height below 1e-3 of its longest edge), whose region tests cancel, takes no region test: its
+/// (kTriangleThinRelative, triangle_class.hpp: height below 1e-3 of its longest edge), whose region tests cancel, takes no region test: its
 /// nearest boundary point, or the projection of p onto its plane when that lies inside it and is
 /// nearer (docs/geometry.md, "Closest point on a sliver triangle").
 Vec3 closestPoint(const Triangle& t, const Vec3& p);

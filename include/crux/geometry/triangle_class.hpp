@@ -1,7 +1,8 @@
 #pragma once
 /// @file triangle_class.hpp  The one classification of a triangle's shape that every
 /// narrow-phase routine uses (sphere, capsule, box and convex contacts, triangle–triangle
-/// distance, closest points): by its doubled area |m| = |(b−a)×(c−a)| against its longest edge
+/// distance; closestPoint(Triangle) takes its thin line and decides degeneracy exactly): by its
+/// doubled area |m| = |(b−a)×(c−a)| against its longest edge
 /// squared L², i.e. by its smallest height h = |m|/L relative to L. The lines are drawn by
 /// rounding, not by taste: a normal computed in double from m is tilted by about
 /// 0.3·eps_double·L²/|m| (measured, worst of 2e5 random slivers).

@@ -27,7 +27,7 @@ namespace crux {
 
 /// Sphere (centre, radius >= 0) against a triangle: the closest point of the triangle to the
 /// centre (Ericson, RTCD 5.1.5, Voronoi regions, in double; a degenerate triangle by its
-/// edges; a sliver, height below 1e-3 of its longest edge, as closestPoint(Triangle) takes it:
+/// edges; a thin triangle (kTriangleThinRelative), as closestPoint(Triangle) takes it:
 /// no region tests), one contact point. When the centre lies on the triangle (within kGjkScaleTolerance ×
 /// the pair's length scale, max|vertex| + |centre| + radius, the generic routine's flat case) the
 /// normal is minus the front face normal: the sphere is taken to be on the front side,
@@ -61,7 +61,7 @@ bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius,
 /// Capsule (segment [p0, p1] ⊕ ball of `radius`) against a triangle.
 ///   - Separated cores: the closest points of the segment and the triangle (the minimum over
 ///     the segment–edge pairs, RTCD 5.1.9, and the endpoint–face projections inside the face;
-///     RTCD 5.1.10's decomposition). A sliver (height below 1e-3 of its longest edge) has an
+///     RTCD 5.1.10's decomposition). A thin triangle (kTriangleThinRelative) has an
 ///     unreliable plane: its endpoints' closest points as closestPoint(Triangle) takes them, no
 ///     plane reject, and crossing decided by the exact segment–triangle test.
 ///   - Crossing cores (the segment meets the triangle): the minimum translation of the core

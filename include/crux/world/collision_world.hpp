@@ -9,7 +9,9 @@
 /// the backend's protected virtual `do...` hook, and converts anything a peer library throws into
 /// crux::BackendFailure — no exception from a peer ever crosses the boundary. A hook a backend
 /// does not override throws crux::Unsupported: a backend that cannot answer an op says so and
-/// never guesses. `supports(op)` tells in advance.
+/// never guesses. `supports(op)` tells in advance (one exception: the fcl backend supports
+/// `cast` for convex pairs and fails, BackendFailure, against a mesh, where FCL's continuous
+/// collision misses hits; oracle/README.md).
 ///
 /// Semantics are those of the batch protocol (/work/shared/contracts/batch-protocol.md): closed
 /// point sets, touching intersects, a plane is the plane itself, degenerate triangles are the
@@ -301,8 +303,9 @@ struct WorldMotion {
 /// The first time of impact of a cast (cast.hpp's CastResult in double), world space.
 struct WorldCast {
   bool hit = false;
-  /// Whether t, the points and the normal are known: false when the backend decides hit or miss
-  /// only (the exact backend's rounded shapes, whose time of impact is irrational).
+  /// Whether t, the points and the normal are known: false for a CastFind::Any query, and when
+  /// the backend decides hit or miss only (the exact backend's rounded shapes, whose time of
+  /// impact is irrational).
   bool timeKnown = true;
   /// Whether the points and the normal are known (timeKnown): false when the backend reports
   /// the time alone (FCL).
@@ -475,11 +478,12 @@ class CollisionWorld {
   bool overlapsVolume(ModelHandle model, const Triangle& t);
 
   /// cast: the first time at which the convex operand a, moved by `motion`, touches b (a convex
-  /// shape or a mesh, staying at its pose). a being a mesh: InvalidInput.
+  /// shape or a mesh, staying at its pose), or with CastFind::Any whether it does. a being a
+  /// mesh: InvalidInput.
   WorldCast cast(const WorldOperand& a, const WorldMotion& motion, const WorldOperand& b,
                  CastFind find = CastFind::Closest);
   /// model_cast: the cast of a against a model's mesh placed by the model's world transform
-  /// (WorldCast::triangleB the triangle hit).
+  /// (WorldCast::triangleB the triangle hit; WorldCast::model left empty: the caller named it).
   WorldCast modelCast(const WorldOperand& a, const WorldMotion& motion, ModelHandle model,
                       CastFind find = CastFind::Closest);
   /// scene_cast: the cast of a against every model of the scene: the first model touched
