@@ -69,8 +69,12 @@ inline int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector
   const V3* base[3] = {&a, &b, &a};
   const V3* dir[3] = {&ab, &cb, &ac};
   const double num[3] = {d1, e43, d2}, den[3] = {d1 - d3, e43 + e56, d2 - d6};
+  // In an edge region 0 <= num <= den; den = 0 (then num = 0) when p lies so far from a tiny
+  // triangle that p − a and p − b round to the same vector: any point of the edge is as near, a
+  // is taken rather than 0/0 (fuzz_geometry: corners 1e-30 apart, p 64 away).
+  const double param = den[k] > 0 ? num[k] / den[k] : 0.0;
   V3 cand[2];
-  cand[0] = *base[k] + *dir[k] * (num[k] / den[k]);
+  cand[0] = *base[k] + *dir[k] * param;
   const V3* corner[3] = {&a, &b, &c};
   cand[1] = *corner[kVertex[region + 1]];
   q = cand[region >= 3];

@@ -162,6 +162,20 @@ TEST(ClosestPointTriangle, SliverWithATinyEdgeIsNotTakenForThatEdge) {
   EXPECT_NEAR(double(squaredDistance(t, p)), (s - p).cast<double>().squaredNorm(), 1e-2);
 }
 
+TEST(ClosestPointTriangle, TinyTriangleFarFromThePointGivesACorner) {
+  // Found by fuzz_geometry (corners at ±1.4e-45, p 64 away; here ±1e-30, the same in both
+  // precisions): p − a and p − b round to one vector, so the edge region's parameter was 0/0 and
+  // the answer NaN. Every point of the triangle is as near as rounding can tell: the answer is
+  // within the triangle's size of its corners.
+  const Real m = Real(1e-30);
+  const Triangle t{Vec3(-m, -m, m), Vec3(-m, m, -m), Vec3(-m, -m, -m)};
+  const Vec3 p(-m, -64, -64);
+  const Vec3 q = closestPoint(t, p);
+  ASSERT_TRUE(q.allFinite());
+  EXPECT_LE(q.cwiseAbs().maxCoeff(), m);
+  EXPECT_NEAR(double(squaredDistance(t, p)), 2.0 * 64 * 64, 1e-9);
+}
+
 // Slivers with a tiny edge (needles). (1) Found by a scratch search (the fuzz
 // check skipped slivers' in-triangle test): a tiny edge near the origin (1e-17) against edges of
 // 0.07; RTCD's products vc, vb, va cancelled, the face region was taken and p was projected onto
