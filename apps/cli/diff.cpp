@@ -712,6 +712,53 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
+/// The vertices of a box or hull operand (world coordinates, under its `transform`) whose support
+/// value along `dir` is within `tie` of the largest: the points a support function may return in
+/// that direction. Empty for other operands (their support is not a vertex set).
+std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double tie) {
+  const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
+  std::vector<Vec3d> corners;
+  if (operand.contains("box")) {
+    const J& b = operand["box"];
+    for (int k = 0; k < 8; ++k) {
+      Vec3d p = toVec(b["center"]);
+      for (std::size_t i = 0; i < 3; ++i)
+        p += ((k >> i) & 1 ? 1.0 : -1.0) * b["half"][i].get<double>() * toVec(b["axes"][i]).normalized();
+      corners.push_back(place.r * p + place.t);
+    }
+  } else if (operand.contains("hull")) {
+    for (const auto& p : operand["hull"]["points"]) corners.push_back(place.r * toVec(p) + place.t);
+  }
+  double best = -std::numeric_limits<double>::infinity();
+  for (const Vec3d& p : corners) best = std::max(best, p.dot(dir));
+  std::vector<Vec3d> out;
+  for (const Vec3d& p : corners)
+    if (p.dot(dir) >= best - tie) out.push_back(p);
+  return out;
+}
+
+/// FCL's `distance` of separated polytopes (box, hull) stopped early by libccd's GJK: its answer
+/// v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
+/// Minkowski difference with |w| = |v| within `tau` though w·v̂ < |v| − tau (GJK had not
+/// converged). FCL 0.7's `_ccdDist` (gjk_libccd-inl.h) stops when the new support point's *norm*
+/// equals the current distance, a test meant for a support point already in the simplex; a
+/// mirror-image point of the Minkowski difference at the same norm stops it too. Grid boxes with
+/// coincident faces make such points: their tied support vertices (FCL's box support picks by the
+/// sign of the direction rotated into the box frame, rounding decides a zero component) cancel.
+bool fclGjkStoppedOnEqualNorm(const J& query, const J& got, double tau) {
+  if (!got.contains("point_a") || !got.contains("point_b") || !got.contains("distance")) return false;
+  const Vec3d v = toVec(got["point_a"]) - toVec(got["point_b"]);
+  const double d = v.norm();
+  if (!(d > tau) || std::fabs(d - got["distance"].get<double>()) > tau) return false;
+  const Vec3d u = v / d;
+  for (const Vec3d& a : supportVertices(query["a"], -u, tau))
+    for (const Vec3d& b : supportVertices(query["b"], u, tau)) {
+      const Vec3d w = a - b;
+      if (std::fabs(w.norm() - d) <= tau && w.dot(u) < d - tau) return true;
+    }
+  return false;
+}
+
 /// The triangles of a mesh_* / model_* query's mesh, placed in the world (the model's world
 /// transform, or the query's `transform`); empty when the mesh is unknown.
 std::vector<std::array<Vec3d, 3>> placedQueryTriangles(const DiffCase& c, const J& query) {
@@ -1297,6 +1344,11 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // origin on its boundary, reports a depth that is not there
     if (fcl && c.op == "distance" && std::fabs(narrowNumber(c.op, exact)) <= tau && narrowNumber(c.op, got) < -tau)
       return peer("touching-depth");
+    // separated polytopes whose GJK stopped on a support point as far from the origin as its
+    // current closest point (libccd's equal-norm stop)
+    if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau && narrowNumber(c.op, got) > narrowNumber(c.op, exact) &&
+        fclGjkStoppedOnEqualNorm(query, got, numTol))
+      return peer("gjk-equal-norm-stop");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));
       return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");

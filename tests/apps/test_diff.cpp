@@ -301,6 +301,29 @@ TEST(DiffClassify, FclTouchingDepth) {
   EXPECT_NE(k.cause, "touching-depth") << describe(k);
 }
 
+TEST(DiffClassify, FclGjkEqualNormStop) {
+  // found by crux diff (seed 4242, case 24487, grid family): boxes with coincident faces
+  // (y in [0, 2] both), 2 apart along z; libccd's GJK starts at the Minkowski-difference point
+  // (2, 0, -4), finds the support point (-4, 0, -2) as far from the origin, and stops: FCL
+  // answers the corners' distance sqrt(20)
+  DiffRunner runner;
+  const auto c = primitive(
+      R"({"op":"distance","a":{"box":{"center":[-1,1,-1],"half":[1,1,1],"axes":[[0,1,0],[-1,0,0],[0,0,-1]]}},"b":{"box":{"center":[-2,0,3],"half":[2,1,1],"axes":[[1,0,0],[0,0,1],[0,-1,0]]},"transform":{"rotation":[0,0,0,1],"translation":[-2,1,0]}}})",
+      true);
+  const auto distance = [](const J& pa, const J& pb) {
+    double d2 = 0;
+    for (std::size_t i = 0; i < 3; ++i) d2 += (pa[i].get<double>() - pb[i].get<double>()) * (pa[i].get<double>() - pb[i].get<double>());
+    return J{{"op", "distance"}, {"distance", std::sqrt(d2)}, {"point_a", pa}, {"point_b", pb}};
+  };
+  auto k = classify(runner, c, "fcl", distance(J::array({0.0, 2.0, 0.0}), J::array({-2.0, 2.0, 4.0})));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  // a wrong distance sqrt(10) along (-1, 0, -3), where no support point is as far: not explained
+  k = classify(runner, c, "fcl", distance(J::array({0.0, 2.0, 0.0}), J::array({1.0, 2.0, 3.0})));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "unexplained");
+}
+
 TEST(DiffClassify, CastTimesKeepTheirGuaranteeOrAreWrong) {
   // A box of half 1 from z = 4 down by 8 onto a box of half 1 at the origin: exact t = 2/8.
   // Native's t a hair early (the shapes 1e-11 apart at it: within the contact tolerance) is
