@@ -5,6 +5,7 @@
 #include "cli/peer_worker.hpp"
 
 #include <crux/error.hpp>
+#include <crux/geometry/axis_aligned.hpp>
 #include <crux/geometry/cast.hpp>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/contact.hpp>
@@ -616,37 +617,52 @@ double gapToOperand(const DiffCase& c, const J& operand, const Vec3d& world) {
   return std::numeric_limits<double>::quiet_NaN();  // hull: not checked
 }
 
-/// A model's mesh operand as the setup lines place it: {"mesh": its mesh, "transform": its world
-/// transform} (parent_world ∘ local, composed in double from add_model, set_transform and
-/// set_parent lines; set_parent keeps the world pose). Null when the model is not defined.
-J modelOperand(const DiffCase& c, const std::string& name) {
-  struct Pose {
-    Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
-    Vec3d t = Vec3d::Zero();
-  };
+/// A model's placement in the world as the setup lines give it: its mesh, its world rotation
+/// (as a quaternion, and as a matrix: a chain of axis-aligned rotations composes exactly, each
+/// snapped as crux snaps them, docs/model.md) and translation (double).
+struct ModelWorldPose {
+  std::string mesh;
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  Vec3d t = Vec3d::Zero();
+};
+
+/// The world pose of model `name`: parent_world ∘ local, composed in double from add_model,
+/// set_transform and set_parent lines (set_parent keeps the world pose). Nothing when the model
+/// is not defined.
+std::optional<ModelWorldPose> modelWorldPose(const DiffCase& c, const std::string& name) {
   struct ModelLine {
-    std::string mesh, parent;
-    Pose local;
+    std::string parent;
+    ModelWorldPose local;
   };
   std::map<std::string, ModelLine> models;
-  auto readPose = [](const J& tr) {
-    Pose p;
+  auto readPose = [](const J& tr, std::string mesh) {
+    ModelWorldPose p;
+    p.mesh = std::move(mesh);
     if (!tr.is_object()) return p;
     if (tr.contains("translation")) p.t = toVec(tr["translation"]);
     if (tr.contains("rotation")) {
       const J& q = tr["rotation"];
       p.q = Eigen::Quaterniond(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>())
                 .normalized();
+      const Quat read(Real(q[0].get<double>()), Real(q[1].get<double>()), Real(q[2].get<double>()),
+                      Real(q[3].get<double>()));
+      const std::optional<Quat> snapped = snapAxisAligned(read.normalized());
+      p.r = snapped ? Eigen::Matrix3d(signedPermutation(*snapped).cast<double>()) : p.q.toRotationMatrix();
     }
     return p;
   };
-  std::function<Pose(const std::string&, int)> world = [&](const std::string& m, int depth) {
+  auto compose = [](const ModelWorldPose& a, const ModelWorldPose& b) {  // a ∘ b
+    ModelWorldPose p;
+    p.mesh = b.mesh;
+    p.q = a.q * b.q, p.r = a.r * b.r, p.t = a.r * b.t + a.t;
+    return p;
+  };
+  std::function<ModelWorldPose(const std::string&, int)> world = [&](const std::string& m, int depth) {
     const auto it = models.find(m);
-    if (it == models.end() || depth > 64) return Pose{};
-    const Pose& l = it->second.local;
-    if (it->second.parent.empty()) return l;
-    const Pose p = world(it->second.parent, depth + 1);
-    return Pose{p.q * l.q, p.q * l.t + p.t};
+    if (it == models.end() || depth > 64) return ModelWorldPose{};
+    if (it->second.parent.empty()) return it->second.local;
+    return compose(world(it->second.parent, depth + 1), it->second.local);
   };
   for (const auto& line : c.setup) {
     const J m = J::parse(line, nullptr, false);
@@ -654,28 +670,75 @@ J modelOperand(const DiffCase& c, const std::string& name) {
     const std::string op = m.value("op", "");
     if (op == "add_model" && m.contains("name") && m["name"].is_string()) {
       ModelLine& d = models[m["name"].get<std::string>()];
-      d.mesh = m.value("mesh", "");
       d.parent = m.contains("parent") && m["parent"].is_string() ? m["parent"].get<std::string>() : "";
-      d.local = readPose(m.contains("transform") ? m["transform"] : J());
+      d.local = readPose(m.contains("transform") ? m["transform"] : J(), m.value("mesh", ""));
     } else if ((op == "set_transform" || op == "set_parent") && m.contains("model") && m["model"].is_string()) {
       const std::string who = m["model"].get<std::string>();
       const auto it = models.find(who);
       if (it == models.end()) continue;
       if (op == "set_transform") {
-        it->second.local = readPose(m.contains("transform") ? m["transform"] : J());
+        it->second.local = readPose(m.contains("transform") ? m["transform"] : J(), it->second.local.mesh);
       } else {
-        const Pose w = world(who, 0);
+        const ModelWorldPose w = world(who, 0);
         it->second.parent = m.contains("parent") && m["parent"].is_string() ? m["parent"].get<std::string>() : "";
-        const Pose p = it->second.parent.empty() ? Pose{} : world(it->second.parent, 0);
-        it->second.local = Pose{p.q.conjugate() * w.q, p.q.conjugate() * (w.t - p.t)};
+        const ModelWorldPose p = it->second.parent.empty() ? ModelWorldPose{} : world(it->second.parent, 0);
+        ModelWorldPose inverse;
+        inverse.q = p.q.conjugate(), inverse.r = p.r.transpose(), inverse.t = -(p.r.transpose() * p.t);
+        it->second.local = compose(inverse, w);
       }
     }
   }
-  if (!models.count(name)) return J();
-  const Pose w = world(name, 0);
-  return J{{"mesh", models[name].mesh},
+  if (!models.count(name)) return std::nullopt;
+  return world(name, 0);
+}
+
+/// A model's mesh operand as the setup lines place it: {"mesh": its mesh, "transform": its world
+/// transform} (modelWorldPose). Null when the model is not defined.
+J modelOperand(const DiffCase& c, const std::string& name) {
+  const std::optional<ModelWorldPose> w = modelWorldPose(c, name);
+  if (!w) return J();
+  return J{{"mesh", w->mesh},
            {"transform",
-            {{"rotation", {w.q.w(), w.q.x(), w.q.y(), w.q.z()}}, {"translation", {w.t.x(), w.t.y(), w.t.z()}}}}};
+            {{"rotation", {w->q.w(), w->q.x(), w->q.y(), w->q.z()}}, {"translation", {w->t.x(), w->t.y(), w->t.z()}}}}};
+}
+
+/// The triangles of model `name` placed in the world by its exactly composed world pose
+/// (modelWorldPose: exact for axis-aligned rotations and integer data); empty when unknown.
+std::vector<std::array<V, 3>> placedModelTriangles(const DiffCase& c, const std::string& name) {
+  std::vector<std::array<V, 3>> out;
+  const std::optional<ModelWorldPose> w = modelWorldPose(c, name);
+  if (!w) return out;
+  std::vector<std::array<Vec3d, 3>> tris;
+  if (const Mesh* mesh = caseMesh(c, w->mesh, tris)) {
+    for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
+      const Triangle t = mesh->triangle(i);
+      tris.push_back({t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()});
+    }
+  }
+  for (const auto& t : tris) {
+    std::array<V, 3> placed;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const Vec3d p = w->r * t[k] + w->t;
+      placed[k] = {p.x(), p.y(), p.z()};
+    }
+    out.push_back(placed);
+  }
+  return out;
+}
+
+/// The triangles, placed in the world, of the models a model_ray / model_segment / scene_ray
+/// case is about: the query's model; for scene_ray the models named by either answer.
+std::vector<std::array<V, 3>> rayModelTriangles(const DiffCase& c, const J& query, const J& got, const J& exact) {
+  std::set<std::string> names;
+  if ((c.op == "model_ray" || c.op == "model_segment") && query.contains("model") && query["model"].is_string())
+    names.insert(query["model"].get<std::string>());
+  if (c.op == "scene_ray")
+    for (const J* a : {&got, &exact})
+      if (a->contains("model") && (*a)["model"].is_string()) names.insert((*a)["model"].get<std::string>());
+  std::vector<std::array<V, 3>> out;
+  for (const std::string& name : names)
+    for (const auto& t : placedModelTriangles(c, name)) out.push_back(t);
+  return out;
 }
 
 /// Checks the witness of a distance / mesh_distance / model_distance answer: point_a on A and point_b on B
@@ -1364,6 +1427,11 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
       maxDiff(exact["point"], query["point"]) <= tau)
     return peer("nearest-points-in-collision");
   if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, tris)) return peer("plane-endpoint");
+  // the same on a placed model's triangle: Bullet tests the ray moved into the model's frame in
+  // float (btCollisionWorld::rayTestSingle), where the endpoint lands on the triangle's plane (seed
+  // 9001 case 30028, a quarter turn: exactly) or within rounding of it, on either side
+  if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, rayModelTriangles(c, query, got, exact)))
+    return peer("plane-endpoint");
   // Bullet hits a triangle whose plane the ray or segment crosses just outside it
   if (bullet && isRayOrSegmentOp(c.op) && diff == Difference::Boolean && got.value("hit", false) &&
       withinFattenedEdges(query, tris))
