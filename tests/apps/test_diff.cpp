@@ -267,6 +267,39 @@ TEST(DiffClassify, BulletCoreOnSurface) {
   EXPECT_EQ(k.cause, "core-on-surface");
 }
 
+TEST(DiffClassify, BulletEpaOnMirrorSymmetricBoxes) {
+  // found by crux diff (seed 777, case 13091, grid family): boxes with parallel frames whose
+  // centres share x (-1): their Minkowski difference is symmetric about x = 0, and Bullet's EPA
+  // answers depth 0 along x for 1 along y
+  DiffRunner runner;
+  const J got = J{{"op", "contacts"},
+                  {"contacts",
+                   J::array({J{{"point_a", J::array({-1.0, -1.3333332538604736, 1.0})},
+                               {"point_b", J::array({-1.0, -1.3333332538604736, 1.0})},
+                               {"normal", J::array({1.0, 0.0, 0.0})},
+                               {"depth", 0.0},
+                               {"feature_a", nullptr},
+                               {"feature_b", nullptr}}})}};
+  const std::string a = R"({"box":{"center":[-1,0,0],"half":[1,2,1],"axes":[[0,0,1],[0,1,0],[-1,0,0]]}})";
+  const std::string b =
+      R"("transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[0,-2,-1]}}})";
+  auto c = primitive(
+      R"({"op":"contacts","a":)" + a +
+          R"(,"b":{"box":{"center":[-1,0,0],"half":[1,2,1],"axes":[[1,0,0],[0,-1,0],[0,0,-1]]},)" + b,
+      true);
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "epa-symmetric-boxes");
+  // b's centre 0.1 further along x: no symmetry, and the same answer is not explained by it
+  // (Bullet answers that case right)
+  c = primitive(
+      R"({"op":"contacts","a":)" + a +
+          R"(,"b":{"box":{"center":[-1.1,0,0],"half":[1,2,1],"axes":[[1,0,0],[0,-1,0],[0,0,-1]]},)" + b,
+      false);
+  k = classify(runner, c, "bullet", got);
+  EXPECT_NE(k.cause, "epa-symmetric-boxes") << describe(k);
+}
+
 TEST(DiffClassify, ModelTouchingThroughTrianglesThatOnlyTouch) {
   // found by crux diff (seed 777, case 21781, hierarchy family): one triangle of n1 has an edge
   // in the plane and lies below it, another has a corner in it and lies above: the model stays a
