@@ -214,6 +214,36 @@ TEST(DiffClassify, BulletFattenedEdges) {
   EXPECT_NE(k.cause, "fattened-edges");
 }
 
+TEST(DiffClassify, BulletFloatPlaneSide) {
+  // found by crux diff (seed 9001, case 3523, transformed family): the segment ends 1.95e-7 short
+  // of the triangle's plane (float build; 2.6e-8 in double), aimed at an edge's midpoint; Bullet's
+  // float side test puts the end beyond the plane and hits
+  DiffRunner runner;
+  const std::string triangle =
+      R"("triangle":[[9.52734375,28,0.203125],[2.3414113589961376,15.38368148810532,-0.9986088275909424],[-4.2898686633469625,7.412364631358513,-26.46396255493164]])";
+  auto c = primitive(R"({"op":"segment_triangle",)" + triangle +
+                         R"(,"segment":{"start":[-1,5,7],"end":[-0.9742286521754115,11.398023059731916,-13.73128604888916]}})",
+                     false);
+  auto k = classify(runner, c, "bullet", answer("segment_triangle", true));
+  // peer wrong in float builds; in double builds (the end 2.6e-8 short) the probe finds a move
+  // that makes exact hit: within tolerance, with this cause recorded
+  EXPECT_TRUE(k.verdict == (sizeof(Real) == sizeof(float) ? Verdict::PeerWrong : Verdict::WithinTolerance))
+      << describe(k);
+  EXPECT_EQ(k.cause, "float-plane-side");
+  // case 2641: a segment lying within 5e-8 of the plane, Bullet's dist_a and dist_b ±4.8e-7
+  c = primitive(
+      R"({"op":"segment_triangle","triangle":[[-4.483449546089636,1.1029365970939187,-3.860280752182007],[-2.11287466543839,1.4157566352794526,-1.7908562421798706],[-1.828321788432448,1.8183213801284608,-2.6608972549438477]],"segment":{"start":[-5.399876086843269,1.8337076429512484,-7.269992828369141],"end":[-0.31140553879902777,0.9234471837669702,2.0186502933502197]}})",
+      false);
+  k = classify(runner, c, "bullet", answer("segment_triangle", true));
+  EXPECT_EQ(k.cause, "float-plane-side") << describe(k);
+  // the first segment ending 1 % short of the plane: a hit there is not explained by it
+  c = primitive(R"({"op":"segment_triangle",)" + triangle +
+                    R"(,"segment":{"start":[-1,5,7],"end":[-0.97448636565,11.33404282773,-13.52396927]}})",
+                false);
+  k = classify(runner, c, "bullet", answer("segment_triangle", true));
+  EXPECT_NE(k.cause, "float-plane-side") << describe(k);
+}
+
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
   // found by crux diff (seed 4242, case 2806, sliver family): two corners 1.1e-7 apart, |n|² in
   // float 8e-15 < FLT_EPSILON²; the sphere holds the triangle 1.1 deep, Bullet reports nothing
