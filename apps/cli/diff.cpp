@@ -824,9 +824,9 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
-/// The vertices of a box or hull operand (world coordinates, under its `transform`) whose support
-/// value along `dir` is within `tie` of the largest: the points a support function may return in
-/// that direction. Empty for other operands (their support is not a vertex set).
+/// The vertices of a box, hull or triangle operand (world coordinates, under its `transform`)
+/// whose support value along `dir` is within `tie` of the largest: the points a support function
+/// may return in that direction. Empty for other operands (their support is not a vertex set).
 std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double tie) {
   const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
   std::vector<Vec3d> corners;
@@ -838,8 +838,9 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
         p += ((k >> i) & 1 ? 1.0 : -1.0) * b["half"][i].get<double>() * toVec(b["axes"][i]).normalized();
       corners.push_back(place.r * p + place.t);
     }
-  } else if (operand.contains("hull")) {
-    for (const auto& p : operand["hull"]["points"]) corners.push_back(place.r * toVec(p) + place.t);
+  } else if (operand.contains("hull") || operand.contains("triangle")) {
+    for (const auto& p : operand.contains("hull") ? operand["hull"]["points"] : operand["triangle"])
+      corners.push_back(place.r * toVec(p) + place.t);
   }
   double best = -std::numeric_limits<double>::infinity();
   for (const Vec3d& p : corners) best = std::max(best, p.dot(dir));
@@ -849,7 +850,8 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
   return out;
 }
 
-/// FCL's `distance` of separated polytopes (box, hull) stopped early by libccd's GJK: its answer
+/// FCL's `distance` of separated polytopes (box, hull, triangle: FCL measures a one-triangle
+/// BVHModel against a shape by the same GJK, shapeTriangleDistance) stopped early by libccd's GJK: its answer
 /// v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
 /// Minkowski difference with |w| = |v| within `tau` though w·v̂ < |v| − tau (GJK had not
 /// converged). FCL 0.7's `_ccdDist` (gjk_libccd-inl.h) stops when the new support point's *norm*
@@ -859,7 +861,12 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
 /// sign of the direction rotated into the box frame, rounding decides a zero component) cancel.
 bool fclGjkStoppedOnEqualNorm(const J& query, const J& got, double tau) {
   if (!got.contains("point_a") || !got.contains("point_b") || !got.contains("distance")) return false;
-  const Vec3d v = toVec(got["point_a"]) - toVec(got["point_b"]);
+  // FCL 0.7's fcl::distance measures a shape against a BVHModel (the fcl world's triangle
+  // operand) as the BVHModel against the shape and leaves the nearest points in that order
+  // (narrowphase/distance-inl.h)
+  const bool swapped = !query["a"].contains("triangle") && query["b"].contains("triangle");
+  const Vec3d v = swapped ? Vec3d(toVec(got["point_b"]) - toVec(got["point_a"]))
+                          : Vec3d(toVec(got["point_a"]) - toVec(got["point_b"]));
   const double d = v.norm();
   if (!(d > tau) || std::fabs(d - got["distance"].get<double>()) > tau) return false;
   const Vec3d u = v / d;

@@ -415,6 +415,15 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
   k = classify(runner, c, "fcl", distance(J::array({0.0, 2.0, 0.0}), J::array({1.0, 2.0, 3.0})));
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "unexplained");
+  // seed 9001, case 11232: a box and a triangle (FCL: a one-triangle BVHModel, measured against
+  // the box by the same GJK); FCL answers sqrt(11) for sqrt(2), its points in the order
+  // triangle, box (fcl::distance does not swap them back for a shape against a BVHModel)
+  const auto t = primitive(
+      R"({"op":"distance","a":{"box":{"center":[1,1,0],"half":[1,2,1],"axes":[[-1,0,0],[0,1,0],[0,0,-1]]}},"b":{"triangle":[[4,-1,2],[3,2,2],[4,0,3]]}})",
+      true);
+  k = classify(runner, t, "fcl", distance(J::array({3.0, 2.0, 2.0}), J::array({2.0, 3.0, -1.0})));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
 }
 
 TEST(DiffClassify, CastTimesKeepTheirGuaranteeOrAreWrong) {
