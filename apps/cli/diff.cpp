@@ -667,8 +667,9 @@ double gapToOperand(const DiffCase& c, const J& operand, const Vec3d& world) {
 }
 
 /// A model's placement in the world as the setup lines give it: its mesh, its world rotation
-/// (as a quaternion, and as a matrix: a chain of axis-aligned rotations composes exactly, each
-/// snapped as crux snaps them, docs/model.md) and translation (double).
+/// (as a quaternion, and as a matrix: each axis-aligned rotation snapped to its exact signed
+/// permutation as crux's model layer does, snapAxisAligned, so a chain of them composes exactly)
+/// and translation (double).
 struct ModelWorldPose {
   std::string mesh;
   Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
@@ -851,8 +852,8 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
 }
 
 /// FCL's `distance` of separated polytopes (box, hull, triangle: FCL measures a one-triangle
-/// BVHModel against a shape by the same GJK, shapeTriangleDistance) stopped early by libccd's GJK: its answer
-/// v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
+/// BVHModel against a shape by the same GJK, shapeTriangleDistance) stopped early by libccd's
+/// GJK: its answer v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
 /// Minkowski difference with |w| = |v| within `tau` though w·v̂ < |v| − tau (GJK had not
 /// converged). FCL 0.7's `_ccdDist` (gjk_libccd-inl.h) stops when the new support point's *norm*
 /// equals the current distance, a test meant for a support point already in the simplex; a
@@ -1502,8 +1503,8 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
       return peer("touching-depth");
     // separated polytopes whose GJK stopped on a support point as far from the origin as its
     // current closest point (libccd's equal-norm stop)
-    if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau && narrowNumber(c.op, got) > narrowNumber(c.op, exact) &&
-        fclGjkStoppedOnEqualNorm(query, got, numTol))
+    if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
+        narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(query, got, numTol))
       return peer("gjk-equal-norm-stop");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));

@@ -405,7 +405,10 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
       true);
   const auto distance = [](const J& pa, const J& pb) {
     double d2 = 0;
-    for (std::size_t i = 0; i < 3; ++i) d2 += (pa[i].get<double>() - pb[i].get<double>()) * (pa[i].get<double>() - pb[i].get<double>());
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double d = pa[i].get<double>() - pb[i].get<double>();
+      d2 += d * d;
+    }
     return J{{"op", "distance"}, {"distance", std::sqrt(d2)}, {"point_a", pa}, {"point_b", pb}};
   };
   auto k = classify(runner, c, "fcl", distance(J::array({0.0, 2.0, 0.0}), J::array({-2.0, 2.0, 4.0})));
