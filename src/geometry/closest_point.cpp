@@ -29,24 +29,6 @@ WVec3 closestOnSegment(const WVec3& a, const WVec3& b, const WVec3& p) {
   return a + ab * (t / len2);  // 0 < t < len2, so len2 > 0
 }
 
-/// Closest point of a proper (non-collinear) triangle: RTCD 5.1.5 ClosestPtPointTriangle, its
-/// region by closest_detail::closestRegionOnTriangle (the vertex tests come first and are
-/// inclusive, so where an edge test would tie with a vertex test the vertex wins: the errata's
-/// (2,-0.5,0) case).
-WVec3 closestOnProperTriangle(const WVec3& a, const WVec3& b, const WVec3& c, const WVec3& p) {
-  WVec3 q;
-  if (closest_detail::closestRegionOnTriangle(a, b, c, p, q) >= 0) return q;  // an edge or a vertex
-  // Face region: the orthogonal projection onto the plane. Computed from the normal rather than
-  // from va/vb/vc, whose cancellation grows with the distance of p.
-  const WVec3 n = (b - a).cross(c - a);
-  const Wide nn = n.squaredNorm();
-  if (!(nn > 0)) {  // too thin for its normal to be formed: its boundary (closestOnSliver's)
-    closest_detail::closestOnSliver(a, b, c, p, q);
-    return q;
-  }
-  return p - n * (n.dot(p - a) / nn);
-}
-
 WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
   const predicates::TriangleShape shape = predicates::classify(t);
   switch (shape.kind) {
@@ -57,15 +39,16 @@ WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
     case predicates::TriangleKind::Triangle:
       break;
   }
+  // A proper (non-collinear) triangle: RTCD 5.1.5 by closest_detail::closestOnProperTriangle (the
+  // vertex tests come first and are inclusive, so where an edge test would tie with a vertex
+  // test the vertex wins: the errata's (2,-0.5,0) case); a thin one by its boundary.
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
   const Wide longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
   constexpr Wide k = kTriangleThinRelative;
-  if ((b - a).cross(c - a).squaredNorm() <= k * k * longest2 * longest2) {
-    WVec3 q;
-    closest_detail::closestOnSliver(a, b, c, p, q);
-    return q;
-  }
-  return closestOnProperTriangle(a, b, c, p);
+  const bool thin = (b - a).cross(c - a).squaredNorm() <= k * k * longest2 * longest2;
+  WVec3 q;
+  closest_detail::closestOnProperTriangle(a, b, c, p, thin, q);
+  return q;
 }
 
 WVec3 closestOnRay(const Ray& r, const WVec3& p) {

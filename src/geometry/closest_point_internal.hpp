@@ -1,8 +1,9 @@
 // Closest-point routines shared inside the geometry layer: the closest point of a sliver
 // triangle (closestPoint(Triangle) in closest_point.cpp and the sphere–triangle contact in
 // triangle_contact.cpp, which also needs the point's region), the one point–triangle region
-// routine (the same two) and the one segment–segment closest-point routine (GJK's core pairs,
-// the contacts, triangle–triangle distance).
+// routine (the same two), the one point–triangle closest point built from them
+// (closestPoint(Triangle) and triangle–triangle distance) and the one segment–segment
+// closest-point routine (GJK's core pairs, the contacts, triangle–triangle distance).
 #pragma once
 
 #include <crux/math.hpp>
@@ -79,6 +80,25 @@ inline int closestRegionOnTriangle(const Eigen::Vector3d& a, const Eigen::Vector
   cand[1] = *corner[kVertex[region + 1]];
   q = cand[region >= 3];
   return region;
+}
+
+/// Closest point q of a non-degenerate triangle to p and its region (closestRegionOnTriangle's
+/// numbering: -1 the face, i the edge from corner i to corner i+1 (mod 3), 3 + i corner i): a
+/// thin triangle (`thin`, kTriangleThinRelative) by closestOnSliver, any other by RTCD 5.1.5's
+/// regions, the face's point by the orthogonal projection onto the plane of n = (b − a) × (c − a)
+/// (not from va/vb/vc, whose cancellation grows with the distance of p). A normal too small to be
+/// formed takes the sliver's boundary. closestPoint(Triangle) and triangle–triangle distance's
+/// crossing points both come here.
+inline int closestOnProperTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                   const Eigen::Vector3d& p, bool thin, Eigen::Vector3d& q) {
+  if (thin) return closestOnSliver(a, b, c, p, q);
+  const int region = closestRegionOnTriangle(a, b, c, p, q);
+  if (region >= 0) return region;  // an edge or a vertex
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  const double nn = n.squaredNorm();
+  if (!(nn > 0)) return closestOnSliver(a, b, c, p, q);
+  q = p - n * (n.dot(p - a) / nn);
+  return -1;
 }
 
 /// Closest points of the segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (Ericson, Real-Time
