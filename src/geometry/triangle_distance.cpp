@@ -1,5 +1,6 @@
 // Triangle–triangle closest points: 9 edge pairs (RTCD 5.1.9) + 6 vertex–face projections
-// (RTCD 5.1.5 restricted to the face region) + an exact intersection test for crossing pairs.
+// (RTCD 5.1.5 restricted to the face region) + an exact intersection test for crossing pairs,
+// whose common point comes from the one point–triangle closest point (closest_point_internal.hpp).
 // All arithmetic in double; see triangle_distance.hpp.
 
 #include <crux/geometry/overlap.hpp>
@@ -89,26 +90,33 @@ void vertexFace(const Tri& from, const Tri& to, bool swap, Candidate& best) {
   }
 }
 
-/// Distance from a point x on the plane of `to` to the triangle `to`, with its closest point
-/// and feature: the plane distance when x projects inside, else the nearest edge.
+/// Distance from a point x on the plane of `to` to the triangle `to` (which has a face), with
+/// its closest point and feature: the one point–triangle closest point
+/// (closest_detail::closestOnProperTriangle, as closestPoint(Triangle) takes it: RTCD 5.1.5's
+/// regions, a thin triangle by closestOnSliver). An edge region's point at a corner is that
+/// vertex (edgeFeature's rule).
 double pointToTriangle(const Tri& to, const V3& x, V3& q, std::uint32_t& feature) {
-  if (to.hasFace && to.projectsInside(x)) {
-    const double sd = to.side(x);
-    q = x - (sd / to.n2) * to.n;
+  // thin by classifyTriangle, here rather than in Tri: only crossing pairs come this way
+  const double longest2 = std::max({to.e[0].squaredNorm(), to.e[1].squaredNorm(), to.e[2].squaredNorm()});
+  const bool thin = classifyTriangle(std::sqrt(to.n2), longest2).thin;
+  const int region = closest_detail::closestOnProperTriangle(to.v[0], to.v[1], to.v[2], x, thin, q);
+  if (region < 0) {
     feature = featureId(FeatureKind::Face, 0);
-    return sd * sd / to.n2;
-  }
-  double best = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < 3; ++i) {
-    double s = 0, t = 0;
-    const double d2 = segmentSegment(to.v[i], to.e[i], x, V3::Zero(), s, t);
-    if (d2 < best) {
-      best = d2;
-      q = to.v[i] + s * to.e[i];
-      feature = edgeFeature(i, s);
+    // the plane distance, as vertexFace's: x is on the plane up to rounding, and |q − x| would
+    // be quantised to ulps of x where sd's rounding is relative to the residual
+    if (!thin) {
+      const double sd = to.side(x);
+      return sd * sd / to.n2;
     }
+  } else if (region >= 3) {
+    feature = featureId(FeatureKind::Vertex, std::uint32_t(region - 3));
+  } else {
+    const int j = (region + 1) % 3;
+    feature = q == to.v[region] ? featureId(FeatureKind::Vertex, std::uint32_t(region))
+              : q == to.v[j]    ? featureId(FeatureKind::Vertex, std::uint32_t(j))
+                                : featureId(FeatureKind::Edge, std::uint32_t(region));
   }
-  return best;
+  return (q - x).squaredNorm();
 }
 
 /// Intersecting pair: the points where edges of `from` cross the plane of `to`, each with its
