@@ -68,16 +68,22 @@ class TriangleRayTest {
   /// for each hit; false when f stopped it.
   template <class F>
   bool slots(const Mesh& mesh, std::uint32_t first, std::uint32_t count, F&& f) const {
+    using Filter = mesh_detail::RayTriangleFilter;
+    const Vec3* vertices = mesh.vertices().data();
     for (std::uint32_t k0 = first, end = first + count; k0 < end; k0 += 4) {
       const int n = int(std::min<std::uint32_t>(4, end - k0));
-      Triangle tris[4];
-      for (int j = 0; j < n; ++j) tris[j] = mesh.slotTriangle(k0 + std::uint32_t(j));
-      mesh_detail::RayTriangleFilter::Verdict verdicts[4];
-      setup().filter.classify(tris, n, verdicts);
-      for (int j = 0; j < n; ++j) {
-        if (verdicts[j] == mesh_detail::RayTriangleFilter::kMisses) continue;
-        Candidate c;
-        if (test(tris[j], verdicts[j], c) && !f(k0 + std::uint32_t(j), c)) return false;
+      const Vec3* a[4];
+      const Vec3* b[4];
+      const Vec3* c[4];
+      for (int j = 0; j < 4; ++j) {  // unused lanes repeat the first triangle
+        const TriangleIndices& t = mesh.slotIndices(k0 + std::uint32_t(j < n ? j : 0));
+        a[j] = vertices + t[0], b[j] = vertices + t[1], c[j] = vertices + t[2];
+      }
+      const Filter::LaneVerdicts verdicts = setup().filter.classify(Filter::TriangleLanes::gather(a, b, c));
+      for (unsigned todo = ~verdicts.misses & ((1u << n) - 1); todo != 0; todo &= todo - 1) {
+        const int j = __builtin_ctz(todo);
+        Candidate cand;
+        if (test(Triangle{*a[j], *b[j], *c[j]}, verdicts.of(j), cand) && !f(k0 + std::uint32_t(j), cand)) return false;
       }
     }
     return true;
@@ -142,7 +148,10 @@ mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
   return mesh_detail::RayBoxTest(ray.origin, ray.dir, scale);
 }
 
-/// Visitor for closest / any hit: keeps the best (t, index), prunes beyond it.
+/// Visitor for closest / any hit: keeps the best (t, index), prunes beyond it. kCounted: it
+/// counts nodes and triangles into `counters` (a separate instance, so the uncounted walk has
+/// no stores through a pointer that might alias the ray's constants).
+template <bool kCounted>
 struct RayVisitor {
   const Mesh& mesh;
   const mesh_detail::RayBoxTest& box;
@@ -155,22 +164,22 @@ struct RayVisitor {
   bool found = false;
 
   bool entry(const Aabb& b, Real& key) const {
-    if (counters) ++counters->nodes;
+    if constexpr (kCounted) ++counters->nodes;
     return box.enter(b, sLimit, key);
   }
   unsigned entry4(const WideBvhNode& node, Real (&keys)[4]) const {
-    if (counters) ++counters->nodes;
+    if constexpr (kCounted) ++counters->nodes;
     return box.enter4(node, sLimit, keys);
   }
   bool keep(Real key) const { return box.keep(key, sLimit); }
   bool leaf(std::uint32_t first, std::uint32_t count) {
-    if (counters) counters->triangles += count;
+    if constexpr (kCounted) counters->triangles += count;
     return test.slots(mesh, first, count,
                       [&](std::uint32_t k, const TriangleRayTest::Candidate& c) { return offer(c, mesh.bvh().primIndices[k]); });
   }
   /// The brute-force path's visit of triangle i.
   bool triangle(std::uint32_t i) {
-    if (counters) ++counters->triangles;
+    if constexpr (kCounted) ++counters->triangles;
     TriangleRayTest::Candidate c;
     return !test(mesh.triangle(i), c) || offer(c, i);
   }
@@ -211,15 +220,19 @@ std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const Ra
   TriangleRayTest test(ray, options, mesh);
   test.count(options.counters);
   const mesh_detail::RayBoxTest box = rayBoxTest(mesh, ray);
-  RayVisitor v{mesh, box, test, stopAtFirst, box.parameterLimit(options.maxDistance), options.counters};
-  if (path == QueryPath::BruteForce) {
-    for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
-      if (!v.triangle(i)) break;
-  } else {
-    mesh_detail::walkOrdered(mesh, v);
-  }
-  if (!v.found) return std::nullopt;
-  return test.hit(v.best, v.bestTriangle);
+  const auto run = [&](auto v) -> std::optional<MeshRayHit> {
+    if (path == QueryPath::BruteForce) {
+      for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i)
+        if (!v.triangle(i)) break;
+    } else {
+      mesh_detail::walkOrdered(mesh, v);
+    }
+    if (!v.found) return std::nullopt;
+    return test.hit(v.best, v.bestTriangle);
+  };
+  const Real sLimit = box.parameterLimit(options.maxDistance);
+  if (options.counters) return run(RayVisitor<true>{mesh, box, test, stopAtFirst, sLimit, options.counters});
+  return run(RayVisitor<false>{mesh, box, test, stopAtFirst, sLimit, nullptr});
 }
 
 // ---- shapes ----------------------------------------------------------------------------------

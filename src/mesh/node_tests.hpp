@@ -90,15 +90,18 @@ class RayBoxTest {
     for (int i = 0; i < 3; ++i) {
       const Real d = oneFactor ? dir[i] * f : std::ldexp(dir[i], k);
       const bool negative = std::signbit(d);
-      nearIsMax_[i] = negative;
       Real inv = Real(1) / d;
       if (dir[i] != 0 && std::fabs(d) < std::numeric_limits<Real>::min()) inv = std::numeric_limits<Real>::quiet_NaN();
-      invNear_[i] = inv * (1 - kSlabRoundingPad);
-      invFar_[i] = inv * (1 + kSlabRoundingPad);
-      nearLane_[i] = negative ? 3 + i : i;  // WideBvhNode's coordinate arrays: minX..minZ, maxX..maxZ
-      farLane_[i] = negative ? i : 3 + i;
-      originNear_[i] = negative ? origin[i] - pad : origin[i] + pad;
-      originFar_[i] = negative ? origin[i] + pad : origin[i] - pad;
+      const Real invNear = inv * (1 - kSlabRoundingPad), invFar = inv * (1 + kSlabRoundingPad);
+      const Real originNear = negative ? origin[i] - pad : origin[i] + pad;
+      const Real originFar = negative ? origin[i] + pad : origin[i] - pad;
+      // WideBvhNode's coordinate arrays: minX..minZ, maxX..maxZ, four Reals each
+      nearOffset_[i] = 4 * (negative ? 3 + i : i);
+      farOffset_[i] = 4 * (negative ? i : 3 + i);
+      originNear_[i] = Lanes{originNear, originNear, originNear, originNear};
+      originFar_[i] = Lanes{originFar, originFar, originFar, originFar};
+      invNear_[i] = Lanes{invNear, invNear, invNear, invNear};
+      invFar_[i] = Lanes{invFar, invFar, invFar, invFar};
       scaled[i] = d;
     }
     length_ = scaled.norm();
@@ -118,10 +121,11 @@ class RayBoxTest {
   bool enter(const Aabb& b, Real sLimit, Real& key) const {
     Real lo = 0, hi = std::numeric_limits<Real>::max();  // lo = +inf (parallel miss) fails lo <= hi
     for (int i = 0; i < 3; ++i) {
-      const Real nearPlane = nearIsMax_[i] ? b.max[i] : b.min[i];
-      const Real farPlane = nearIsMax_[i] ? b.min[i] : b.max[i];
-      const Real t0 = (nearPlane - originNear_[i]) * invNear_[i];
-      const Real t1 = (farPlane - originFar_[i]) * invFar_[i];
+      const bool nearIsMax = nearOffset_[i] > farOffset_[i];
+      const Real nearPlane = nearIsMax ? b.max[i] : b.min[i];
+      const Real farPlane = nearIsMax ? b.min[i] : b.max[i];
+      const Real t0 = (nearPlane - originNear_[i][0]) * invNear_[i][0];  // (every lane holds the value)
+      const Real t1 = (farPlane - originFar_[i][0]) * invFar_[i][0];
       lo = t0 > lo ? t0 : lo;  // NaN (0·inf) is dropped
       hi = t1 < hi ? t1 : hi;
     }
@@ -138,8 +142,8 @@ class RayBoxTest {
     constexpr Real kMax = std::numeric_limits<Real>::max();
     Lanes lo = {0, 0, 0, 0}, hi = {kMax, kMax, kMax, kMax};
     for (int i = 0; i < 3; ++i) {
-      const Lanes t0 = (lanesLoad(coords + 4 * nearLane_[i]) - originNear_[i]) * invNear_[i];
-      const Lanes t1 = (lanesLoad(coords + 4 * farLane_[i]) - originFar_[i]) * invFar_[i];
+      const Lanes t0 = (lanesLoad(coords + nearOffset_[i]) - originNear_[i]) * invNear_[i];
+      const Lanes t1 = (lanesLoad(coords + farOffset_[i]) - originFar_[i]) * invFar_[i];
       lo = lanesMax(t0, lo);  // NaN (0·inf) is dropped
       hi = lanesMin(t1, hi);
     }
@@ -151,9 +155,10 @@ class RayBoxTest {
   static bool keep(Real key, Real sLimit) { return key <= sLimit; }
 
  private:
-  Vec3 originNear_, originFar_, invNear_, invFar_;
-  int nearLane_[3], farLane_[3];
-  bool nearIsMax_[3];
+  // Per axis, each value in all four lanes: the near and far planes' padded origin and inverse
+  // direction; the offsets of the near and far coordinate arrays in a WideBvhNode.
+  Lanes originNear_[3], originFar_[3], invNear_[3], invFar_[3];
+  int nearOffset_[3], farOffset_[3];
   Real length_ = 1;
   Real absSlack_ = 0;
 };

@@ -75,15 +75,31 @@ class RayTriangleFilter {
   /// or kUnknown.
   enum Verdict : std::uint8_t { kMisses, kCrossesFront, kCrossesBack, kUnknown };
 
-  /// The verdicts of triangles t[0..n) (n <= 4) in out[0..n).
-  void classify(const Triangle* t, int n, Verdict (&out)[4]) const {
+  /// Four triangles' corners by coordinate, one triangle per lane.
+  struct TriangleLanes {
     Lanes ax, ay, az, bx, by, bz, cx, cy, cz;
-    for (int j = 0; j < 4; ++j) {
-      const Triangle& tj = t[j < n ? j : 0];  // unused lanes repeat the first triangle
-      ax[j] = tj.a.x(), ay[j] = tj.a.y(), az[j] = tj.a.z();
-      bx[j] = tj.b.x(), by[j] = tj.b.y(), bz[j] = tj.b.z();
-      cx[j] = tj.c.x(), cy[j] = tj.c.y(), cz[j] = tj.c.z();
+    /// Lanes from four triangles' corners (a lane may repeat another's triangle).
+    static TriangleLanes gather(const Vec3* const (&a)[4], const Vec3* const (&b)[4], const Vec3* const (&c)[4]) {
+      const auto lane = [](const Vec3* const (&v)[4], int k) {
+        return Lanes{(*v[0])[k], (*v[1])[k], (*v[2])[k], (*v[3])[k]};
+      };
+      return {lane(a, 0), lane(a, 1), lane(a, 2), lane(b, 0), lane(b, 1), lane(b, 2), lane(c, 0), lane(c, 1), lane(c, 2)};
     }
+  };
+
+  /// The verdicts of four lanes as bit masks (bit j: lane j): kMisses, kCrossesBack and
+  /// kCrossesFront; a lane in none of them is kUnknown.
+  struct LaneVerdicts {
+    unsigned misses, back, front;
+    Verdict of(int j) const {
+      return (misses >> j & 1u) ? kMisses : (back >> j & 1u) ? kCrossesBack : (front >> j & 1u) ? kCrossesFront : kUnknown;
+    }
+  };
+
+  /// The verdicts of the four triangles of t.
+  LaneVerdicts classify(const TriangleLanes& t) const {
+    const Lanes &ax = t.ax, &ay = t.ay, &az = t.az, &bx = t.bx, &by = t.by, &bz = t.bz, &cx = t.cx, &cy = t.cy,
+                &cz = t.cz;
     // e_ab = (b − a)·(d × (a − o)), and cyclically (the corners relative to the origin)
     const Lanes eab = edgeProduct(ax, ay, az, bx, by, bz);
     const Lanes ebc = edgeProduct(bx, by, bz, cx, cy, cz);
@@ -104,20 +120,15 @@ class RayTriangleFilter {
     const Lanes mo = (m + shift_) * (1 + kRayFilterMargin);
     const Lanes geometry = Real(kWideFilterMargin * 2) * mo * mo * dNorm1_;
     const Lanes bound = lanesMax(own, geometry) * (1 + kRayFilterMargin) + std::numeric_limits<Real>::min();
-    const unsigned misses = laneMask((lo < -bound) & (hi > bound));
-    const unsigned back = laneMask(lo > bound), front = laneMask(hi < -bound);
-    for (int j = 0; j < n; ++j)
-      out[j] = (misses >> j & 1u) ? kMisses
-               : (back >> j & 1u)  ? kCrossesBack
-               : (front >> j & 1u) ? kCrossesFront
-                                   : kUnknown;
+    return {laneMask((lo < -bound) & (hi > bound)), laneMask(lo > bound), laneMask(hi < -bound)};
   }
 
   /// The verdict of one triangle (classify with one lane used).
   Verdict classify(const Triangle& t) const {
-    Verdict v[4];
-    classify(&t, 1, v);
-    return v[0];
+    const Vec3* const a[4] = {&t.a, &t.a, &t.a, &t.a};
+    const Vec3* const b[4] = {&t.b, &t.b, &t.b, &t.b};
+    const Vec3* const c[4] = {&t.c, &t.c, &t.c, &t.c};
+    return classify(TriangleLanes::gather(a, b, c)).of(0);
   }
 
  private:

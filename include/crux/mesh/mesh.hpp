@@ -70,6 +70,8 @@ class Mesh {
     const TriangleIndices& t = slotTriangles_[k];
     return {vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]};
   }
+  /// The vertex indices of the triangle in BVH slot k (slotTriangle(k)'s corners).
+  const TriangleIndices& slotIndices(std::uint32_t k) const { return slotTriangles_[k]; }
   /// Every slot triangle's corners in BVH slot order: slotTriangle(k) at [3k, 3k + 3). The copy
   /// MeshDistanceAccel keeps so that a leaf's triangles are read contiguously, without the
   /// index gather.
