@@ -8,9 +8,13 @@
 /// already proved that the ray's line crosses the triangle's interior (the float filter of
 /// mesh/ray_kernel.hpp: all three edge products strictly of one sign beyond their error bound),
 /// properRayTriangleCrossing settles the rest with the filter-stage arithmetic alone: the side
-/// of the origin, the parameter and its accuracy bound (kRayParameterUlps); it answers
-/// "undecided" whenever raycast's filter stage would need the exact stage, and the caller then
-/// runs rayTriangleCrossing.
+/// of the origin, the parameter and its accuracy bound (kRayParameterUlps), bounded statically
+/// (Higham's forward error bounds on the products, not a running bound); it answers
+/// "undecided" when those bounds do not settle it, and the caller then runs rayTriangleCrossing.
+/// Its decision is exact and its parameter raycast's filter-stage value (test_raycast:
+/// CertifiedCrossingIsRaycastsOwnAnswerOrDefers); in double builds raycast itself may take its
+/// exact stage for such a crossing (a sign elsewhere unsure), so the two may differ in the last
+/// bits, both within kRayParameterUlps.
 
 #include <crux/geometry/predicates.hpp>
 #include <crux/geometry/raycast.hpp>

@@ -315,11 +315,30 @@ WVec3 toBoxFrame(const Obb& b, const WVec3& v) {
 /// triangle, but grows as L/h on a sliver (height h, longest edge L), whose normal is the cross
 /// product of two nearly antiparallel edges (`crux diff`'s flat caps, docs/diff.md): such hits
 /// are recomputed by the exact stage. A NaN or infinite bound (overflow) is imprecise too.
-bool imprecise(const Frac<robust::Bounded>& f, Wide s, const WVec3& normal, const Ray& ray, const Triangle& tri) {
+/// numError, denError: the bounds on num and den.
+bool imprecise(Wide numError, Wide denError, Wide s, const WVec3& normal, const Ray& ray, const Triangle& tri) {
   const Wide S = std::max(wide(ray.origin).cwiseAbs().maxCoeff(), wide(tri.a).cwiseAbs().maxCoeff());
   const Wide t = s * wide(ray.dir).cwiseAbs().maxCoeff();  // <= s|d|
   const Wide allowed = Wide(kRayParameterUlps) * Wide(std::numeric_limits<Real>::epsilon()) * (S + t);
-  return !(f.num.e + s * f.den.e <= allowed * normal.cwiseAbs().maxCoeff());
+  return !(numError + s * denError <= allowed * normal.cwiseAbs().maxCoeff());
+}
+bool imprecise(const Frac<robust::Bounded>& f, Wide s, const WVec3& normal, const Ray& ray, const Triangle& tri) {
+  return imprecise(f.num.e, f.den.e, s, normal, ray, tri);
+}
+
+/// A static forward error bound (Higham, Accuracy and Stability of Numerical Algorithms, 2002,
+/// ch. 3) on n·v evaluated in Wide as V3's dot of n = (b − a) × (c − a) (V3's cross) with v,
+/// every input exact in Wide and every difference formed once: each n_i is off by at most
+/// γ₄·P_i (P_i = the sum of |products| forming it, from the rounded edges), the dot adds γ₃ on
+/// Σ|n_i v_i|, so |error| <= γ₈·Σ P_i|v_i| for rounded v = x − o as well. Taken as 16u·Q·(1 +
+/// 8u) with Q = Σ P_i|v_i| computed in Wide, plus an absolute term for underflowed products
+/// (each at most the smallest subnormal, carried through one more product). vAbs: |v| per
+/// axis; p: P per axis.
+Wide staticDotCrossBound(const WVec3& p, const WVec3& vAbs) {
+  constexpr Wide u = std::numeric_limits<Wide>::epsilon() / 2;
+  constexpr Wide tiny = std::numeric_limits<Wide>::denorm_min();
+  const Wide q = p.dot(vAbs);
+  return 16 * u * q * (1 + 8 * u) + tiny * (8 * vAbs.sum() + 8);
 }
 
 }  // namespace
@@ -358,25 +377,33 @@ std::optional<RayCrossing> rayTriangleCrossing(const Ray& ray, const Triangle& t
 }
 
 int properRayTriangleCrossing(const Ray& ray, const Triangle& t, int det, RayCrossing& out) {
-  using T = robust::Bounded;
-  robust::FilterJudge judge;
-  // firstHit's expressions for a crossing of the plane (the same values, so the same bits)
-  const V3<T> o = lift<T>(ray.origin), d = lift<T>(ray.dir);
-  const V3<T> A = lift<T>(t.a), B = lift<T>(t.b), C = lift<T>(t.c);
-  const V3<T> a = A - o;
-  const V3<T> n = (B - A).cross(C - A);
+  // firstHit's expressions for a crossing of the plane in Wide (the values of its filter stage:
+  // the same bits whenever raycast's filter stage decides; where it is unsure of another sign,
+  // raycast's exact stage may round the parameter differently, both within kRayParameterUlps),
+  // with static error bounds in place of Bounded's running ones
+  const V3<Wide> o = lift<Wide>(ray.origin), d = lift<Wide>(ray.dir);
+  const V3<Wide> A = lift<Wide>(t.a), B = lift<Wide>(t.b), C = lift<Wide>(t.c);
+  const V3<Wide> a = A - o, e1 = B - A, e2 = C - A;
+  const V3<Wide> n = e1.cross(e2);
   // n·a = a·(b × c) exactly (b, c the other corners relative to o): the origin's side
-  const T na = n.dot(a);
-  const int side = judge(na);
-  if (judge.uncertain || side == 0) return -1;  // near or in the plane: raycast's own path
-  if ((side > 0) != (det > 0)) return 0;        // the plane is behind the origin
-  const T nd = n.dot(d);
-  if (judge(nd) != det) return -1;
-  const Frac<T> f = det > 0 ? Frac<T>{na, nd} : Frac<T>{-na, -nd};
-  const WVec3 nApprox = robust::approx(n);
-  if (!nApprox.allFinite() || !std::isfinite(na.v) || !std::isfinite(nd.v)) return -1;
-  const Wide value = f.value();
-  if (imprecise(f, value, nApprox, ray, t)) return -1;
+  const Wide na = n.dot(a), nd = n.dot(d);
+  if (!std::isfinite(na) || !std::isfinite(nd)) return -1;
+  using std::abs;
+  const WVec3 p(abs(e1.y * e2.z) + abs(e1.z * e2.y), abs(e1.z * e2.x) + abs(e1.x * e2.z),
+                abs(e1.x * e2.y) + abs(e1.y * e2.x));
+  const Wide naError = staticDotCrossBound(p, WVec3(abs(a.x), abs(a.y), abs(a.z)));
+  const Wide ndError = staticDotCrossBound(p, WVec3(abs(d.x), abs(d.y), abs(d.z)));
+  // certain signs, with Bounded's safety factor on the comparison
+  constexpr Wide kSafety = robust::Bounded::kSafety;
+  if (!(abs(na) > naError * kSafety)) return -1;  // near or in the plane: raycast's own path
+  if ((na > 0) != (det > 0)) return 0;           // the plane is behind the origin
+  if (!(abs(nd) > ndError * kSafety) || (nd > 0) != (det > 0)) return -1;
+  const WVec3 nApprox(n.x, n.y, n.z);
+  if (!nApprox.allFinite()) return -1;
+  // Frac::value of (na, nd) or (−na, −nd): the same quotient (0 if it underflowed)
+  const Wide quotient = na / nd;
+  const Wide value = quotient > 0 ? quotient : Wide(0);
+  if (imprecise(naError, ndError, value, nApprox, ray, t)) return -1;
   out.s = value;
   out.normal = det > 0 ? WVec3(-nApprox) : nApprox;
   return 1;

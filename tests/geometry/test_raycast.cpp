@@ -12,6 +12,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exact/exact.hpp>
+
+#include "geometry/ray_triangle.hpp"
+#include "mesh/ray_kernel.hpp"
 #include <iomanip>
 #include <limits>
 #include <optional>
@@ -971,6 +974,70 @@ TEST(RaycastProperty, SegmentPlaneMatchesExact) {
 // Found by fuzz_geometry (tests/fuzz/corpus/geometry/crash-ray-plane-infinite-t): a ray almost
 // parallel to a plane meets it so far away that t overflows Real; it was reported as a hit at
 // t = inf with an infinite point. Such a hit is beyond every representable point: a miss.
+// properRayTriangleCrossing (the mesh kernel's certified path, static error bounds) against
+// raycast's exact decision: for the lines the mesh kernel's float filter proves to cross a
+// triangle's interior (its contract) it either defers (-1) or decides hit or miss exactly, with
+// a parameter within raycast's accuracy rule (kRayParameterUlps ulps of Real × (S + t) / cos θ)
+// of the exact one. (Not always raycast's bits: where raycast's filter stage is unsure of
+// another sign, raycast takes its exact stage, which may round the parameter differently.)
+// The cases press on its bounds (in double builds: a float origin is never that near a plane): origins a hair off the plane on either side, near-grazing directions, far origins, large and
+// tiny coordinates, long thin triangles.
+TEST(RaycastProperty, CertifiedCrossingIsRaycastsOwnAnswerOrDefers) {
+  std::mt19937_64 rng(20261129);
+  std::uniform_real_distribution<double> unit(-1, 1), weight(0.05, 1);
+  const double scales[] = {1e-6, 1, 1e3, 1e6};
+  int decided = 0, deferred = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const double scale = scales[i % 4];
+    const Vec3 base(Real(unit(rng) * scale), Real(unit(rng) * scale), Real(unit(rng) * scale));
+    auto corner = [&](double size) {
+      return Vec3(base + Vec3(Real(unit(rng) * size), Real(unit(rng) * size), Real(unit(rng) * size)));
+    };
+    const double size = scale * (i % 3 == 0 ? 1e-3 : 0.3);
+    const Triangle t{corner(size), corner(size), i % 5 == 0 ? corner(size * 1e-3) : corner(size)};
+    // a point well inside, in Wide: its rounding moves it by far less than its margin
+    const double w0 = weight(rng), w1 = weight(rng), w2 = weight(rng), sum = w0 + w1 + w2;
+    const WVec3 inside = (wide(t.a) * w0 + wide(t.b) * w1 + wide(t.c) * w2) / sum;
+    const WVec3 n = (wide(t.b) - wide(t.a)).cross(wide(t.c) - wide(t.a));
+    if (!(n.norm() > 1e-3 * (wide(t.b) - wide(t.a)).squaredNorm())) continue;  // not a sliver
+    WVec3 dir(unit(rng), unit(rng), unit(rng));
+    if (i % 7 == 0) dir = dir - n * (dir.dot(n) / n.squaredNorm()) * (1 - 1e-6);  // near grazing
+    const Vec3 d = dir.cast<Real>();
+    // origin at parameter -s along d from the inside point: in front (s > 0), behind (s < 0),
+    // far, or a hair off the plane
+    const double choices[] = {1, -1, 1e3, -1e3, 1e-7, -1e-7, 1e-15, -1e-15, 1e-17, -1e-17};
+    const double sParam = choices[i % 10] * size / wide(d).norm();
+    const Vec3 origin = (inside - wide(d) * sParam).cast<Real>();
+    const Ray ray{origin, d};
+    using Filter = mesh_detail::RayTriangleFilter;
+    const Filter::Verdict proof = Filter(ray).classify(t);
+    if (proof != Filter::kCrossesBack && proof != Filter::kCrossesFront) continue;
+    geometry_detail::RayCrossing certified;
+    const int verdict = geometry_detail::properRayTriangleCrossing(ray, t, proof == Filter::kCrossesBack ? 1 : -1, certified);
+    if (verdict < 0) {
+      ++deferred;
+      continue;
+    }
+    ++decided;
+    const std::optional<double> exactT = exact::raycast(ray, t);
+    const auto where = [&] {
+      return "case " + std::to_string(i) + ": " + str(t.a) + str(t.b) + str(t.c) + ", origin " + str(origin) +
+             ", direction " + str(d);
+    };
+    ASSERT_EQ(verdict == 1, exactT.has_value()) << where();
+    if (exactT) {
+      const double length = wide(d).norm(), tCertified = certified.s * length;
+      const double S = std::max(wide(origin).cwiseAbs().maxCoeff(), wide(t.a).cwiseAbs().maxCoeff());
+      const double cosine = std::abs(n.dot(wide(d))) / (n.norm() * length);
+      ASSERT_LE(std::abs(tCertified - *exactT), kRayParameterUlps * double(kEps) * (S + *exactT) / cosine) << where();
+      ASSERT_LT(certified.normal.dot(wide(d)), 0) << "the normal faces the origin: " << where();
+    }
+  }
+  // (in double builds most origins 1e-15 and 1e-17 off the plane are deferred, rightly)
+  EXPECT_GT(decided, 2 * deferred) << "the certified path defers too often";
+  EXPECT_GT(decided, 50000);
+}
+
 TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
   const Ray ray{Vec3(4, 0, 0), Vec3(2, 1, 5)};
   const Plane plane{Vec3(-1, 2, std::numeric_limits<Real>::min()), 4};  // n·dir = 5·min
