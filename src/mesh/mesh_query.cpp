@@ -68,25 +68,11 @@ class TriangleRayTest {
   /// for each hit; false when f stopped it.
   template <class F>
   bool slots(const Mesh& mesh, std::uint32_t first, std::uint32_t count, F&& f) const {
-    using Filter = mesh_detail::RayTriangleFilter;
-    const Vec3* vertices = mesh.vertices().data();
-    for (std::uint32_t k0 = first, end = first + count; k0 < end; k0 += 4) {
-      const int n = int(std::min<std::uint32_t>(4, end - k0));
-      const Vec3* a[4];
-      const Vec3* b[4];
-      const Vec3* c[4];
-      for (int j = 0; j < 4; ++j) {  // unused lanes repeat the first triangle
-        const TriangleIndices& t = mesh.slotIndices(k0 + std::uint32_t(j < n ? j : 0));
-        a[j] = vertices + t[0], b[j] = vertices + t[1], c[j] = vertices + t[2];
-      }
-      const Filter::LaneVerdicts verdicts = setup().filter.classify(Filter::TriangleLanes::gather(a, b, c));
-      for (unsigned todo = ~verdicts.misses & ((1u << n) - 1); todo != 0; todo &= todo - 1) {
-        const int j = __builtin_ctz(todo);
-        Candidate cand;
-        if (test(Triangle{*a[j], *b[j], *c[j]}, verdicts.of(j), cand) && !f(k0 + std::uint32_t(j), cand)) return false;
-      }
-    }
-    return true;
+    return mesh_detail::filterSlots(setup().filter, mesh, first, count,
+                                    [&](std::uint32_t k, const Triangle& t, mesh_detail::RayTriangleFilter::Verdict v) {
+                                      Candidate cand;
+                                      return !test(t, v, cand) || f(k, cand);
+                                    });
   }
 
   bool test(const Triangle& t, mesh_detail::RayTriangleFilter::Verdict v, Candidate& out) const {
@@ -240,10 +226,14 @@ std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const Ra
 /// Runs a shape query: `nodeTest(box)` culls subtrees conservatively (mesh_walk.hpp: over the
 /// mesh's wide or binary BVH), `triTest(triangle)` is the exact per-triangle decision.
 /// With `out == nullptr` it stops at the first touching triangle and reports whether there was
-/// one; otherwise it appends every touching index (ascending).
-template <class NodeTest, class TriTest, class LaneTest = std::nullptr_t>
+/// one; otherwise it appends every touching index (ascending). Optional: `laneTest(node)`, the
+/// node test on a wide node's four lanes; `slotsTest(first, count, touched)`, triTest on a
+/// leaf's slots together, calling touched(k) for each slot k whose triangle passes (in slot
+/// order; false from it stops the test, which then returns false).
+template <class NodeTest, class TriTest, class LaneTest = std::nullptr_t, class SlotsTest = std::nullptr_t>
 bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, const TriTest& triTest,
-                std::vector<std::uint32_t>* out, const LaneTest& laneTest = nullptr) {
+                std::vector<std::uint32_t>* out, const LaneTest& laneTest = nullptr,
+                const SlotsTest& slotsTest = nullptr) {
   if (path == QueryPath::BruteForce) {
     bool any = false;
     for (std::uint32_t i = 0, n = std::uint32_t(mesh.triangleCount()); i < n; ++i) {
@@ -266,14 +256,24 @@ bool shapeQuery(const Mesh& mesh, QueryPath path, const NodeTest& nodeTest, cons
       if constexpr (std::is_same_v<LaneTest, std::nullptr_t>) return mesh_detail::eachLane(n, nodeTest);
       else return laneTest(n);
     }
-    bool slot(std::uint32_t k) {
-      if (!triTest(mesh.slotTriangle(k))) return true;
+    const SlotsTest& slotsTest;
+    bool slot(std::uint32_t k) { return !triTest(mesh.slotTriangle(k)) || touched(k); }
+    bool leaf(std::uint32_t first, std::uint32_t count) {
+      if constexpr (std::is_same_v<SlotsTest, std::nullptr_t>) {
+        for (std::uint32_t k = first, end = first + count; k < end; ++k)
+          if (!slot(k)) return false;
+        return true;
+      } else {
+        return slotsTest(first, count, [&](std::uint32_t k) { return touched(k); });
+      }
+    }
+    bool touched(std::uint32_t k) {
       any = true;
       if (!out) return false;
       out->push_back(mesh.bvh().primIndices[k]);
       return true;
     }
-  } v{mesh, nodeTest, triTest, out, false, laneTest};
+  } v{mesh, nodeTest, triTest, out, false, laneTest, slotsTest};
   mesh_detail::walkSlots(mesh, v);
   if (out) std::sort(out->begin(), out->end());
   return v.any;
@@ -309,11 +309,20 @@ bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vecto
   // inside the filter's margin (64ε on the same terms). A zero-length segment gives zero
   // products, which it never rejects; a direction that overflows Real is not filtered.
   const mesh_detail::RayTriangleFilter filter(Ray{s.start, d});
-  const bool filtered = d.allFinite();
   auto tri = [&](const Triangle& t) {
-    return !(filtered && filter.classify(t) == mesh_detail::RayTriangleFilter::kMisses) && intersects(s, t);
+    return filter.classify(t) != mesh_detail::RayTriangleFilter::kMisses && intersects(s, t);
   };
-  return shapeQuery(mesh, path, node, tri, out, lanes);
+  auto slots = [&](std::uint32_t first, std::uint32_t count, auto&& touched) {
+    return mesh_detail::filterSlots(filter, mesh, first, count,
+                                    [&](std::uint32_t k, const Triangle& t, mesh_detail::RayTriangleFilter::Verdict) {
+                                      return !intersects(s, t) || touched(k);
+                                    });
+  };
+  if (!d.allFinite()) {  // (a direction that overflows Real is not filtered)
+    auto exactOnly = [&](const Triangle& t) { return intersects(s, t); };
+    return shapeQuery(mesh, path, node, exactOnly, out, lanes);
+  }
+  return shapeQuery(mesh, path, node, tri, out, lanes, slots);
 }
 
 bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<std::uint32_t>* out) {

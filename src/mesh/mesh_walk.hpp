@@ -31,19 +31,34 @@ struct HasEntry4<V, std::void_t<decltype(std::declval<const V&>().entry4(std::de
 /// Every slot whose path of boxes passes the visitor's test, depth first, leaves in the tree's
 /// left-to-right order. Visitor: `bool touches(const Aabb&) const` (monotone: a box inside a
 /// rejected one is rejected), optionally `unsigned touches4(const WideBvhNode&) const` (bit i:
-/// touches' answer for lane i), and `bool slot(std::uint32_t k)` (false stops the walk).
-/// Returns false when the visitor stopped it.
+/// touches' answer for lane i), and `bool slot(std::uint32_t k)` or `bool leaf(std::uint32_t
+/// first, std::uint32_t count)` (a leaf's slots together; false stops the walk). Returns false
+/// when the visitor stopped it.
+/// walkSlots' adapter of a visitor to traverseWideBvhSlots (the wide node test from touches4
+/// or touches); WalkLeaves also hands whole leaves to a visitor that takes them.
+template <class V>
+struct WalkSlots {
+  V& v;
+  unsigned enter(const WideBvhNode& n) const {
+    if constexpr (HasTouches4<V>::value) return v.touches4(n);
+    else return eachLane(n, [&](const Aabb& b) { return v.touches(b); });
+  }
+  bool slot(std::uint32_t k) { return v.slot(k); }
+};
+template <class V>
+struct WalkLeaves : WalkSlots<V> {
+  bool leaf(std::uint32_t first, std::uint32_t count) { return this->v.leaf(first, count); }
+};
+
 template <class V>
 bool walkSlots(const Mesh& mesh, V& v) {
-  struct Wide {
-    V& v;
-    unsigned enter(const WideBvhNode& n) const {
-      if constexpr (HasTouches4<V>::value) return v.touches4(n);
-      else return eachLane(n, [&](const Aabb& b) { return v.touches(b); });
-    }
-    bool slot(std::uint32_t k) { return v.slot(k); }
-  } w{v};
-  return traverseWideBvhSlots(mesh.bvh(), w);
+  if constexpr (detail::HasLeafSlots<V>::value) {
+    WalkLeaves<V> w{{v}};
+    return traverseWideBvhSlots(mesh.bvh(), w);
+  } else {
+    WalkSlots<V> w{v};
+    return traverseWideBvhSlots(mesh.bvh(), w);
+  }
 }
 
 /// Nearest first: subtrees in increasing key, deferred ones dropped when the visitor no longer

@@ -16,6 +16,7 @@
 /// geometry/ray_triangle.hpp). Four triangles are classified at once, one per SIMD lane.
 
 #include <crux/geometry/shapes.hpp>
+#include <crux/mesh/mesh.hpp>
 
 #include "lanes.hpp"
 
@@ -151,5 +152,30 @@ class RayTriangleFilter {
   Real delta_ = 0;  // |o' − (the line's point)|∞, rounded up (0: o' = o)
   Real shift_ = 0;  // |o' − o|∞, rounded up
 };
+
+/// The triangles of slots [first, first + count) of a mesh's BVH through the filter, four at a
+/// time (the corners gathered from the slot indices straight into the lanes; a triangle's verdict
+/// does not depend on its lane): f(k, triangle, verdict) for each slot k the filter does not
+/// reject, in slot order. False from f stops it, and is returned.
+template <class F>
+bool filterSlots(const RayTriangleFilter& filter, const Mesh& mesh, std::uint32_t first, std::uint32_t count, F&& f) {
+  const Vec3* vertices = mesh.vertices().data();
+  for (std::uint32_t k0 = first, end = first + count; k0 < end; k0 += 4) {
+    const int n = int(std::min<std::uint32_t>(4, end - k0));
+    const Vec3* a[4];
+    const Vec3* b[4];
+    const Vec3* c[4];
+    for (int j = 0; j < 4; ++j) {  // unused lanes repeat the first triangle
+      const TriangleIndices& t = mesh.slotIndices(k0 + std::uint32_t(j < n ? j : 0));
+      a[j] = vertices + t[0], b[j] = vertices + t[1], c[j] = vertices + t[2];
+    }
+    const RayTriangleFilter::LaneVerdicts verdicts = filter.classify(RayTriangleFilter::TriangleLanes::gather(a, b, c));
+    for (unsigned todo = ~verdicts.misses & ((1u << n) - 1); todo != 0; todo &= todo - 1) {
+      const int j = __builtin_ctz(todo);
+      if (!f(k0 + std::uint32_t(j), Triangle{*a[j], *b[j], *c[j]}, verdicts.of(j))) return false;
+    }
+  }
+  return true;
+}
 
 }  // namespace crux::mesh_detail

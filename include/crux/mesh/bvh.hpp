@@ -220,12 +220,22 @@ void refitWideBvhSlots(WideBvh& bvh, const SlotBox& slotBox) {
 }
 
 
+namespace detail {
+template <class V, class = void>
+struct HasLeafSlots : std::false_type {};
+template <class V>
+struct HasLeafSlots<V, std::void_t<decltype(std::declval<V&>().leaf(std::uint32_t(), std::uint32_t()))>>
+    : std::true_type {};
+}  // namespace detail
+
 /// Depth-first traversal of a WideBvh, visiting the leaves in the order traverseBvhSlots visits
 /// the binary BVH's with equal keys (lanes in order, each lane's subtree before the next lane).
 /// Visitor:
 ///   `unsigned enter(const WideBvhNode& node)` — bit i set: enter lane i (unused lanes must be
 ///       left out; their empty boxes make an overlap test reject them);
-///   `bool slot(std::uint32_t k)` — as traverseBvhSlots'; false stops the traversal.
+///   `bool slot(std::uint32_t k)` — as traverseBvhSlots'; false stops the traversal; or
+///   `bool leaf(std::uint32_t first, std::uint32_t count)` — the slots of one leaf together (so
+///       their triangles can be tested in SIMD lanes), in place of slot(); false stops it.
 /// A lane is tested without its binary parent's box (the parent is skipped), so the test must be
 /// monotone (a box inside a rejected box is rejected), as separating-axis and distance tests are.
 /// Returns false when the visitor stopped it early.
@@ -241,8 +251,12 @@ bool traverseWideBvhSlots(const WideBvh& bvh, Visitor& visitor) {
   while (top > 0) {
     const Entry e = stack[--top];
     if (e.count > 0) {
-      for (std::uint32_t k = e.child, end = e.child + e.count; k < end; ++k)
-        if (!visitor.slot(k)) return false;
+      if constexpr (detail::HasLeafSlots<Visitor>::value) {
+        if (!visitor.leaf(e.child, e.count)) return false;
+      } else {
+        for (std::uint32_t k = e.child, end = e.child + e.count; k < end; ++k)
+          if (!visitor.slot(k)) return false;
+      }
       continue;
     }
     const WideBvhNode& node = bvh.nodes[e.child];
