@@ -493,8 +493,38 @@ Json benches(Context& c) {
   return all;
 }
 
+/// The number of calls to functions whose name contains `callee`, read from a callgrind output
+/// file (compressed names: "fn=(id) name" or "cfn=(id) name" defines an id, a later "cfn=(id)"
+/// reuses it; the "calls=N ..." line of a call follows its cfn line, after any cob/cfi lines).
+/// -1 when the file cannot be read.
+double callgrindCalls(const std::string& file, const std::string& callee) {
+  std::ifstream in(file);
+  if (!in) return -1;
+  std::map<std::string, std::string> names;
+  double total = 0;
+  bool counting = false;  // within a call record of the callee (its cfn= line seen, not its calls=)
+  for (std::string line; std::getline(in, line);) {
+    const bool call = line.rfind("cfn=(", 0) == 0;
+    if (call || line.rfind("fn=(", 0) == 0) {
+      const std::size_t open = line.find('('), close = line.find(')');
+      if (close == std::string::npos) continue;
+      const std::string id = line.substr(open + 1, close - open - 1);
+      if (close + 2 <= line.size()) names[id] = line.substr(close + 2);
+      counting = call && names[id].find(callee) != std::string::npos;
+      continue;
+    }
+    if (line.rfind("calls=", 0) == 0) {
+      if (counting) total += std::atof(line.c_str() + 6);
+      counting = false;
+    }
+  }
+  return total;
+}
+
 /// Instruction counts (callgrind, inclusive) of each backend's closest-hit ray function on
-/// bench_scaling's 10k-triangle torus, 2000 rays, 1 thread.
+/// bench_scaling's 10k-triangle torus, 2000 rays, 1 thread. Divided by the number of rays the
+/// function cast: its calls of the per-ray query (bench_scaling runs each engine's function on
+/// the rays several times: the reference, the agreement pass, the timed runs, the refit check).
 Json callgrind(Context& c) {
   const std::string valgrind = "/usr/bin/valgrind";
   const std::string exe = c.bin("bench_scaling");
@@ -505,10 +535,15 @@ Json callgrind(Context& c) {
   out["workload"] = "bench_scaling closest-hit rays, 10k-triangle torus, 2000 rays, 1 thread: instructions (callgrind "
                     "Ir, inclusive) of the backend's ray function over all its passes, divided by passes x rays";
   Json counts = Json::object();
-  const std::vector<std::pair<std::string, std::string>> functions = {
-      {"crux", "*cruxRays*"}, {"embree", "crux::bench::EmbreePeer::closestHits*"},
-      {"bullet", "crux::bench::BulletPeer::closestHits*"}};
-  for (const auto& [backend, pattern] : functions) {
+  struct RayFunction {
+    std::string backend, pattern, perRay;  // toggle-collect pattern, the per-ray call inside it
+  };
+  const std::vector<RayFunction> functions = {
+      {"crux", "*cruxRays*", "crux::raycastClosest("},
+      {"embree", "crux::bench::EmbreePeer::closestHits*", "rtcIntersect1"},
+      {"bullet", "crux::bench::BulletPeer::closestHits*", "btCollisionWorld::rayTest("}};
+  constexpr double kRays = 2000;
+  for (const auto& [backend, pattern, perRay] : functions) {
     const std::string outFile = c.rawDir + "/callgrind." + backend + ".out";
     std::remove(outFile.c_str());
     const Json step = runStep(c, "callgrind-" + backend,
@@ -516,18 +551,17 @@ Json callgrind(Context& c) {
                                "--toggle-collect=" + pattern, exe, "--sizes", "10000", "--rays", "2000", "--runs", "1",
                                "--seconds", "0.0001", "--threads", "1"},
                               false);
-    // Summary line: "summary: <Ir>"; calls: the crux function runs 4 times (reference,
-    // check, warm-up, timed run), the peers 3 times.
+    // Summary line: "summary: <Ir>"
     double ir = -1;
     std::ifstream in(outFile);
     for (std::string line; std::getline(in, line);)
       if (line.rfind("summary:", 0) == 0 || line.rfind("totals:", 0) == 0) ir = std::atof(line.substr(line.find(':') + 1).c_str());
-    const double passes = backend == "crux" ? 4 : 3;
-    if (ir < 0 || step["exit_status"] != 0) {
+    const double rays = callgrindCalls(outFile, perRay);
+    if (ir < 0 || !(rays >= kRays) || step["exit_status"] != 0) {
       counts[backend] = nullptr;
       continue;
     }
-    counts[backend] = {{"instructions_total", ir}, {"passes", passes}, {"instructions_per_ray", ir / passes / 2000}};
+    counts[backend] = {{"instructions_total", ir}, {"passes", rays / kRays}, {"instructions_per_ray", ir / rays}};
   }
   out["backends"] = counts;
   return out;
