@@ -862,12 +862,7 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
 /// sign of the direction rotated into the box frame, rounding decides a zero component) cancel.
 bool fclGjkStoppedOnEqualNorm(const J& query, const J& got, double tau) {
   if (!got.contains("point_a") || !got.contains("point_b") || !got.contains("distance")) return false;
-  // FCL 0.7's fcl::distance measures a shape against a BVHModel (the fcl world's triangle
-  // operand) as the BVHModel against the shape and leaves the nearest points in that order
-  // (narrowphase/distance-inl.h)
-  const bool swapped = !query["a"].contains("triangle") && query["b"].contains("triangle");
-  const Vec3d v = swapped ? Vec3d(toVec(got["point_b"]) - toVec(got["point_a"]))
-                          : Vec3d(toVec(got["point_a"]) - toVec(got["point_b"]));
+  const Vec3d v = toVec(got["point_a"]) - toVec(got["point_b"]);
   const double d = v.norm();
   if (!(d > tau) || std::fabs(d - got["distance"].get<double>()) > tau) return false;
   const Vec3d u = v / d;

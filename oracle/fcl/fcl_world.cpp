@@ -345,7 +345,13 @@ class FclWorld final : public CollisionWorld {
   // (docs/batch.md "Backends": FCL's sign convention for penetration and its bounds.)
 
   WorldDistance doDistance(const WorldOperand& a, const WorldOperand& b) override {
-    return toWorld(signedDistance(operand(a), operand(b)), a.isMesh(), b.isMesh());
+    const FclOperand oa = operand(a), ob = operand(b);
+    const fcl::DistanceResultd r = signedDistance(oa, ob);
+    // FCL 0.7's fcl::distance answers (shape, BVHModel) — here a convex shape against a triangle
+    // operand — as (BVHModel, shape) and leaves its result in that order (DistanceResult's o1 is
+    // then b's geometry; narrowphase/distance-inl.h swaps nothing back)
+    if (r.o1 == ob.geometry.get() && r.o1 != oa.geometry.get()) return toWorld(r, b.isMesh(), a.isMesh()).reversed();
+    return toWorld(r, a.isMesh(), b.isMesh());
   }
   std::optional<WorldDistance> doMeshDistance(MeshHandle a, const Transform& ta, MeshHandle b, const Transform& tb,
                                               double maxDistance) override {

@@ -488,8 +488,7 @@ WorldDistance CollisionWorld::distance(const WorldOperand& a, const WorldOperand
   if (a.isMesh() && b.isMesh())
     throw InvalidInput("b: distance needs at least one convex operand (a and b are both meshes; use mesh_distance)");
   if (b.isMesh()) {  // (shape, mesh) from (mesh, shape), as for contacts
-    const WorldDistance d = guarded(WorldOp::Distance, [&] { return doDistance(b, a); });
-    return {d.distance, d.pointB, d.pointA, -d.normal, d.triangleB, d.triangleA};
+    return guarded(WorldOp::Distance, [&] { return doDistance(b, a); }).reversed();
   }
   return guarded(WorldOp::Distance, [&] { return doDistance(a, b); });
 }

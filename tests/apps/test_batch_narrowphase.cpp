@@ -359,6 +359,11 @@ TEST(BatchNarrowPhase, PeersAnswerWhatTheySupportAndAgreeOnClearCases) {
           "}}}",
       R"({"op":"distance","a":{"capsule":{"a":[-1,0,0],"b":[1,0,0],"radius":0.5}},"b":{"sphere":{"center":[0,3,0],"radius":1}}})",
       R"({"op":"mesh_distance","a":"cube","b":"cube","transform_b":{"translation":[0,0,3]}})",
+      // one closest pair, so the points are compared too, in both operand orders (FCL measures a
+      // shape against its one-triangle BVHModel in the order (triangle, shape), and FCL 0.7
+      // reports the shape's point in the shape's own frame there: only the triangle's is compared)
+      R"({"op":"distance","a":{"sphere":{"center":[0.25,0.25,2],"radius":0.5}},"b":{"triangle":[[0,0,0],[1,0,0],[0,1,0]]}})",
+      R"({"op":"distance","a":{"triangle":[[0,0,0],[1,0,0],[0,1,0]]},"b":{"sphere":{"center":[0.25,0.25,2],"radius":0.5}}})",
   };
   Batch native;
   native.ask(kSmallCube);
@@ -387,6 +392,14 @@ TEST(BatchNarrowPhase, PeersAnswerWhatTheySupportAndAgreeOnClearCases) {
       if (got.contains("distance"))
         EXPECT_NEAR(got["distance"].get<double>(), want[i]["distance"].get<double>(), 1e-5)
             << name << ": " << lines[i] << " -> " << got.dump();
+      if (lines[i].find("\"triangle\"") != std::string::npos)
+        for (const char* point : {"point_a", "point_b"}) {
+          const bool onTriangle = Json::parse(lines[i])[std::string(point) == "point_a" ? "a" : "b"].contains("triangle");
+          if (name == "fcl" && !onTriangle) continue;
+          for (std::size_t k = 0; k < 3; ++k)
+            EXPECT_NEAR(got[point][k].get<double>(), want[i][point][k].get<double>(), 1e-5)
+                << name << ": " << point << " of " << lines[i] << " -> " << got.dump();
+        }
     }
   }
   if (built("exact")) EXPECT_TRUE(makeWorld("exact")->supports(WorldOp::PointInside));

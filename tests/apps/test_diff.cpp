@@ -419,12 +419,13 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "unexplained");
   // seed 9001, case 11232: a box and a triangle (FCL: a one-triangle BVHModel, measured against
-  // the box by the same GJK); FCL answers sqrt(11) for sqrt(2), its points in the order
-  // triangle, box (fcl::distance does not swap them back for a shape against a BVHModel)
+  // the box by the same GJK); FCL answers sqrt(11) for sqrt(2), box corner (2, 3, -1) and
+  // triangle corner (3, 2, 2) (the fcl world puts the pair to FCL as (triangle, box), FCL's own
+  // order for a shape against a BVHModel, and reverses the answer)
   const auto t = primitive(
       R"({"op":"distance","a":{"box":{"center":[1,1,0],"half":[1,2,1],"axes":[[-1,0,0],[0,1,0],[0,0,-1]]}},"b":{"triangle":[[4,-1,2],[3,2,2],[4,0,3]]}})",
       true);
-  k = classify(runner, t, "fcl", distance(J::array({3.0, 2.0, 2.0}), J::array({2.0, 3.0, -1.0})));
+  k = classify(runner, t, "fcl", distance(J::array({2.0, 3.0, -1.0}), J::array({3.0, 2.0, 2.0})));
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
 }

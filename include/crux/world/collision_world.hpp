@@ -291,6 +291,8 @@ struct WorldDistance {
   Vec3d normal = Vec3d::UnitZ();
   /// Triangle realising the distance when the operand is a mesh.
   std::optional<std::uint32_t> triangleA, triangleB;
+  /// The same answer for the pair (B, A): points and triangles exchanged, the normal reversed.
+  WorldDistance reversed() const { return {distance, pointB, pointA, -normal, triangleB, triangleA}; }
 };
 
 /// How a cast moves its operand a over t in [0, 1]: by a translation, or (when `end` is set) from
