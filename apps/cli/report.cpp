@@ -493,10 +493,9 @@ Json benches(Context& c) {
   return all;
 }
 
-/// The number of calls to functions whose name contains `callee`, read from a callgrind output
-/// file (compressed names: "fn=(id) name" or "cfn=(id) name" defines an id, a later "cfn=(id)"
-/// reuses it; the "calls=N ..." line of a call follows its cfn line, after any cob/cfi lines).
-/// -1 when the file cannot be read.
+}  // namespace
+
+// (documented in report.hpp)
 double callgrindCalls(const std::string& file, const std::string& callee) {
   std::ifstream in(file);
   if (!in) return -1;
@@ -520,6 +519,8 @@ double callgrindCalls(const std::string& file, const std::string& callee) {
   }
   return total;
 }
+
+namespace {
 
 /// Instruction counts (callgrind, inclusive) of each backend's closest-hit ray function on
 /// bench_scaling's 10k-triangle torus, 2000 rays, 1 thread. Divided by the number of rays the

@@ -90,4 +90,10 @@ std::string renderSummary(const nlohmann::json& results);
 /// written, with the failure recorded), 2 when the output directory cannot be written.
 int runReport(const ReportOptions& options, std::ostream& progress);
 
+/// The number of calls to functions whose name contains `callee`, read from a callgrind output
+/// file (compressed names: "fn=(id) name" or "cfn=(id) name" defines an id, a later "cfn=(id)"
+/// reuses it; the "calls=N ..." line of a call follows its cfn line, after any cob/cfi lines).
+/// -1 when the file cannot be read. The report's instructions per ray divide by it.
+double callgrindCalls(const std::string& file, const std::string& callee);
+
 }  // namespace crux::cli

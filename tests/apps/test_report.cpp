@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -634,6 +635,35 @@ TEST(ReportCommand, RendersAnEarlierResultsJsonAndComparesWithIt) {
   EXPECT_EQ(bad, 2);
   EXPECT_NE(message.find("absent.json"), std::string::npos) << message;
   std::system(("rm -rf " + out).c_str());
+}
+
+TEST(ReportCallgrind, CountsTheCallsOfTheNamedFunctionAcrossCompressedNames) {
+  // A callgrind file as valgrind writes it: a name given once with its id, later calls by id
+  // alone, a cfi line between a cfn line and its calls line, and another callee's calls.
+  const std::string file = "/tmp/crux_test_callgrind." + std::to_string(::getpid()) + ".out";
+  {
+    std::ofstream out(file);
+    out << "events: Ir\n"
+        << "fn=(1) cruxRays(crux::Mesh const&)\n"
+        << "0 100\n"
+        << "cfn=(2) crux::raycastClosest(crux::Mesh const&, crux::Ray const&)\n"
+        << "calls=2000 0\n"
+        << "0 5000\n"
+        << "cfn=(3) crux::other()\n"
+        << "calls=7 0\n"
+        << "0 70\n"
+        << "fn=(4) lambda\n"
+        << "cfi=(5) mesh_query.cpp\n"
+        << "cfn=(2)\n"
+        << "calls=3000 0\n"
+        << "0 6000\n"
+        << "summary: 11170\n";
+  }
+  EXPECT_EQ(crux::cli::callgrindCalls(file, "crux::raycastClosest("), 5000);
+  EXPECT_EQ(crux::cli::callgrindCalls(file, "crux::other("), 7);
+  EXPECT_EQ(crux::cli::callgrindCalls(file, "rtcIntersect1"), 0);
+  EXPECT_EQ(crux::cli::callgrindCalls(file + ".absent", "crux::raycastClosest("), -1);
+  std::remove(file.c_str());
 }
 
 }  // namespace
