@@ -5,7 +5,15 @@ same mesh, rays and points: cast rays, occlusion, distance, signed distance, occ
 Answers are checked first (counts of disagreements, with the cause where known), then each row
 is timed (median of --runs runs, both libraries on all cores) and the Open3D/crux time ratio is
 printed (> 1: crux is faster). Needs Debian's python3-open3d (0.16; `CRUX_SETUP_OPEN3D=1
-scripts/setup` installs it), which is too heavy for CI: this bench is not part of CI.
+scripts/setup` installs it), which is too heavy for CI: this bench is not part of CI
+(tests/python/test_open3d.py checks the same agreement on small meshes where Open3D is installed).
+
+Open3D < 0.19 over an Embree built with ray masks (Debian's) hits nothing; open3d_peer.py loads
+crux's shim for that before importing Open3D (bench/python/open3d_embree_mask.c), and the first
+line of the output says whether it did.
+
+Units: Open3D's t_hit is in units of the ray's direction as given (the rays here are not unit),
+crux's t is the distance along the ray; the check compares t_hit * |direction| with crux's t.
 
 Usage: PYTHONPATH=build/python /usr/bin/python3 bench/python/bench_open3d.py [--mesh PATH]
        [--rays N] [--points N] [--runs N] [--seed N]
@@ -20,9 +28,10 @@ import time
 import numpy as np
 
 import crux
+from open3d_peer import import_open3d
 
 try:
-    import open3d as o3d
+    o3d, SHIM = import_open3d()
 except ImportError:
     sys.exit("bench_open3d: needs python3-open3d (CRUX_SETUP_OPEN3D=1 scripts/setup)")
 
@@ -62,6 +71,7 @@ def main():
     points = (lo + (hi - lo) * rng.uniform(-0.2, 1.2, size=(a.points, 3))).astype(np.float32)
     o3d_rays, o3d_points = o3d.core.Tensor(rays), o3d.core.Tensor(points)
 
+    print("Open3D %s; Embree ray-mask shim: %s" % (o3d.__version__, SHIM))
     print("mesh %s: %d triangles, closed %s; %d rays, %d points; crux REAL %s; load average %.2f"
           % (a.mesh, len(mesh), mesh.closed, a.rays, a.points, crux.REAL, os.getloadavg()[0]))
 
@@ -69,17 +79,19 @@ def main():
     scale = float(np.abs(mesh.bounds).max())
     verdict = {}
     hits = mesh.ray_closest(rays)
-    t_o3d = scene.cast_rays(o3d_rays)["t_hit"].numpy()
+    # Open3D's t_hit counts lengths of the direction as given; as a distance it is t_hit * |d|
+    # (|d| in float64 of the float32 rows both libraries read).
+    t_o3d = scene.cast_rays(o3d_rays)["t_hit"].numpy() * np.linalg.norm(rays[:, 3:].astype(np.float64), axis=1)
     hit_crux, hit_o3d = np.isfinite(hits.t), np.isfinite(t_o3d)
     both = hit_crux & hit_o3d
     rel = np.abs(t_o3d[both] - hits.t[both]) / np.maximum(hits.t[both], 1e-30)
-    print("cast rays: %d hits by crux, %d by Open3D; hit/miss differ on %d rays; t relative difference max %.2e"
+    print("cast rays: %d hits by crux, %d by Open3D; hit/miss differ on %d rays; distance relative difference max %.2e"
           % (hit_crux.sum(), hit_o3d.sum(), (hit_crux != hit_o3d).sum(), rel.max() if rel.size else np.nan))
     verdict["cast rays"] = (hit_crux == hit_o3d).all() and (rel.size == 0 or rel.max() <= 1e-5)
     if hit_crux.any() and not hit_o3d.any():
-        print("  Open3D hit nothing at all: its ray queries are broken in this build (cast_rays,"
-              " test_occlusions and count_intersections answer 'no hit' even for a ray straight at a"
-              " triangle); the ray rows and occupancy below compare against that")
+        print("  Open3D hit nothing at all (shim: %s): its ray queries are broken in this build (Embree"
+              " with ray masks, Open3D < 0.19 giving rays mask 0: open3d_embree_mask.c); the ray rows,"
+              " the signed distance's sign and occupancy below compare against that" % SHIM)
     occl = scene.test_occlusions(o3d_rays).numpy().astype(bool)
     verdict["occlusion"] = (occl == mesh.ray_any(rays)).all()
     print("occlusion: differs on %d rays" % (occl != mesh.ray_any(rays)).sum())
