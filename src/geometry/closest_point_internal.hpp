@@ -2,7 +2,8 @@
 // triangle (closestPoint(Triangle) in closest_point.cpp and the sphere–triangle contact in
 // triangle_contact.cpp, which also needs the point's region), the one point–triangle region
 // routine (the same two), the one point–triangle closest point built from them
-// (closestPoint(Triangle) and triangle–triangle distance) and the one segment–segment
+// (closestPoint(Triangle) and triangle–triangle distance), the one face-inside test (triangle–
+// triangle distance, the capsule–triangle contact) and the one segment–segment
 // closest-point routine (GJK's core pairs, the contacts, triangle–triangle distance).
 #pragma once
 
@@ -99,6 +100,17 @@ inline int closestOnProperTriangle(const Eigen::Vector3d& a, const Eigen::Vector
   if (!(nn > 0)) return closestOnSliver(a, b, c, p, q);
   q = p - n * (n.dot(p - a) / nn);
   return -1;
+}
+
+/// Whether x, a point on the plane of the triangle (v[0], v[1], v[2]) with normal n (any length,
+/// n·((v1 − v0) × (v2 − v0)) > 0), lies in the closed triangle: the three edge functions
+/// ((v[i+1] − v[i]) × (x − v[i]))·n are >= 0 (RTCD 3.4, barycentric signs). A point on an edge
+/// or corner is inside. Triangle–triangle distance's vertex–face candidates and the capsule's
+/// segment-end projections and plane crossing take it.
+inline bool projectsInside(const Eigen::Vector3d* v, const Eigen::Vector3d& n, const Eigen::Vector3d& x) {
+  for (int i = 0; i < 3; ++i)
+    if ((v[(i + 1) % 3] - v[i]).cross(x - v[i]).dot(n) < 0) return false;
+  return true;
 }
 
 /// Closest points of the segments p1 + s·d1 and p2 + t·d2, s, t in [0, 1] (Ericson, Real-Time

@@ -367,11 +367,8 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
     }
     crossing = intersects(Segment{p0In, p1In}, tri);
   } else if (!t.degenerate) {
-    auto inside = [&](const V3& x) {  // x on the plane: inside the closed triangle
-      for (int i = 0; i < 3; ++i)
-        if (t.m.dot((t.p[(i + 1) % 3] - t.p[i]).cross(x - t.p[i])) < 0) return false;
-      return true;
-    };
+    // x on the plane: inside the closed triangle
+    auto inside = [&](const V3& x) { return closest_detail::projectsInside(t.p, t.m, x); };
     const double h[2] = {h0, h1};
     for (int k = 0; k < 2; ++k) {
       const V3 proj = s[k] - h[k] * mh;

@@ -61,12 +61,8 @@ struct Tri {
   }
   /// n·(p − v0): signed distance times |n|.
   double side(const V3& p) const { return n.dot(p - v[0]); }
-  /// Does p project into the closed face? (edge functions with respect to n)
-  bool projectsInside(const V3& p) const {
-    for (int i = 0; i < 3; ++i)
-      if (e[i].cross(p - v[i]).dot(n) < 0) return false;
-    return true;
-  }
+  /// Does p project into the closed face? (closest_detail::projectsInside)
+  bool projectsInside(const V3& p) const { return closest_detail::projectsInside(v, n, p); }
 };
 
 /// Keeps the candidate when strictly closer (ties keep the earlier, lower-dimensional feature).
