@@ -44,8 +44,7 @@ WVec3 closestOnTriangle(const Triangle& t, const WVec3& p) {
   // test the vertex wins: the errata's (2,-0.5,0) case); a thin one by its boundary.
   const WVec3 a = wide(t.a), b = wide(t.b), c = wide(t.c);
   const Wide longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-  constexpr Wide k = kTriangleThinRelative;
-  const bool thin = (b - a).cross(c - a).squaredNorm() <= k * k * longest2 * longest2;
+  const bool thin = belowThinLine(std::sqrt((b - a).cross(c - a).squaredNorm()), longest2);
   WVec3 q;
   closest_detail::closestOnProperTriangle(a, b, c, p, thin, q);
   return q;

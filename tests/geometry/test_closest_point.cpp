@@ -8,6 +8,7 @@
 #include <cmath>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/predicates.hpp>
+#include <crux/geometry/triangle_class.hpp>
 #include <limits>
 #include <random>
 #include <sstream>
@@ -386,6 +387,50 @@ TEST(ClosestPointTriangleProperty, GeneralPositionMatchesExact) {
   // Every region kind must be exercised: face regions neither absent nor everything.
   EXPECT_GE(faceRegion, cases / 10);
   EXPECT_LE(faceRegion, cases / 10 * 9);
+}
+
+// Triangles whose height lies on the thin line (kTriangleThinRelative × longest edge, to within
+// the rounding of the doubled area), with p in every region: on either side of the line the
+// closest point comes from a different routine (closestOnSliver below it, RTCD 5.1.5's regions
+// above), and either must match the exact one. belowThinLine draws the line as
+// |m| <= k·L²; its earlier squared form |m|² <= k²·L⁴ (closestPoint's own) put about 1 in 20,000
+// such triangles on the other side.
+TEST(ClosestPointTriangleProperty, TrianglesOnTheThinLineMatchExact) {
+  std::mt19937_64 rng(0x7411);
+  std::uniform_real_distribution<double> coord(-10, 10), unit(0, 1), offset(-3, 3), close(-1e-9, 1e-9);
+  std::normal_distribution<double> gauss;
+  double worst = 0;
+  int failures = 0;
+  long below = 0, above = 0;
+  const int cases = test::scaledCases(50000);
+  for (int i = 0; i < cases && failures < 10; ++i) {
+    const Eigen::Vector3d a(coord(rng), coord(rng), coord(rng)), b(coord(rng), coord(rng), coord(rng));
+    const Eigen::Vector3d ab = b - a;
+    const double len = ab.norm();
+    if (!(len > 1e-3)) continue;
+    Eigen::Vector3d d(gauss(rng), gauss(rng), gauss(rng));
+    d -= ab * (d.dot(ab) / ab.squaredNorm());
+    if (!(d.norm() > 1e-6)) continue;
+    d.normalize();
+    // c above a point of ab at the thin line's height (relative to |ab|, the longest edge)
+    const Eigen::Vector3d c = a + unit(rng) * ab + (kTriangleThinRelative * (1 + close(rng))) * len * d;
+    const Triangle t{Vec3(a.cast<Real>()), Vec3(b.cast<Real>()), Vec3(c.cast<Real>())};
+    if (kindOf(t) != predicates::TriangleKind::Triangle) continue;
+    const Eigen::Vector3d ad = t.a.cast<double>(), bd = t.b.cast<double>(), cd = t.c.cast<double>();
+    const double longest2 = std::max({(bd - ad).squaredNorm(), (cd - bd).squaredNorm(), (ad - cd).squaredNorm()});
+    (belowThinLine((bd - ad).cross(cd - ad).norm(), longest2) ? below : above) += 1;
+    // p around the triangle: off a point near it, partly along its plane's normal
+    const Eigen::Vector3d n = d.cross(ab).normalized();
+    const Eigen::Vector3d p = a + (unit(rng) * 1.5 - 0.25) * ab + offset(rng) * len * 1e-3 * d + offset(rng) * n +
+                              Eigen::Vector3d(offset(rng), offset(rng), offset(rng)) * 0.01;
+    const Vec3 pr = p.cast<Real>();
+    failures += !agreesWithExact(t, pr, exactAnswer(t, pr), worst);
+  }
+  EXPECT_EQ(failures, 0);
+  std::printf("thin line: %ld below, %ld above, worst error %.3g units\n", below, above, worst);
+  // both sides of the line are exercised
+  EXPECT_GE(below, (below + above) / 10);
+  EXPECT_GE(above, (below + above) / 10);
 }
 
 // Needles whose two near corners b, c lie ~1e-14 apart near the origin, a point p ~3 away almost

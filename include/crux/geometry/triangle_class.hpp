@@ -45,12 +45,20 @@ struct TriangleClass {
   bool referenceFace = false;  ///< may be a manifold's reference face (kTriangleFaceRelative)
 };
 
+/// Whether a triangle of doubled area |(b−a)×(c−a)| and longest edge squared L² is no thicker
+/// than kTriangleThinRelative (h <= kTriangleThinRelative × L, i.e. |m| <= k·L²), degenerate ones
+/// included: the one thin line, for classifyTriangle and for closestPoint(Triangle) (which has
+/// decided degeneracy exactly and sends every proper triangle under the line to its boundary).
+inline bool belowThinLine(double doubledArea, double longestEdge2) {
+  return doubledArea <= kTriangleThinRelative * longestEdge2;
+}
+
 /// Classifies a triangle from its doubled area |(b−a)×(c−a)| and its longest edge squared (both
 /// computed in double by the caller). NaN input: degenerate.
 inline TriangleClass classifyTriangle(double doubledArea, double longestEdge2) {
   TriangleClass c;
   c.degenerate = !(doubledArea > kTriangleDegenerateRelative * longestEdge2);
-  c.thin = !c.degenerate && doubledArea <= kTriangleThinRelative * longestEdge2;
+  c.thin = !c.degenerate && belowThinLine(doubledArea, longestEdge2);
   c.referenceFace = !c.degenerate && doubledArea >= kTriangleFaceRelative * longestEdge2;
   return c;
 }
