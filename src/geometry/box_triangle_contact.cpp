@@ -10,7 +10,9 @@
 #include <cstring>
 #include <limits>
 
-#include "geometry/contact_internal.hpp"
+#include "geometry/contact/clip.hpp"
+#include "geometry/contact/reduce.hpp"
+#include "geometry/contact/supporting_feature.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {

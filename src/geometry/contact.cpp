@@ -15,7 +15,10 @@
 
 #include <crux/precondition.hpp>
 
-#include "geometry/contact_internal.hpp"
+#include "geometry/contact/clip.hpp"
+#include "geometry/contact/margin.hpp"
+#include "geometry/contact/reduce.hpp"
+#include "geometry/contact/supporting_feature.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {
@@ -29,10 +32,9 @@ using detail::V3;
 constexpr int kMaxFeatureVerts = 32;
 constexpr int kMaxClipVerts = 2 * kMaxFeatureVerts + 4;
 
-
-// contact_internal.hpp, shared with triangle_contact.cpp: the sliver rule, the rounding budget
-// (coincidenceTolerance) and the reference clipping with its coincident-point merge
-// (clipToReference).
+// From src/geometry/contact/ (shared with triangle_contact.cpp and box_triangle_contact.cpp): the
+// supporting-feature rule, the rounding budget (coincidenceTolerance), the reference clipping with
+// its coincident-point merge (clipToReference) and the 4-point reduction.
 
 /// A supporting feature: 1 vertex, 2 (an edge), or a face loop counter-clockwise around `normal`.
 struct Feature {

@@ -11,7 +11,9 @@
 #include <limits>
 
 #include "geometry/closest_point_internal.hpp"
-#include "geometry/contact_internal.hpp"
+#include "geometry/contact/clip.hpp"
+#include "geometry/contact/margin.hpp"
+#include "geometry/contact/supporting_feature.hpp"
 #include "geometry/gjk_internal.hpp"
 
 namespace crux {

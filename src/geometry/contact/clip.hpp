@@ -1,6 +1,7 @@
-// Rules shared by the generic contact clipping (contact.cpp), the closed-form triangle contacts
-// (triangle_contact.cpp) and the box–triangle SAT (box_triangle_contact.cpp, its clipping step),
-// which must classify triangle features, clip and merge coincident points identically.
+// Reference-feature clipping shared by the generic contact (contact.cpp), the closed-form triangle
+// contacts (triangle_contact.cpp) and the box–triangle SAT (box_triangle_contact.cpp): the clip
+// polygon step, the reference clip that turns clipped points into contact points, and the merge
+// of points coincident on both bodies.
 #pragma once
 
 #include <crux/geometry/contact.hpp>
@@ -15,103 +16,7 @@
 
 namespace crux::contact_detail {
 
-// kOnFeatureUlps and the reference-face rule (kTriangleFaceRelative): triangle_class.hpp.
-
-/// sin of the feature angle (kContactFaceAngleCos, contact.hpp), from that same cosine, so the
-/// face, edge and parallel-edge tests of every contact routine draw the line in one place.
-inline const double kContactFaceAngleSin =
-    std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
-
-/// The supporting-feature rule's edge test, written once for contact.cpp, triangle_contact.cpp
-/// and box_triangle_contact.cpp: whether an edge e with e·d = ed and |e|² = e2 (d unit) is
-/// within the feature angle of perpendicular to d and at least as near to it as bestCos (|cos|
-/// of the best so far, starting at kContactFaceAngleSin), which it then becomes. The supporting
-/// vertex then grows into that edge.
-inline bool nearerPerpendicular(double ed, double e2, double& bestCos) {
-  // Cheap reject (no square root): beyond the feature angle with room to spare for rounding, so
-  // the exact test below would reject it too (bestCos only decreases from kContactFaceAngleSin).
-  if (!(e2 > 0) || ed * ed > kContactFaceAngleSin * kContactFaceAngleSin * (1 + 1e-6) * e2) return false;
-  const double len = std::sqrt(e2);
-  if (!(len > 0)) return false;
-  const double c = std::abs(ed) / len;
-  if (!(c <= bestCos)) return false;
-  bestCos = c;
-  return true;
-}
-
-/// Of the edges (is, others[k]) of a shape whose vertex `is` supports the unit direction d, the
-/// index k of the one nearerPerpendicular chooses, or -1 (the vertex is the feature). `vertex(i)`
-/// gives vertex i.
-template <class VertexAt>
-int supportingEdge(const VertexAt& vertex, const Eigen::Vector3d& d, int is, const int* others, int nOthers) {
-  const Eigen::Vector3d vs = vertex(is);
-  int bestK = -1;
-  double bestCos = kContactFaceAngleSin;
-  for (int k = 0; k < nOthers; ++k) {
-    const Eigen::Vector3d e = vertex(others[k]) - vs;
-    if (nearerPerpendicular(e.dot(d), e.squaredNorm(), bestCos)) bestK = k;
-  }
-  return bestK;
-}
-
-/// Whether two edges are parallel within the feature angle (|ea × eb| <= sin·|ea|·|eb|): then they
-/// are clipped against each other; crossing edges touch at one point.
-inline bool edgesParallel(const Eigen::Vector3d& ea, const Eigen::Vector3d& eb) {
-  return ea.cross(eb).norm() <= kContactFaceAngleSin * ea.norm() * eb.norm();
-}
-
-/// The 4-point manifold reduction, written once for contact.cpp and box_triangle_contact.cpp (the
-/// mesh's reduction over the points of many triangles, mesh_contact.cpp, adds a merge tolerance
-/// and ties by triangle): of count > 4 points keep the deepest (smallest separation, the first of
-/// equals), the one farthest from it, and the two of largest and smallest signed area about the
-/// axis u with those two; when all lie on one side, the one of largest |area| and then the point
-/// adding most area outside that triangle. `pos(p)` is point p's position (double) and `sep(p)`
-/// its separation. The kept four move to the front, in that order; count becomes 4.
-template <class Point, class Pos, class Sep>
-void reduceToFour(Point* pts, int& count, const Eigen::Vector3d& u, const Pos& pos, const Sep& sep) {
-  using V3 = Eigen::Vector3d;
-  if (count <= ContactManifold::kMaxContactPoints) return;
-  const auto P = [&](int i) -> V3 { return pos(pts[i]); };
-  int sel[4] = {0, -1, -1, -1};
-  for (int i = 1; i < count; ++i)
-    if (sep(pts[i]) < sep(pts[sel[0]])) sel[0] = i;
-  double best = -1;
-  for (int i = 0; i < count; ++i)
-    if (i != sel[0] && (P(i) - P(sel[0])).squaredNorm() > best) {
-      best = (P(i) - P(sel[0])).squaredNorm();
-      sel[1] = i;
-    }
-  const auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
-  int hi = -1, lo = -1;
-  for (int i = 0; i < count; ++i) {
-    if (i == sel[0] || i == sel[1]) continue;
-    if (hi < 0 || area(i) > area(hi)) hi = i;
-    if (lo < 0 || area(i) < area(lo)) lo = i;
-  }
-  sel[2] = hi;
-  sel[3] = lo;
-  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the largest triangle + the best 4th
-    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
-    sel[3] = -1;
-    double bestGain = -1;
-    for (int i = 0; i < count; ++i) {
-      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
-      double gain = 0;  // the largest |area| outside one of the triangle's edges
-      for (int e = 0; e < 3; ++e) {
-        const V3 a = P(sel[e]), b = P(sel[(e + 1) % 3]);
-        gain = std::max(gain, std::abs((b - a).cross(P(i) - a).dot(u)));
-      }
-      if (gain > bestGain) {
-        bestGain = gain;
-        sel[3] = i;
-      }
-    }
-  }
-  Point kept[4];
-  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
-  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
-  count = 4;
-}
+// kOnFeatureUlps: triangle_class.hpp.
 
 /// Rounding budget of a feature's coordinates: kOnFeatureUlps ulps of Real × the largest of
 /// `scale` and its |coordinates|.
@@ -252,35 +157,6 @@ int clipToReference(const Feature& ref, const Feature& inc, bool refIsA, const E
   }
   removeCoincident(pts, np, tol);
   return np;
-}
-
-/// The contact margin decision, separation <= margin, for a separation computed in double within
-/// `band` of its exact value: certain outside the band, else `exact()` decides (withinDistance's
-/// filtered exact predicates, overlap.hpp), so that touching on integer grids is reported exactly.
-/// `clamp` tells that the pair is within the margin but its computed separation beyond it (the
-/// callers then report the margin as its separation).
-template <class Exact>
-bool withinMargin(double separation, double margin, double band, const Exact& exact, bool& clamp) {
-  clamp = false;
-  if (!(separation <= margin + band)) return false;
-  if (separation <= margin - band) return true;
-  if (!exact()) return false;
-  clamp = separation > margin;
-  return true;
-}
-
-/// Whether a clipped manifold pts[0, np) keeps the closest (deepest) pair's separation `sep` (the
-/// GJK/EPA one along the true contact normal): its smallest separation is at most sep plus the
-/// face snapping's allowance, (1 − kContactFaceAngleCos)·|sep|, and the rounding budget tol. The
-/// overlap along any direction is at least the minimum, so a reference face snapped to within
-/// 2° measures its deepest support point at least that deep; but clipping cuts that point away
-/// when it lies beyond the face's side planes (crux diff: a capsule's end past a tetrahedron's
-/// edge read 6.6e-4 relative shallow, tests/regressions/native.crux-wrong.contacts.9301-8420).
-/// The callers then report the single closest pair, along the true normal.
-inline bool keepsClosest(const ContactPoint* pts, int np, double sep, double tol) {
-  double least = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < np; ++i) least = std::min(least, double(pts[i].separation));
-  return least <= sep + (1 - double(kContactFaceAngleCos)) * std::abs(sep) + tol;
 }
 
 }  // namespace crux::contact_detail

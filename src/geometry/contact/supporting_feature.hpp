@@ -1,0 +1,60 @@
+// The supporting-feature rule of every contact routine (contact.cpp, triangle_contact.cpp,
+// box_triangle_contact.cpp): the feature angle's sine, the edge a supporting vertex grows into,
+// and when two edges count as parallel.
+#pragma once
+
+#include <crux/geometry/contact.hpp>
+
+#include <cmath>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace crux::contact_detail {
+
+// kOnFeatureUlps and the reference-face rule (kTriangleFaceRelative): triangle_class.hpp.
+
+/// sin of the feature angle (kContactFaceAngleCos, contact.hpp), from that same cosine, so the
+/// face, edge and parallel-edge tests of every contact routine draw the line in one place.
+inline const double kContactFaceAngleSin =
+    std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
+
+/// The supporting-feature rule's edge test, written once for contact.cpp, triangle_contact.cpp
+/// and box_triangle_contact.cpp: whether an edge e with e·d = ed and |e|² = e2 (d unit) is
+/// within the feature angle of perpendicular to d and at least as near to it as bestCos (|cos|
+/// of the best so far, starting at kContactFaceAngleSin), which it then becomes. The supporting
+/// vertex then grows into that edge.
+inline bool nearerPerpendicular(double ed, double e2, double& bestCos) {
+  // Cheap reject (no square root): beyond the feature angle with room to spare for rounding, so
+  // the exact test below would reject it too (bestCos only decreases from kContactFaceAngleSin).
+  if (!(e2 > 0) || ed * ed > kContactFaceAngleSin * kContactFaceAngleSin * (1 + 1e-6) * e2) return false;
+  const double len = std::sqrt(e2);
+  if (!(len > 0)) return false;
+  const double c = std::abs(ed) / len;
+  if (!(c <= bestCos)) return false;
+  bestCos = c;
+  return true;
+}
+
+/// Of the edges (is, others[k]) of a shape whose vertex `is` supports the unit direction d, the
+/// index k of the one nearerPerpendicular chooses, or -1 (the vertex is the feature). `vertex(i)`
+/// gives vertex i.
+template <class VertexAt>
+int supportingEdge(const VertexAt& vertex, const Eigen::Vector3d& d, int is, const int* others, int nOthers) {
+  const Eigen::Vector3d vs = vertex(is);
+  int bestK = -1;
+  double bestCos = kContactFaceAngleSin;
+  for (int k = 0; k < nOthers; ++k) {
+    const Eigen::Vector3d e = vertex(others[k]) - vs;
+    if (nearerPerpendicular(e.dot(d), e.squaredNorm(), bestCos)) bestK = k;
+  }
+  return bestK;
+}
+
+/// Whether two edges are parallel within the feature angle (|ea × eb| <= sin·|ea|·|eb|): then they
+/// are clipped against each other; crossing edges touch at one point.
+inline bool edgesParallel(const Eigen::Vector3d& ea, const Eigen::Vector3d& eb) {
+  return ea.cross(eb).norm() <= kContactFaceAngleSin * ea.norm() * eb.norm();
+}
+
+}  // namespace crux::contact_detail
