@@ -1,5 +1,6 @@
-// The 4-point manifold reduction of one pair's clipped points (contact.cpp,
-// box_triangle_contact.cpp).
+// The 4-point manifold reductions: reduceToFour for one pair's clipped points (contact.cpp,
+// box_triangle_contact.cpp) and reduceMerged for the merged points of many triangles
+// (mesh_contact.cpp).
 #pragma once
 
 #include <crux/geometry/contact.hpp>
@@ -13,7 +14,7 @@
 namespace crux::contact_detail {
 
 /// The 4-point manifold reduction of one pair's points (contact.cpp, box_triangle_contact.cpp;
-/// the mesh's, over the points of many triangles, is mesh_contact.cpp's): of count > 4 points keep the deepest (smallest separation, the first of
+/// reduceMerged below is the mesh's, over the points of many triangles): of count > 4 points keep the deepest (smallest separation, the first of
 /// equals), the one farthest from it, and the two of largest and smallest signed area about the
 /// axis u with those two; when all lie on one side, the one of largest |area| and then the point
 /// adding most area outside that triangle. `pos(p)` is point p's position (double) and `sep(p)`
@@ -64,5 +65,59 @@ void reduceToFour(Point* pts, int& count, const Eigen::Vector3d& u, const Pos& p
   count = 4;
 }
 
+/// The 4-point reduction of a mesh manifold (mesh_contact.cpp), over the points of many triangles
+/// that its merge stage has already merged within `tol`: the deepest (smallest separation; ties
+/// by the lower `triangle`), then the farthest from it, then the point of largest |area| with
+/// those two about the deepest point's normal, then the one adding most area outside that
+/// triangle; it stops early when the next point adds nothing (no farther than tol, or no area
+/// beyond tol × the first pair's distance: coincident or collinear within the merge tolerance).
+/// `buf[i]` (i < n) is a Point, which has pointA and normal (vectors), separation and triangle.
+/// The kept points are written to out in that order; returns their count (0 to 4).
+template <class Points, class Point>
+int reduceMerged(const Points& buf, int n, double tol, Point* out) {
+  int count = 0;
+  if (n == 0) return count;
+  int sel[4] = {0, -1, -1, -1};
+  for (int i = 1; i < n; ++i)
+    if (buf[i].separation < buf[sel[0]].separation ||
+        (buf[i].separation == buf[sel[0]].separation && buf[i].triangle < buf[sel[0]].triangle))
+      sel[0] = i;
+  out[count++] = buf[sel[0]];
+  auto P = [&](int i) { return buf[i].pointA.template cast<double>(); };
+  const Eigen::Vector3d u = buf[sel[0]].normal.template cast<double>();
+  double best = tol * tol;
+  for (int i = 0; i < n; ++i)
+    if ((P(i) - P(sel[0])).squaredNorm() > best) {
+      best = (P(i) - P(sel[0])).squaredNorm();
+      sel[1] = i;
+    }
+  if (sel[1] < 0) return count;
+  out[count++] = buf[sel[1]];
+  const double areaTol = tol * (P(sel[1]) - P(sel[0])).norm();
+  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
+  double a2 = areaTol;
+  for (int i = 0; i < n; ++i)
+    if (std::abs(area(i)) > a2) {
+      a2 = std::abs(area(i));
+      sel[2] = i;
+    }
+  if (sel[2] < 0) return count;
+  out[count++] = buf[sel[2]];
+  const double orient = area(sel[2]) > 0 ? 1 : -1;
+  double g3 = areaTol;
+  for (int i = 0; i < n; ++i) {
+    double gain = 0;  // area outside the triangle's edges
+    for (int e = 0; e < 3; ++e) {
+      const Eigen::Vector3d a = P(sel[e]), b = P(sel[(e + 1) % 3]);
+      gain = std::max(gain, -orient * (b - a).cross(P(i) - a).dot(u));
+    }
+    if (gain > g3) {
+      g3 = gain;
+      sel[3] = i;
+    }
+  }
+  if (sel[3] >= 0) out[count++] = buf[sel[3]];
+  return count;
+}
 
 }  // namespace crux::contact_detail
