@@ -75,11 +75,7 @@ struct Bin {
   std::uint32_t count = 0;
 };
 
-int ceilLog2(std::uint32_t c) {
-  int l = 0;
-  while ((std::uint64_t(1) << l) < c) ++l;
-  return l;
-}
+int ceilLog2(std::uint32_t c) { return c <= 1 ? 0 : 32 - __builtin_clz(c - 1); }
 
 /// SAH cost measure of a non-empty box: its surface area, or for boxes of zero area (segments
 /// and points, e.g. nodes over collinear degenerate triangles) the sum of its extents, so that
@@ -358,31 +354,28 @@ class Builder {
     Wide* rightCost = scratch.rightCost.data();
     for (int a = 0; a < 3; ++a) {
       if (scale[a] == 0) continue;
-      // rightCost[s] = measure(bins s..end) * count(bins s..end)
+      // rightCost[s] = measure(bins s..end) * count(bins s..end), 0 while those are empty. The
+      // sweeps have no data-dependent branches (an empty bin's box is the empty box, which
+      // growing ignores), so sweeping costs no mispredictions.
       LaneBox acc;
       std::uint32_t n = 0;
       for (std::uint32_t s = bins - 1; s >= 1; --s) {
-        if (bin[a][s].count == 0) {
-          rightCost[s] = s + 1 < bins ? rightCost[s + 1] : 0;
-          continue;
-        }
         acc.grow(bin[a][s].bounds);
         n += bin[a][s].count;
-        rightCost[s] = costMeasure(acc, useLength) * Wide(n);
+        const Wide cost = costMeasure(acc, useLength) * Wide(n);
+        rightCost[s] = n > 0 ? cost : Wide(0);
       }
+      // Candidates: the splits with primitives on both sides; the first of equal costs wins.
       acc = LaneBox{};
       n = 0;
       for (std::uint32_t s = 1; s < bins; ++s) {
-        if (bin[a][s - 1].count == 0 && n == 0) continue;
         acc.grow(bin[a][s - 1].bounds);
         n += bin[a][s - 1].count;
-        if (n == count) break;
         const Wide cost = costMeasure(acc, useLength) * Wide(n) + rightCost[s];
-        if (cost < bestCost) {
-          bestCost = cost;
-          bestAxis = a;
-          bestSplit = s;
-        }
+        const bool better = n > 0 && n < count && cost < bestCost;
+        bestCost = better ? cost : bestCost;
+        bestSplit = better ? s : bestSplit;
+        bestAxis = better ? a : bestAxis;
       }
     }
     if (bestAxis < 0) return {};
@@ -401,23 +394,29 @@ class Builder {
         split.right.grow(b.bounds);
       }
     }
-    // Hoare partition of the primitives and their indices together; each primitive is passed by
-    // exactly one of the two scans, which collect the children's centroid bounds.
+    // Partition of the primitives and their indices together without data-dependent branches
+    // (Lomuto's scheme, every element swapped with the first right one, the boundary advanced
+    // by the predicate: a Hoare partition mispredicts about every other element here), then
+    // the children's centroid bounds over the two ranges.
     std::uint32_t* ids = bvh_.primIndices.data() + first;
-    std::uint32_t i = 0, j = count;
-    auto goesLeft = [&](const BuildPrim& p) { return binOnAxis(p, bestAxis) < bestSplit; };
-    for (;;) {
-      while (i < j && goesLeft(prims[i])) {
-        const Lanes c = prims[i++].centroid();
-        split.leftCentroids.grow(c, c);
-      }
-      while (i < j && !goesLeft(prims[j - 1])) {
-        const Lanes c = prims[--j].centroid();
-        split.rightCentroids.grow(c, c);
-      }
-      if (i >= j) break;
-      std::swap(prims[i], prims[j - 1]);
-      std::swap(ids[i], ids[j - 1]);
+    std::uint32_t i = 0;
+    for (std::uint32_t k = 0; k < count; ++k) {
+      const BuildPrim p = prims[k];
+      const std::uint32_t id = ids[k];
+      const bool left = binOnAxis(p, bestAxis) < bestSplit;
+      prims[k] = prims[i];
+      ids[k] = ids[i];
+      prims[i] = p;
+      ids[i] = id;
+      i += left ? 1u : 0u;
+    }
+    for (std::uint32_t k = 0; k < i; ++k) {
+      const Lanes c = prims[k].centroid();
+      split.leftCentroids.grow(c, c);
+    }
+    for (std::uint32_t k = i; k < count; ++k) {
+      const Lanes c = prims[k].centroid();
+      split.rightCentroids.grow(c, c);
     }
     return split;
   }
