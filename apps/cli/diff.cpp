@@ -825,12 +825,15 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
-/// The vertices of a box, hull or triangle operand (world coordinates, under its `transform`)
-/// whose support value along `dir` is within `tie` of the largest: the points a support function
-/// may return in that direction. Empty for other operands (their support is not a vertex set).
-std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double tie) {
+/// The points a support function of a box, hull, triangle, sphere or capsule operand (world
+/// coordinates, under its `transform`) may return along `dir`: for the polytopes, the vertices
+/// whose support value is within `tie` of the largest; for a sphere, centre + r·dir̂; for a capsule,
+/// the end (both ends within `tie`) + r·dir̂, as libccd's supportSphere and supportCap compute
+/// them. Empty for other operands.
+std::vector<Vec3d> supportPoints(const J& operand, const Vec3d& dir, double tie) {
   const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
   std::vector<Vec3d> corners;
+  Vec3d rounding = Vec3d::Zero();  // r·dir̂ of a sphere or capsule
   if (operand.contains("box")) {
     const J& b = operand["box"];
     for (int k = 0; k < 8; ++k) {
@@ -842,33 +845,73 @@ std::vector<Vec3d> supportVertices(const J& operand, const Vec3d& dir, double ti
   } else if (operand.contains("hull") || operand.contains("triangle")) {
     for (const auto& p : operand.contains("hull") ? operand["hull"]["points"] : operand["triangle"])
       corners.push_back(place.r * toVec(p) + place.t);
+  } else if (operand.contains("sphere") || operand.contains("capsule")) {
+    const J& r = operand.contains("sphere") ? operand["sphere"] : operand["capsule"];
+    if (operand.contains("sphere")) {
+      corners.push_back(place.r * toVec(r["center"]) + place.t);
+    } else {
+      corners.push_back(place.r * toVec(r["a"]) + place.t);
+      corners.push_back(place.r * toVec(r["b"]) + place.t);
+    }
+    rounding = r["radius"].get<double>() * dir.normalized();
   }
   double best = -std::numeric_limits<double>::infinity();
   for (const Vec3d& p : corners) best = std::max(best, p.dot(dir));
   std::vector<Vec3d> out;
   for (const Vec3d& p : corners)
-    if (p.dot(dir) >= best - tie) out.push_back(p);
+    if (p.dot(dir) >= best - tie) out.push_back(p + rounding);
   return out;
 }
 
-/// FCL's `distance` of separated polytopes (box, hull, triangle: FCL measures a one-triangle
-/// BVHModel against a shape by the same GJK, shapeTriangleDistance) stopped early by libccd's
-/// GJK: its answer v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
+/// A `distance` operand as libccd sees it in FCL's GJK: the operand itself, or for a mesh
+/// operand the triangle the peer names (`triangle_a` / `triangle_b`): FCL measures a BVHModel
+/// against a shape triangle by triangle, each by the same GJK (shapeTriangleDistance), and
+/// reports the least. Null when the mesh or the triangle is unknown.
+J gjkOperand(const DiffCase& c, const J& operand, const J& got, const char* triangleKey) {
+  if (!operand.contains("mesh")) return operand;
+  if (!operand["mesh"].is_string() || !got.contains(triangleKey) || !got[triangleKey].is_number_integer() ||
+      got[triangleKey].get<long long>() < 0)
+    return nullptr;
+  std::vector<std::array<Vec3d, 3>> tris;
+  if (const Mesh* mesh = caseMesh(c, operand["mesh"].get<std::string>(), tris))
+    for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
+      const Triangle t = mesh->triangle(i);
+      tris.push_back({t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()});
+    }
+  const auto k = got[triangleKey].get<std::size_t>();
+  if (k >= tris.size()) return nullptr;
+  J triangle = J::array();
+  for (const Vec3d& v : tris[k]) triangle.push_back({v.x(), v.y(), v.z()});
+  J out{{"triangle", triangle}};
+  if (operand.contains("transform")) out["transform"] = operand["transform"];
+  return out;
+}
+
+/// FCL's `distance` of separated convex shapes (box, hull, triangle, sphere, capsule: FCL's
+/// signed-distance request runs libccd's GJK for every shape pair, its sphere–sphere and
+/// sphere–capsule formulas being used for unsigned requests only; a mesh is measured triangle by
+/// triangle by the same GJK, shapeTriangleDistance) stopped early by libccd's GJK: its answer
+/// v = point_a − point_b (|v| its distance) has a support point w = s_A(−v) − s_B(v) of the
 /// Minkowski difference with |w| = |v| within `tau` though w·v̂ < |v| − tau (GJK had not
 /// converged). FCL 0.7's `_ccdDist` (gjk_libccd-inl.h) stops when the new support point's *norm*
 /// equals the current distance, a test meant for a support point already in the simplex; a
 /// mirror-image point of the Minkowski difference at the same norm stops it too. Grid boxes with
 /// coincident faces make such points: their tied support vertices (FCL's box support picks by the
 /// sign of the direction rotated into the box frame, rounding decides a zero component) cancel.
-bool fclGjkStoppedOnEqualNorm(const J& query, const J& got, double tau) {
+/// Grid spheres and capsules make them too: GJK's first support points, along libccd's first
+/// direction (1, 0, 0), give v; the next, along −v, lands at the same norm (seed 98765 case
+/// 35505: spheres 2.48 apart, FCL 3).
+bool fclGjkStoppedOnEqualNorm(const DiffCase& c, const J& query, const J& got, double tau) {
   if (!got.contains("point_a") || !got.contains("point_b") || !got.contains("distance")) return false;
+  const J a = gjkOperand(c, query["a"], got, "triangle_a"), b = gjkOperand(c, query["b"], got, "triangle_b");
+  if (a.is_null() || b.is_null()) return false;
   const Vec3d v = toVec(got["point_a"]) - toVec(got["point_b"]);
   const double d = v.norm();
   if (!(d > tau) || std::fabs(d - got["distance"].get<double>()) > tau) return false;
   const Vec3d u = v / d;
-  for (const Vec3d& a : supportVertices(query["a"], -u, tau))
-    for (const Vec3d& b : supportVertices(query["b"], u, tau)) {
-      const Vec3d w = a - b;
+  for (const Vec3d& pa : supportPoints(a, -u, tau))
+    for (const Vec3d& pb : supportPoints(b, u, tau)) {
+      const Vec3d w = pa - pb;
       if (std::fabs(w.norm() - d) <= tau && w.dot(u) < d - tau) return true;
     }
   return false;
@@ -1499,7 +1542,7 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // separated polytopes whose GJK stopped on a support point as far from the origin as its
     // current closest point (libccd's equal-norm stop)
     if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
-        narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(query, got, numTol))
+        narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(c, query, got, numTol))
       return peer("gjk-equal-norm-stop");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));

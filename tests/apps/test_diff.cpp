@@ -428,6 +428,40 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
   k = classify(runner, t, "fcl", distance(J::array({2.0, 3.0, -1.0}), J::array({3.0, 2.0, 2.0})));
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  // seed 98765 case 35505: two grid spheres sqrt(30) - 3 apart. FCL's signed-distance request
+  // runs libccd's GJK for spheres too; its first support points, along (1, 0, 0), are (1, -1, -1)
+  // and (3, 0, -3), v = (-2, -1, 2); the next support point, along -v, is (-3, 0, 0), as long: it
+  // stops at 3
+  const auto spheres = primitive(
+      R"({"op":"distance","a":{"sphere":{"center":[-1,-1,-1],"radius":2}},"b":{"sphere":{"center":[4,0,-3],"radius":1}}})",
+      true);
+  k = classify(runner, spheres, "fcl", distance(J::array({1.0, -1.0, -1.0}), J::array({3.0, 0.0, -3.0})));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  // points on the spheres 3.5 apart, where no support point is as far: not explained
+  k = classify(runner, spheres, "fcl", distance(J::array({-1.0, -1.0, 1.0}), J::array({3.0, 0.0, -3.0}) ));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+  // seed 98765 case 61254: a capsule and a sphere, the same first steps (3 for 1.899)
+  const auto capsule = primitive(
+      R"({"op":"distance","a":{"capsule":{"a":[-1,-1,0],"b":[-1,0,2],"radius":1}},"b":{"sphere":{"center":[3,1,-2],"radius":2}}})",
+      true);
+  k = classify(runner, capsule, "fcl", distance(J::array({0.0, -1.0, 0.0}), J::array({1.0, 1.0, -2.0})));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  // seed 98765 case 93684: a mesh against a box; FCL measures each triangle by the same GJK and
+  // names the triangle (0) whose distance stopped at sqrt(2) for 1 (its corner (-4, -2, 1), the
+  // box's tied corners (-4 or -6, -3, 2))
+  DiffCase mesh = primitive(
+      R"({"op":"distance","a":{"mesh":"m","transform":{"rotation":[1,0,0,0],"translation":[0,-1,-2]}},"b":{"box":{"center":[-5,-2,3],"half":[1,1,1],"axes":[[0,1,0],[0,0,1],[-1,0,0]]}}})",
+      true);
+  mesh.setup = {R"({"op":"mesh","name":"m","vertices":[[-4,-1,3],[1,-2,-1],[-1,-4,-4],[4,3,2],[1,-4,4],[3,-4,1]],"triangles":[[0,1,2],[3,4,5]]})"};
+  J got = distance(J::array({-4.0, -2.0, 1.0}), J::array({-4.0, -3.0, 2.0}));
+  got["triangle_a"] = 0;
+  k = classify(runner, mesh, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  got["triangle_a"] = 1;  // the other triangle has no such support point
+  EXPECT_EQ(classify(runner, mesh, "fcl", got).cause, "unexplained");
 }
 
 TEST(DiffClassify, CastTimesKeepTheirGuaranteeOrAreWrong) {
