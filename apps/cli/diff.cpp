@@ -364,12 +364,11 @@ bool endpointOnPlane(const J& query, const std::vector<std::array<V, 3>>& tris) 
 /// coordinate opposite that edge is at least −1e-4.
 constexpr long double kBulletRayEdgeTolerance = 1e-4L;
 
-/// A ray or segment that crosses the plane of a (non-degenerate) triangle outside it, but by at
-/// most Bullet's edge tolerance: every barycentric coordinate of the crossing point >= −1e-4
-/// (long double, on the coordinates rounded to Real as the backends read them: a segment through
-/// a corner in double may pass 7.5e-8 outside an edge in float; the crossing's parameter within
-/// the ray or segment).
-bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tris) {
+/// The smallest barycentric coordinate of the point where a ray or segment crosses the plane of
+/// a (non-degenerate) triangle (long double, on the coordinates rounded to Real as the backends
+/// read them: a segment through a corner in double may pass 7.5e-8 outside an edge in float);
+/// none when it does not cross within the ray or segment, or lies parallel to the plane.
+std::optional<long double> crossingBarycentric(const J& query, const std::array<V, 3>& t) {
   using L = long double;
   const auto real = [](double x) { return L(Real(x)); };
   std::array<L, 3> o{}, d{};
@@ -383,7 +382,7 @@ bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tr
     for (std::size_t i = 0; i < 3; ++i) o[i] = real(a[i]), d[i] = real(b[i]) - real(a[i]);
     tMax = 1;
   } else {
-    return false;
+    return std::nullopt;
   }
   using P = std::array<L, 3>;
   auto sub = [](const P& a, const P& b) { return P{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
@@ -391,35 +390,78 @@ bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tr
     return P{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
   };
   auto dot = [](const P& a, const P& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  if (degenerate(t)) return std::nullopt;
+  P v[3];
+  for (std::size_t i = 0; i < 3; ++i) v[i] = {real(t[i][0]), real(t[i][1]), real(t[i][2])};
+  const P n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+  const L nn = dot(n, n), nd = dot(n, d);
+  if (nd == 0) return std::nullopt;
+  const L u = dot(n, sub(v[0], o)) / nd;
+  if (!(u >= 0 && u <= tMax)) return std::nullopt;
+  const P p = {o[0] + u * d[0], o[1] + u * d[1], o[2] + u * d[2]};
+  L lowest = 1;
+  for (std::size_t i = 0; i < 3; ++i)
+    lowest = std::min(lowest, dot(cross(sub(v[(i + 1) % 3], p), sub(v[(i + 2) % 3], p)), n) / nn);
+  return lowest;
+}
+
+/// A ray or segment that crosses the plane of a (non-degenerate) triangle outside it, but by at
+/// most Bullet's edge tolerance: every barycentric coordinate of the crossing point >= −1e-4
+/// (crossingBarycentric).
+bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tris) {
   for (const auto& t : tris) {
-    if (degenerate(t)) continue;
-    P v[3];
-    for (std::size_t i = 0; i < 3; ++i) v[i] = {real(t[i][0]), real(t[i][1]), real(t[i][2])};
-    const P n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
-    const L nn = dot(n, n), nd = dot(n, d);
-    if (nd == 0) continue;
-    const L u = dot(n, sub(v[0], o)) / nd;
-    if (!(u >= 0 && u <= tMax)) continue;
-    const P p = {o[0] + u * d[0], o[1] + u * d[1], o[2] + u * d[2]};
-    L lowest = 1;
-    for (std::size_t i = 0; i < 3; ++i)
-      lowest = std::min(lowest, dot(cross(sub(v[(i + 1) % 3], p), sub(v[(i + 2) % 3], p)), n) / nn);
-    if (lowest < 0 && lowest >= -kBulletRayEdgeTolerance) return true;
+    const auto lowest = crossingBarycentric(query, t);
+    if (lowest && *lowest < 0 && *lowest >= -kBulletRayEdgeTolerance) return true;
   }
   return false;
 }
 
-/// A segment that Bullet hits through a side test its float arithmetic gets wrong:
+/// The side of the triangle's plane (orient3d's sign) of the ray's point o + s·d: o's exact side
+/// `originSide` (orient3dExact on Real) unless the ray crosses the plane before s, where the
+/// crossing parameter −orient(o)/(n·d) is computed in long double on the Real coordinates.
+int rayFarSide(const std::array<V, 3>& t, const V& o, const V& d, double s, int originSide) {
+  using L = long double;
+  const auto at = [](const V& v, std::size_t i) { return L(Real(v[i])); };
+  L e1[3], e2[3], od[3], dd[3];
+  for (std::size_t i = 0; i < 3; ++i)
+    e1[i] = at(t[1], i) - at(t[0], i), e2[i] = at(t[2], i) - at(t[0], i), od[i] = at(o, i) - at(t[0], i),
+    dd[i] = at(d, i);
+  const L n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+  // orient3d(a, b, c, p) = n·(p − a) with n = (b − a)×(c − a)
+  const L no = n[0] * od[0] + n[1] * od[1] + n[2] * od[2], nd = n[0] * dd[0] + n[1] * dd[1] + n[2] * dd[2];
+  const auto sign = [](L x) { return (x > 0) - (x < 0); };
+  if (originSide == 0) return sign(nd);
+  if (nd == 0 || sign(nd) == originSide) return originSide;
+  return -no / nd < L(s) ? sign(nd) : originSide;
+}
+
+/// What a float replay of Bullet's raycast finds wrong: nothing, the side of an endpoint
+/// (`float-plane-side`), or the crossing point (`float-crossing-point`).
+enum class BulletFloatRay { None, Side, Crossing };
+
+/// A segment or ray that Bullet hits through float arithmetic:
 /// btTriangleRaycastCallback::processTriangle, replayed in float on the segment and triangle as
-/// Bullet holds them (coordinates rounded to float, no transform, its operation order), reports
-/// the triangle (dist_a·dist_b < 0, the crossing before the end and within the 1e-4 edge
-/// tolerance), and the sign of dist_a or dist_b differs from the exact side of that endpoint
-/// (orient3dExact on the coordinates as the exact backend reads them, Real). Only an endpoint
-/// within float rounding of the plane gets the wrong sign (seed 9001 case 3523: an end 1.95e-7
-/// short of the plane in a float build, Bullet's dist_b −3.7e-4 with |n| = 358; case 2641: a
-/// segment lying within 5e-8 of the plane, dist_a and dist_b ±4.8e-7).
-bool bulletFloatSideCrossing(const J& query, const std::vector<std::array<V, 3>>& tris) {
-  if (!query.contains("segment") || query.contains("transform")) return false;
+/// Bullet holds them (coordinates rounded to float, its operation order), reports the triangle
+/// (dist_a·dist_b < 0, the crossing before the end and within the 1e-4 edge tolerance), and
+/// - `Side`: the sign of dist_a or dist_b differs from the exact side of that endpoint
+///   (orient3dExact on the endpoint as the exact backend reads it, Real; for a ray's far end, on
+///   the float point Bullet holds). Only an endpoint within float rounding of the plane gets the
+///   wrong sign (seed 9001 case 3523: an end 1.95e-7 short of the plane in a float build, Bullet's
+///   dist_b −3.7e-4 with |n| = 358; case 2641: a segment lying within 5e-8 of the plane, dist_a
+///   and dist_b ±4.8e-7; seed 98765 cases 56163 and 77247: rays lying within rounding of the
+///   plane, transformed family);
+/// - `Crossing`: the sides are right, but the exact crossing of the ray or segment
+///   (crossingBarycentric) lies beyond the edge tolerance (a barycentric below −1e-4): for a ray
+///   grazing the plane, Bullet's float crossing moves along the ray by the float rounding of its
+///   far end and of dist_a/(dist_a − dist_b), relative to dist_a − dist_b, times the segment's
+///   length (seed 98765 case 16898: a ray 3.5e-4 rad off the plane, dist_a −3.3e-3 and dist_b
+///   5.7e-3 over 10.8 with |n| = 2.4; the crossing's barycentric −1.03e-4 exactly, −8.4e-5 in
+///   Bullet's float replay).
+/// A segment (no transform) is taken as given; a `ray_triangle` ray as the bullet world casts it:
+/// from the origin to origin + L·d̂ (double, then rounded to float), L twice the distance to the
+/// farthest corner of the triangle's bounding box.
+BulletFloatRay bulletFloatRaycast(std::string_view op, const J& query, const std::vector<std::array<V, 3>>& tris) {
+  if (query.contains("transform")) return BulletFloatRay::None;
   using F3 = std::array<float, 3>;
   const auto f3 = [](const V& v) { return F3{float(v[0]), float(v[1]), float(v[2])}; };
   const auto sub = [](const F3& a, const F3& b) { return F3{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
@@ -428,7 +470,45 @@ bool bulletFloatSideCrossing(const J& query, const std::vector<std::array<V, 3>>
   };
   const auto dot = [](const F3& a, const F3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
   const auto real = [](const V& v) { return WVec3(Wide(Real(v[0])), Wide(Real(v[1])), Wide(Real(v[2]))); };
-  const V start = readV(query["segment"]["start"]), end = readV(query["segment"]["end"]);
+  const auto asReal = [](V v) {  // as the backends read it
+    for (double& x : v) {
+      // through memory: GCC 12 -O3 (this file, -frounding-math) dropped the round trip to float
+      // of the ray's origin assigned from a plain double(Real(x)) (seed 98765 case 56163)
+      volatile Real r = Real(x);
+      x = double(r);
+    }
+    return v;
+  };
+  V start, end, rayDir{};
+  double rayReach = 0;  // the far end's parameter along the ray's dir
+  bool ray = false;
+  if (query.contains("segment")) {
+    start = readV(query["segment"]["start"]), end = readV(query["segment"]["end"]);
+  } else if (op == "ray_triangle" && query.contains("ray") && tris.size() == 1) {
+    ray = true;
+    const V raw = readV(query["ray"]["origin"]);
+    start = asReal(raw);
+    const Vec3d o(start[0], start[1], start[2]);
+    const V dr = asReal(readV(query["ray"]["dir"]));
+    const Vec3d u = Vec3d(dr[0], dr[1], dr[2]).normalized();
+    Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const V& c : tris[0]) {
+      const V r = asReal(c);
+      lo = lo.cwiseMin(Vec3d(r[0], r[1], r[2])), hi = hi.cwiseMax(Vec3d(r[0], r[1], r[2]));
+    }
+    double far2 = 0;
+    for (int k = 0; k < 8; ++k)
+      far2 = std::max(far2, (Vec3d((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(), (k & 4) ? hi.z() : lo.z()) - o)
+                                .squaredNorm());
+    const double length = far2 > 0 ? 2 * std::sqrt(far2) : 1.0;
+    const Vec3d e = o + length * u;
+    rayDir = dr;
+    rayReach = length / Vec3d(dr[0], dr[1], dr[2]).norm();
+    const F3 ef = {float(e.x()), float(e.y()), float(e.z())};
+    end = {double(ef[0]), double(ef[1]), double(ef[2])};
+  } else {
+    return BulletFloatRay::None;
+  }
   const F3 from = f3(start), to = f3(end);
   for (const auto& t : tris) {
     if (degenerate(t)) continue;
@@ -451,10 +531,13 @@ bool bulletFloatSideCrossing(const J& query, const std::vector<std::array<V, 3>>
     // an endpoint on the other side (or on the plane) exactly
     const auto sign = [](float x) { return (x > 0) - (x < 0); };
     const int sa = predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(start));
-    const int sb = predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(end));
-    if (sa != sign(distA) || sb != sign(distB)) return true;
+    const int sb = ray ? rayFarSide(t, start, rayDir, rayReach, sa) : predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(end));
+    if (sa != sign(distA) || sb != sign(distB)) return BulletFloatRay::Side;
+    // the sides are right: the exact crossing lies beyond the edge tolerance?
+    const auto lowest = crossingBarycentric(query, t);
+    if (lowest && *lowest < -kBulletRayEdgeTolerance) return BulletFloatRay::Crossing;
   }
-  return false;
+  return BulletFloatRay::None;
 }
 
 /// A triangle operand against a sphere operand whose normal (b − a)×(c − a), computed in float
@@ -1565,9 +1648,12 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   if (bullet && isRayOrSegmentOp(c.op) && endpointOnPlane(query, rayModelTriangles(c, query, got, exact)))
     return peer("plane-endpoint");
   // Bullet hits a triangle whose plane the segment crosses only in its float arithmetic
-  if (bullet && isRayOrSegmentOp(c.op) && diff == Difference::Boolean && got.value("hit", false) &&
-      bulletFloatSideCrossing(query, tris))
-    return peer("float-plane-side");
+  if (bullet && isRayOrSegmentOp(c.op) && diff == Difference::Boolean && got.value("hit", false)) {
+    const BulletFloatRay wrong = bulletFloatRaycast(c.op, query, tris);
+    if (wrong == BulletFloatRay::Side) return peer("float-plane-side");
+    // Bullet's float crossing point of a ray grazing the plane lands inside the fattened edges
+    if (wrong == BulletFloatRay::Crossing) return peer("float-crossing-point");
+  }
   // Bullet hits a triangle whose plane the ray or segment crosses just outside it
   if (bullet && isRayOrSegmentOp(c.op) && diff == Difference::Boolean && got.value("hit", false) &&
       withinFattenedEdges(query, tris))

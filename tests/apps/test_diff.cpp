@@ -244,6 +244,53 @@ TEST(DiffClassify, BulletFloatPlaneSide) {
   EXPECT_NE(k.cause, "float-plane-side") << describe(k);
 }
 
+TEST(DiffClassify, BulletFloatRayTriangle) {
+  // rays as the bullet world casts them: a float segment from the origin to twice the distance
+  // of the triangle's farthest bounding-box corner. Replayed in float, Bullet's raycast reports
+  // the triangle; exact misses
+  if (sizeof(Real) != sizeof(float)) GTEST_SKIP() << "float-build cases (Bullet's float arithmetic on float inputs)";
+  DiffRunner runner;
+  const auto hit = [](double t, double x, double y, double z) {
+    return J{{"op", "ray_triangle"}, {"hit", true}, {"t", t}, {"point", J::array({x, y, z})}};
+  };
+  // seed 98765 case 56163 (transformed family): a ray within float rounding of the triangle's
+  // plane, crossing it behind the origin; Bullet's float dist_a is -4.8e-7 where the origin lies
+  // on the positive side: float-plane-side
+  const std::string t56163 =
+      R"("triangle":[[4.525421146696169,6.1070279716630615,-0.1725129932165146],[2.833351442173432,4.645640449913489,-0.13720539212226868],[-0.8100221099432621,6.1085086811980425,-0.9026109576225281]])";
+  auto c = primitive(R"({"op":"ray_triangle",)" + t56163 +
+                         R"(,"ray":{"origin":[2.9647304573489928,9.944836014482544,-1.0865556001663208],"dir":[-0.13137901517556072,-5.299195564569056,0.9493502378463745]}})",
+                     false);
+  auto k = classify(runner, c, "bullet", hit(4.383377633603844, 2.8577915668322187, 5.631434644674869, -0.3138103642854422));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "float-plane-side");
+  // case 77247: the same in another triangle's plane
+  c = primitive(
+      R"({"op":"ray_triangle","triangle":[[-1.74792997823298,1.3469755116346573,-2.233792543411255],[-0.8500125311784674,-1.9164654656327131,-6.422312259674072],[3.540437723886603,2.25219530429797,-8.251578330993652]],"ray":{"origin":[-2.628519858932849,-4.331481860119904,-6.354433536529541],"dir":[1.121189704338049,4.212079887881799,2.449758529663086]}})",
+      false);
+  k = classify(runner, c, "bullet", hit(6.6124635692849925, -1.1457545812268437, 1.238963048763427, -3.114645806093223));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "float-plane-side");
+  // case 16898 (general family): a ray 3.5e-4 rad off the plane crossing it 1.03e-4 (barycentric)
+  // outside a corner, beyond Bullet's 1e-4 edge tolerance; Bullet's float segment end and
+  // fraction put the crossing at -8.4e-5, inside it: float-crossing-point
+  const std::string t16898 =
+      R"("triangle":[[0.4957824945449829,-0.359619140625,0.7859397530555725],[0.8939127922058105,0.8816403746604919,-0.3974124789237976],[-0.48833566904067993,0.9118291139602661,0.3931206464767456]])";
+  c = primitive(R"({"op":"ray_triangle",)" + t16898 +
+                    R"(,"ray":{"origin":[-1.4040463568357584,3.989004815163195,-1.4224653244018555],"dir":[2.297959149041569,-3.107364440502703,1.025052785873413]}})",
+                false);
+  k = classify(runner, c, "bullet", hit(3.998245444103907, 0.8938338904152006, 0.8817469662704052, -0.3974476811490564));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "float-crossing-point");
+  // the same ray 0.01 further along x crosses the plane 2.8e-3 outside: a hit there is not explained
+  c = primitive(R"({"op":"ray_triangle",)" + t16898 +
+                    R"(,"ray":{"origin":[-1.3940463568357584,3.989004815163195,-1.4224653244018555],"dir":[2.297959149041569,-3.107364440502703,1.025052785873413]}})",
+                false);
+  k = classify(runner, c, "bullet", hit(3.998245444103907, 0.9038338904152006, 0.8817469662704052, -0.3974476811490564));
+  EXPECT_NE(k.cause, "float-crossing-point") << describe(k);
+  EXPECT_NE(k.cause, "float-plane-side") << describe(k);
+}
+
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
   // found by crux diff (seed 4242, case 2806, sliver family): two corners 1.1e-7 apart, |n|² in
   // float 8e-15 < FLT_EPSILON²; the sphere holds the triangle 1.1 deep, Bullet reports nothing
