@@ -1478,9 +1478,49 @@ bool castWithinContactTolerance(const DiffCase& c, const J& query, const J& got,
 }
 
 
+/// Scales every length of a query by `f` (in place): points, centres, radii, half extents,
+/// translations, plane offsets, margins; not rotations, axes, directions or normals.
+void scaleLengths(J& j, double f) {
+  if (j.is_number()) {
+    j = j.get<double>() * f;
+  } else if (j.is_array()) {
+    for (J& e : j) scaleLengths(e, f);
+  } else if (j.is_object()) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (it.key() != "rotation" && it.key() != "axes" && it.key() != "dir" && it.key() != "normal" && it.key() != "id")
+        scaleLengths(it.value(), f);
+  }
+}
+
+/// Bullet's answer depends on the case's scale alone: the case (no setup lines; `contacts` and
+/// the triangle–shape ops) scaled by 2^−k, k = ⌊log2 s⌋ ≥ 10 (coordinates ~1), is answered as
+/// exact answers it. Scaling by a power of two is exact in float and commutes with every
+/// rounded operation, so only Bullet's absolute constants (btGjkPairDetector's REL_ERROR2 = 1e-6
+/// on the squared closest-point length, gGjkEpaPenetrationTolerance, btGjkEpa2's GJK_MIN_DISTANCE
+/// and EPA_ACCURACY of 1e-4) tell the two apart: at coordinates ~1e6, GJK's float simplex leaves
+/// the origin's closest point at rounding distance (~1e6 × 1.2e-7 = 0.1) from the origin, above
+/// those constants, and Bullet reports the crossing shapes separated by it.
+bool bulletRightWhenScaledDown(const DiffCase& c, const J& query, double s, const WorldTolerance& tol,
+                               const WorldTolerance& exactTol, const std::function<Answer(const DiffCase&)>& probeExact,
+                               const std::function<Answer(const DiffCase&)>& probePeer) {
+  if (!probePeer || !c.setup.empty() || !(s >= 1024)) return false;
+  if (c.op != "contacts" && !startsWith(c.op, "triangle_")) return false;
+  const double f = std::ldexp(1.0, -int(std::floor(std::log2(s))));
+  DiffCase scaled = c;
+  J q = query;
+  scaleLengths(q, f);
+  scaled.query = q.dump();
+  const Answer exact = probeExact(scaled), got = probePeer(scaled);
+  if (hasError(exact) || hasError(got)) return false;
+  const double small = s * f;
+  const double numTol = tol.at(small) + exactTol.at(small) + (isNarrowOp(c.op) ? kNarrowRelative * small : 0);
+  return compareAnswers(c.op, q, got, exact, numTol) == Difference::None;
+}
+
 Classification classifyAnswer(const DiffCase& c, std::string_view backend, const Answer& got, const Answer& exact,
                               const WorldTolerance& tol, const WorldTolerance& exactTol,
-                              const std::function<Answer(const DiffCase&)>& probeExact) {
+                              const std::function<Answer(const DiffCase&)>& probeExact,
+                              const std::function<Answer(const DiffCase&)>& probePeer) {
   const std::string exactError = errorText(exact), gotError = errorText(got);
   if (!exactError.empty()) {
     if (!gotError.empty() && !startsWith(exactError, "unsupported:") && !startsWith(gotError, "unsupported:"))
@@ -1627,6 +1667,9 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
         narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(c, query, got, numTol))
       return peer("gjk-equal-norm-stop");
+    // Bullet answers the same case scaled down by a power of two right: its absolute epsilons
+    if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
+      return peer("absolute-epsilons");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));
       return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");
@@ -1690,6 +1733,8 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer("touching");
   if (bullet && probeFlips(c, query, exact, got, 0.04, numTol, probeExact, false)) return peer("margin");
   if (bullet && c.op == "mesh_mesh") return peer("gimpact-miss");
+  if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
+    return peer("absolute-epsilons");
   return peer("unexplained");
 }
 
@@ -1998,8 +2043,9 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
     for (const auto& backend : backends) {
       const WorldTolerance tol = runner.tolerance(backend);
       const Answer got = runner.run(c, backend);
+      auto probePeer = [&](const DiffCase& other) { return runner.run(other, backend); };
       const Classification k =
-          !nativeReference ? classifyAnswer(c, backend, got, exact, tol, exactTol, probeExact)
+          !nativeReference ? classifyAnswer(c, backend, got, exact, tol, exactTol, probeExact, probePeer)
           : backend == "native"
               ? Classification{Verdict::NoArbiter, "", errorText(exact)}
               : classifyAnswer(c, backend, got, reference, tol, runner.tolerance("native"), probeNative);
@@ -2025,7 +2071,7 @@ DiffSummary runDiff(const DiffOptions& options, std::ostream& err) {
         const Answer e = runner.run(t, "exact");
         const Answer g = runner.run(t, backend);
         (void)cache;
-        return classifyAnswer(t, backend, g, e, tol, exactTol, probe);
+        return classifyAnswer(t, backend, g, e, tol, exactTol, probe, probePeer);
       };
       // Peer findings of the narrow-phase ops stay unshrunk: the shrinker's snapped numbers make
       // degenerate simplices on which FCL 0.7's libccd GJK aborts (assertion "A is not in region

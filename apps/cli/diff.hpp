@@ -130,10 +130,12 @@ class DiffRunner {
 /// Classifies `got` (the answer of `backend`) against `exact`, the arbiter's answer to the
 /// same case. `probeExact` answers translated cases on the exact backend (used for the
 /// within-tolerance and cause rules). `tol` is the backend's declared tolerance, `exactTol`
-/// the arbiter's.
+/// the arbiter's. `probePeer`, when given, answers other cases on `backend` itself (the
+/// `absolute-epsilons` rule asks Bullet the case scaled by a power of two).
 Classification classifyAnswer(const DiffCase& c, std::string_view backend, const Answer& got, const Answer& exact,
                               const WorldTolerance& tol, const WorldTolerance& exactTol,
-                              const std::function<Answer(const DiffCase&)>& probeExact);
+                              const std::function<Answer(const DiffCase&)>& probeExact,
+                              const std::function<Answer(const DiffCase&)>& probePeer = {});
 
 /// Greedy shrinking: drops setup lines and mesh triangles, snaps numbers to 0, integers, fewer
 /// mantissa bits and halves, keeping every change after which `classify` still gives `target`.

@@ -38,7 +38,8 @@ J answer(const std::string& op, bool hit) { return J{{"op", op}, {"hit", hit}}; 
 Classification classify(DiffRunner& runner, const DiffCase& c, const std::string& backend, const J& got) {
   const J exact = runner.run(c, "exact");
   auto probe = [&](const DiffCase& moved) { return runner.run(moved, "exact"); };
-  return classifyAnswer(c, backend, got, exact, runner.tolerance(backend), runner.tolerance("exact"), probe);
+  auto peer = [&](const DiffCase& other) { return runner.run(other, backend); };
+  return classifyAnswer(c, backend, got, exact, runner.tolerance(backend), runner.tolerance("exact"), probe, peer);
 }
 
 std::string describe(const Classification& k) {
@@ -289,6 +290,41 @@ TEST(DiffClassify, BulletFloatRayTriangle) {
   k = classify(runner, c, "bullet", hit(3.998245444103907, 0.9038338904152006, 0.8817469662704052, -0.3974476811490564));
   EXPECT_NE(k.cause, "float-crossing-point") << describe(k);
   EXPECT_NE(k.cause, "float-plane-side") << describe(k);
+}
+
+TEST(DiffClassify, BulletAbsoluteEpsilons) {
+  // seed 98765 case 95403 (huge family): triangles crossing at coordinates ~3e6; Bullet's float
+  // GJK leaves the closest point of its simplex at rounding distance from the origin, above its
+  // absolute thresholds, and reports them apart. The same triangles scaled by 2^-21 (exact in
+  // float) Bullet answers right: absolute-epsilons
+  DiffRunner runner;
+  const std::string tt =
+      R"({"op":"triangle_triangle","a":[[-1000000,-1000000,1000000],[3000000,3000000,-2000000],[1000000,-1000000,-2000000]],"b":[[-4000000,1000000,0],[2000000,-1000000,0],[0,0,0]]})";
+  auto c = primitive(tt, false);
+  auto k = classify(runner, c, "bullet", answer("triangle_triangle", false));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "absolute-epsilons");
+  // without asking Bullet the scaled case, no rule explains it
+  const J exact = runner.run(c, "exact");
+  auto probe = [&](const DiffCase& moved) { return runner.run(moved, "exact"); };
+  EXPECT_EQ(classifyAnswer(c, "bullet", answer("triangle_triangle", false), exact, runner.tolerance("bullet"),
+                           runner.tolerance("exact"), probe)
+                .cause,
+            "unexplained");
+  // case 141785: boxes crossing 2e6 deep at coordinates ~2e6, Bullet reports no contact
+  c = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[0,-1000000,1000000],"half":[1000000,1000000,1000000],"axes":[[-1,0,0],[0,0,1],[0,1,0]]}},"b":{"box":{"center":[1000000,-1000000,1000000],"half":[1000000,2000000,1000000],"axes":[[0,-1,0],[-1,0,0],[0,0,-1]]}}})",
+      false);
+  k = classify(runner, c, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}});
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "absolute-epsilons");
+  // the triangles at coordinates ~4 (scaled by 2^-20): a made-up miss is not put on the scale
+  J small = J::parse(tt);
+  for (const char* side : {"a", "b"})
+    for (auto& p : small[side])
+      for (auto& x : p) x = x.get<double>() / 1048576.0;
+  k = classify(runner, primitive(small.dump(), false), "bullet", answer("triangle_triangle", false));
+  EXPECT_NE(k.cause, "absolute-epsilons") << describe(k);
 }
 
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
