@@ -1135,6 +1135,37 @@ bool exactWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J
   return false;
 }
 
+/// `distance` with a mesh operand: the triangle the peer names as its nearest (`triangle_a` /
+/// `triangle_b`) is collinear or has repeated corners. FCL measures a mesh against a shape
+/// triangle by triangle; on a degenerate one its sphere–triangle distance (whose normal it
+/// normalises) and GJK answer 0 with uninitialised points, and that 0 is the least (seed 98765
+/// case 193812: a sphere 0.97 from a mesh whose triangle 0 repeats a corner; the mesh without it
+/// gets 0.97).
+bool peerWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J& got) {
+  if (c.op != "distance") return false;
+  for (const char* side : {"a", "b"}) {
+    const std::string key = std::string("triangle_") + side;
+    if (!query.contains(side) || !query[side].is_object() || !query[side].contains("mesh") ||
+        !query[side]["mesh"].is_string() || !got.contains(key) || !got[key].is_number_integer() || got[key].get<long long>() < 0)
+      continue;
+    const auto index = got[key].get<std::size_t>();
+    std::vector<std::array<Vec3d, 3>> inline_;
+    const Mesh* mesh = caseMesh(c, query[side]["mesh"].get<std::string>(), inline_);
+    std::array<Vec3d, 3> t;
+    if (mesh && index < mesh->triangleCount()) {
+      const Triangle m = mesh->triangle(std::uint32_t(index));
+      t = {m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()};
+    } else if (!mesh && index < inline_.size()) {
+      t = inline_[index];
+    } else {
+      continue;
+    }
+    if (degenerate({V{t[0].x(), t[0].y(), t[0].z()}, V{t[1].x(), t[1].y(), t[1].z()}, V{t[2].x(), t[2].y(), t[2].z()}}))
+      return true;
+  }
+  return false;
+}
+
 /// A zero-radius sphere, a flat box, a capsule with a = b, a hull of fewer than 4 points or a
 /// degenerate triangle among the operands of a narrow-phase query.
 bool degenerateOperand(const J& query) {
@@ -1636,6 +1667,8 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (degenerateOperand(query)) return peer("degenerate-shape");
     // exact's nearest triangle pair includes a collinear or repeated-corner triangle
     if (exactWitnessOnDegenerateTriangle(c, query, exact)) return peer("degenerate-triangle");
+    // FCL's nearest triangle of a mesh operand is degenerate: its distance there is 0, garbage points
+    if (fcl && peerWitnessOnDegenerateTriangle(c, query, got)) return peer("degenerate-triangle");
     // Bullet's sphere–triangle detector skips a triangle whose float normal is below FLT_EPSILON
     if (bullet && c.op == "contacts" && diff == Difference::Boolean && !narrowVerdict(c.op, got) &&
         sphereTriangleFloatNormalTooSmall(query))
@@ -1722,6 +1755,19 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
   // hit is within its declared tolerance.
   if (diff == Difference::Boolean && got.value("hit", false) && !exact.value("hit", true) && caseGap(c, query) <= tau)
     return {Verdict::WithinTolerance, "boundary", detail.str()};
+  // Bullet's earlier hit is on a mesh triangle the ray passes just outside (its fattened edges):
+  // the triangle Bullet names, placed as the query places the mesh
+  if (bullet && (c.op == "mesh_ray" || c.op == "mesh_segment") && diff == Difference::Numeric && got.value("hit", false) &&
+      got.contains("triangle") && got["triangle"].is_number_integer() && got["triangle"].get<long long>() >= 0) {
+    const auto placed = placedQueryTriangles(c, query);
+    const auto k = got["triangle"].get<std::size_t>();
+    if (k < placed.size()) {
+      const std::array<V, 3> t = {V{placed[k][0].x(), placed[k][0].y(), placed[k][0].z()},
+                                  V{placed[k][1].x(), placed[k][1].y(), placed[k][1].z()},
+                                  V{placed[k][2].x(), placed[k][2].y(), placed[k][2].z()}};
+      if (withinFattenedEdges(query, {t})) return peer("fattened-edges");
+    }
+  }
   if (diff == Difference::Numeric) {
     // both found a contact; the numbers differ beyond the declared tolerance
     double worst = maxDiff(got["point"], exact["point"]);

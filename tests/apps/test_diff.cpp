@@ -327,6 +327,38 @@ TEST(DiffClassify, BulletAbsoluteEpsilons) {
   EXPECT_NE(k.cause, "absolute-epsilons") << describe(k);
 }
 
+TEST(DiffClassify, BulletMeshRayOnANamedFattenedTriangle) {
+  // seed 98765 case 172266 (the cow), cut to two of its triangles: the ray passes 3e-6
+  // (barycentric) outside triangle 0 near a corner, at 6° to it, and crosses triangle 1 further
+  // on; Bullet's 1e-4 edge tolerance takes triangle 0 first (t 0.888 for 0.951)
+  DiffRunner runner;
+  DiffCase c = primitive(R"({"op":"mesh_ray","mesh":"m","ray":{"origin":[-0.1357588895793138,0.7847883887705451,0.48970943689346313],"dir":[0.5374998876090227,-0.5585573949036247,-0.4335978329181671]}})", false);
+  c.setup = {R"({"op":"mesh","name":"m","vertices":[[0.401741,0.226231,0.0561116],[0.404616,0.225304,0.0466036],[0.400004,0.22896,0.0567082],[0.440161,0.189565,0.0236225],[0.436445,0.17631,0.03185],[0.455007,0.179898,0.0240011]],"triangles":[[0,1,2],[3,4,5]]})"};
+  J got = J::parse(R"({"op":"mesh_ray","hit":true,"t":0.8882004419758106,"point":[0.4017411620422646,0.22623082401266847,0.05611148368806057],"triangle":0})");
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "fattened-edges");
+  // the same numbers naming triangle 1, which the ray crosses inside: not explained by it
+  got["triangle"] = 1;
+  EXPECT_NE(classify(runner, c, "bullet", got).cause, "fattened-edges");
+}
+
+TEST(DiffClassify, FclDistanceOnANamedDegenerateTriangle) {
+  // seed 98765 case 193812: FCL's nearest triangle of the mesh repeats a corner; FCL measures it
+  // 0 away from the sphere (with uninitialised points): the sphere is 0.97 from the mesh
+  DiffRunner runner;
+  DiffCase c = primitive(
+      R"({"op":"distance","a":{"mesh":"m","transform":{"rotation":[0,1,0,0],"translation":[1,-1,0]}},"b":{"sphere":{"center":[-2,0,-1],"radius":1}}})",
+      true);
+  c.setup = {R"({"op":"mesh","name":"m","vertices":[[3,-2,-3],[1,0,-4],[3,-2,-3],[-2,0,-4],[3,-4,3],[1,2,-4]],"triangles":[[0,1,2],[3,4,5]]})"};
+  J got = J::parse(R"({"op":"distance","distance":0.0,"point_a":[5.334368540005048,-1.0,-0.85065080835204],"point_b":[-0.5257311121191335,1.0,1.0],"triangle_a":0})");
+  auto k = classify(runner, c, "fcl", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "degenerate-triangle");
+  got["triangle_a"] = 1;  // a proper triangle: not this cause
+  EXPECT_NE(classify(runner, c, "fcl", got).cause, "degenerate-triangle");
+}
+
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
   // found by crux diff (seed 4242, case 2806, sliver family): two corners 1.1e-7 apart, |n|² in
   // float 8e-15 < FLT_EPSILON²; the sphere holds the triangle 1.1 deep, Bullet reports nothing
