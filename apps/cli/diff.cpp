@@ -364,13 +364,21 @@ bool endpointOnPlane(const J& query, const std::vector<std::array<V, 3>>& tris) 
 /// coordinate opposite that edge is at least −1e-4.
 constexpr long double kBulletRayEdgeTolerance = 1e-4L;
 
+/// x rounded to Real as the backends read it, through memory: GCC 12 at -O3 on this file (with
+/// -frounding-math) kept the unrounded double for a plain double(Real(x)) assigned to a ray's
+/// origin (seed 98765 case 56163).
+double roundedToReal(double x) {
+  volatile Real r = Real(x);
+  return double(r);
+}
+
 /// The smallest barycentric coordinate of the point where a ray or segment crosses the plane of
 /// a (non-degenerate) triangle (long double, on the coordinates rounded to Real as the backends
 /// read them: a segment through a corner in double may pass 7.5e-8 outside an edge in float);
 /// none when it does not cross within the ray or segment, or lies parallel to the plane.
 std::optional<long double> crossingBarycentric(const J& query, const std::array<V, 3>& t) {
   using L = long double;
-  const auto real = [](double x) { return L(Real(x)); };
+  const auto real = [](double x) { return L(roundedToReal(x)); };
   std::array<L, 3> o{}, d{};
   L tMax = 0;
   if (query.contains("ray")) {
@@ -416,12 +424,15 @@ bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tr
   return false;
 }
 
-/// The side of the triangle's plane (orient3d's sign) of the ray's point o + s·d: o's exact side
-/// `originSide` (orient3dExact on Real) unless the ray crosses the plane before s, where the
-/// crossing parameter −orient(o)/(n·d) is computed in long double on the Real coordinates.
-int rayFarSide(const std::array<V, 3>& t, const V& o, const V& d, double s, int originSide) {
+/// Where the ray o + u·d (coordinates rounded to Real) meets the triangle's plane ahead of its
+/// origin: u = |orient(o)| / |n·d| when o's exact side `originSide` (orient3dExact) and the sign
+/// of n·d say it does (0 for an origin on the plane), magnitudes in long double; none otherwise.
+/// The side decides the crossing, not the rounded orient(o), which for an origin within rounding
+/// of the plane may have the other sign (seed 98765 case 269579).
+std::optional<long double> rayCrossingAhead(const std::array<V, 3>& t, const V& o, const V& d, int originSide,
+                                            long double* normalDotDir = nullptr) {
   using L = long double;
-  const auto at = [](const V& v, std::size_t i) { return L(Real(v[i])); };
+  const auto at = [](const V& v, std::size_t i) { return L(roundedToReal(v[i])); };
   L e1[3], e2[3], od[3], dd[3];
   for (std::size_t i = 0; i < 3; ++i)
     e1[i] = at(t[1], i) - at(t[0], i), e2[i] = at(t[2], i) - at(t[0], i), od[i] = at(o, i) - at(t[0], i),
@@ -429,10 +440,39 @@ int rayFarSide(const std::array<V, 3>& t, const V& o, const V& d, double s, int 
   const L n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
   // orient3d(a, b, c, p) = n·(p − a) with n = (b − a)×(c − a)
   const L no = n[0] * od[0] + n[1] * od[1] + n[2] * od[2], nd = n[0] * dd[0] + n[1] * dd[1] + n[2] * dd[2];
-  const auto sign = [](L x) { return (x > 0) - (x < 0); };
-  if (originSide == 0) return sign(nd);
-  if (nd == 0 || sign(nd) == originSide) return originSide;
-  return -no / nd < L(s) ? sign(nd) : originSide;
+  if (normalDotDir) *normalDotDir = nd;
+  if (originSide == 0) return L(0);
+  if (nd == 0 || (nd > 0) == (originSide > 0)) return std::nullopt;
+  return std::fabs(no) / std::fabs(nd);
+}
+
+/// The side of the triangle's plane (orient3d's sign) of the ray's point o + s·d: o's exact side
+/// `originSide` unless the ray crosses the plane before s (rayCrossingAhead).
+int rayFarSide(const std::array<V, 3>& t, const V& o, const V& d, double s, int originSide) {
+  long double nd = 0;
+  const auto u = rayCrossingAhead(t, o, d, originSide, &nd);
+  if (!u || *u >= s) return originSide;
+  return (nd > 0) - (nd < 0);
+}
+
+/// The smallest barycentric coordinate of the ray's point o + u·d in the triangle (long double,
+/// coordinates rounded to Real).
+long double barycentricAt(const std::array<V, 3>& t, const V& o, const V& d, long double u) {
+  using L = long double;
+  using P = std::array<L, 3>;
+  const auto lp = [](const V& v) { return P{L(roundedToReal(v[0])), L(roundedToReal(v[1])), L(roundedToReal(v[2]))}; };
+  const auto sub = [](const P& a, const P& b) { return P{a[0] - b[0], a[1] - b[1], a[2] - b[2]}; };
+  const auto cross = [](const P& a, const P& b) {
+    return P{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+  };
+  const auto dot = [](const P& a, const P& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+  const P v[3] = {lp(t[0]), lp(t[1]), lp(t[2])}, po = lp(o), pd = lp(d);
+  const P n = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+  const P p = {po[0] + u * pd[0], po[1] + u * pd[1], po[2] + u * pd[2]};
+  L lowest = 1;
+  for (std::size_t i = 0; i < 3; ++i)
+    lowest = std::min(lowest, dot(cross(sub(v[(i + 1) % 3], p), sub(v[(i + 2) % 3], p)), n) / dot(n, n));
+  return lowest;
 }
 
 /// What a float replay of Bullet's raycast finds wrong: nothing, the side of an endpoint
@@ -469,14 +509,11 @@ BulletFloatRay bulletFloatRaycast(std::string_view op, const J& query, const std
     return F3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
   };
   const auto dot = [](const F3& a, const F3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
-  const auto real = [](const V& v) { return WVec3(Wide(Real(v[0])), Wide(Real(v[1])), Wide(Real(v[2]))); };
+  const auto real = [](const V& v) {
+    return WVec3(Wide(roundedToReal(v[0])), Wide(roundedToReal(v[1])), Wide(roundedToReal(v[2])));
+  };
   const auto asReal = [](V v) {  // as the backends read it
-    for (double& x : v) {
-      // through memory: GCC 12 -O3 (this file, -frounding-math) dropped the round trip to float
-      // of the ray's origin assigned from a plain double(Real(x)) (seed 98765 case 56163)
-      volatile Real r = Real(x);
-      x = double(r);
-    }
+    for (double& x : v) x = roundedToReal(x);
     return v;
   };
   V start, end, rayDir{};
@@ -534,7 +571,12 @@ BulletFloatRay bulletFloatRaycast(std::string_view op, const J& query, const std
     const int sb = ray ? rayFarSide(t, start, rayDir, rayReach, sa) : predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(end));
     if (sa != sign(distA) || sb != sign(distB)) return BulletFloatRay::Side;
     // the sides are right: the exact crossing lies beyond the edge tolerance?
-    const auto lowest = crossingBarycentric(query, t);
+    std::optional<long double> lowest;
+    if (ray) {
+      if (const auto u = rayCrossingAhead(t, start, rayDir, sa)) lowest = barycentricAt(t, start, rayDir, *u);
+    } else {
+      lowest = crossingBarycentric(query, t);
+    }
     if (lowest && *lowest < -kBulletRayEdgeTolerance) return BulletFloatRay::Crossing;
   }
   return BulletFloatRay::None;

@@ -272,6 +272,15 @@ TEST(DiffClassify, BulletFloatRayTriangle) {
   k = classify(runner, c, "bullet", hit(6.6124635692849925, -1.1457545812268437, 1.238963048763427, -3.114645806093223));
   EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
   EXPECT_EQ(k.cause, "float-plane-side");
+  // case 269579: the origin 5e-8 from the plane on its negative side, the ray moving away from
+  // it at 1e-7 rad; Bullet's float dist_a is +1.5e-5 (the exact side comes from the coordinates
+  // rounded to float, as Bullet's are)
+  c = primitive(
+      R"({"op":"ray_triangle","triangle":[[-5.793519175615094,-0.3816815133520155,2.7357306480407715],[0.4219855818730043,3.8765286394146914,3.847102165222168],[-2.448386654701532,5.522072161705854,0.09834907948970795]],"ray":{"origin":[0.5576313773984403,6.033470695800128,2.0224924087524414],"dir":[-4.561104313306095,-6.324007294334123,2.050185203552246]}})",
+      false);
+  k = classify(runner, c, "bullet", hit(4.615019577811835, -2.0532483375217527, 2.413465073847906, 3.1960649916836803));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "float-plane-side");
   // case 16898 (general family): a ray 3.5e-4 rad off the plane crossing it 1.03e-4 (barycentric)
   // outside a corner, beyond Bullet's 1e-4 edge tolerance; Bullet's float segment end and
   // fraction put the crossing at -8.4e-5, inside it: float-crossing-point
