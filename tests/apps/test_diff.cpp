@@ -368,6 +368,28 @@ TEST(DiffClassify, FclDistanceOnANamedDegenerateTriangle) {
   EXPECT_NE(classify(runner, c, "fcl", got).cause, "degenerate-triangle");
 }
 
+TEST(DiffClassify, BulletBroadphaseFaceRay) {
+  // seed 98765 case 70040: model n0, a quarter turn about x, has a triangle edge at z = 2, the
+  // top of its box; the ray runs at z = 2 (direction z 0) and exact hits that edge. Bullet's
+  // proxy box (unpadded, from addCollisionObject) has its top at z <= 2 in float, btRayAabb2
+  // gets tmax = (2 - 2)·1e18 = 0 and culls n0: Bullet hits n2 further on
+  DiffRunner runner;
+  DiffCase c = primitive(R"({"op":"scene_ray","ray":{"origin":[3,3,2],"dir":[-3,-10,0]}})", false);
+  c.setup = {
+      R"({"op":"mesh","name":"m0","vertices":[[0,0,0],[4,-2,-3],[0,0,3],[0,-3,0],[3,-3,0],[0,0,0]],"triangles":[[0,1,2],[3,4,5]]})",
+      R"({"op":"add_model","name":"n0","mesh":"m0","transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[0,0,-1]}})",
+      R"({"op":"add_model","name":"n2","mesh":"m0","transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[-4,-4,0]}})"};
+  const J got = J::parse(
+      R"({"op":"scene_ray","hit":true,"model":"n2","t":10.440306843716101,"point":[-9.620566698842481e-08,-7.000000320685556,2.0],"triangle":0})");
+  auto k = classify(runner, c, "bullet", got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "broadphase-face-ray");
+  // the ray at z = 1.5, inside n0's box: a miss of n0 there is not this cause
+  c.query = R"({"op":"scene_ray","ray":{"origin":[3,3,1.5],"dir":[-3,-10,0]}})";
+  k = classify(runner, c, "bullet", got);
+  EXPECT_NE(k.cause, "broadphase-face-ray") << describe(k);
+}
+
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
   // found by crux diff (seed 4242, case 2806, sliver family): two corners 1.1e-7 apart, |n|² in
   // float 8e-15 < FLT_EPSILON²; the sphere holds the triangle 1.1 deep, Bullet reports nothing
