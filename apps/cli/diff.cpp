@@ -718,6 +718,23 @@ const Mesh* caseMesh(const DiffCase& c, const std::string& name, std::vector<std
   return nullptr;
 }
 
+/// Triangle `index` of the case's mesh `name` (an inline or a loaded mesh), in the mesh's frame;
+/// none when the mesh or the triangle is unknown.
+std::optional<std::array<V, 3>> caseMeshTriangle(const DiffCase& c, const std::string& name, std::size_t index) {
+  std::vector<std::array<Vec3d, 3>> inline_;
+  const Mesh* mesh = caseMesh(c, name, inline_);
+  std::array<Vec3d, 3> t;
+  if (mesh && index < mesh->triangleCount()) {
+    const Triangle m = mesh->triangle(std::uint32_t(index));
+    t = {m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()};
+  } else if (!mesh && index < inline_.size()) {
+    t = inline_[index];
+  } else {
+    return std::nullopt;
+  }
+  return std::array<V, 3>{V{t[0].x(), t[0].y(), t[0].z()}, V{t[1].x(), t[1].y(), t[1].z()}, V{t[2].x(), t[2].y(), t[2].z()}};
+}
+
 /// rayHitOnMovedTriangle for a `mesh_ray` (no transform: mesh coordinates are world ones) whose
 /// answer and exact's hit the same triangle of the mesh: the answer is the exact hit of that
 /// triangle moved by at most `move` (found on grazing rays on blob-closed, |cos θ| 7.5e-5 and
@@ -1070,16 +1087,10 @@ J gjkOperand(const DiffCase& c, const J& operand, const J& got, const char* tria
   if (!operand["mesh"].is_string() || !got.contains(triangleKey) || !got[triangleKey].is_number_integer() ||
       got[triangleKey].get<long long>() < 0)
     return nullptr;
-  std::vector<std::array<Vec3d, 3>> tris;
-  if (const Mesh* mesh = caseMesh(c, operand["mesh"].get<std::string>(), tris))
-    for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
-      const Triangle t = mesh->triangle(i);
-      tris.push_back({t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()});
-    }
-  const auto k = got[triangleKey].get<std::size_t>();
-  if (k >= tris.size()) return nullptr;
+  const auto t = caseMeshTriangle(c, operand["mesh"].get<std::string>(), got[triangleKey].get<std::size_t>());
+  if (!t) return nullptr;
   J triangle = J::array();
-  for (const Vec3d& v : tris[k]) triangle.push_back({v.x(), v.y(), v.z()});
+  for (const V& v : *t) triangle.push_back({v[0], v[1], v[2]});
   J out{{"triangle", triangle}};
   if (operand.contains("transform")) out["transform"] = operand["transform"];
   return out;
@@ -1232,20 +1243,8 @@ bool exactWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J
       if (operand.is_null() || !operand["mesh"].is_string()) continue;
       name = operand["mesh"].get<std::string>();
     }
-    const std::size_t index = exact[key].get<std::size_t>();
-    std::vector<std::array<Vec3d, 3>> inline_;
-    const Mesh* mesh = caseMesh(c, name, inline_);
-    std::array<Vec3d, 3> t;
-    if (mesh && index < mesh->triangleCount()) {
-      const Triangle m = mesh->triangle(std::uint32_t(index));
-      t = {m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()};
-    } else if (!mesh && index < inline_.size()) {
-      t = inline_[index];
-    } else {
-      continue;
-    }
-    if (degenerate({V{t[0].x(), t[0].y(), t[0].z()}, V{t[1].x(), t[1].y(), t[1].z()}, V{t[2].x(), t[2].y(), t[2].z()}}))
-      return true;
+    const auto t = caseMeshTriangle(c, name, exact[key].get<std::size_t>());
+    if (t && degenerate(*t)) return true;
   }
   return false;
 }
@@ -1263,20 +1262,8 @@ bool peerWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J&
     if (!query.contains(side) || !query[side].is_object() || !query[side].contains("mesh") ||
         !query[side]["mesh"].is_string() || !got.contains(key) || !got[key].is_number_integer() || got[key].get<long long>() < 0)
       continue;
-    const auto index = got[key].get<std::size_t>();
-    std::vector<std::array<Vec3d, 3>> inline_;
-    const Mesh* mesh = caseMesh(c, query[side]["mesh"].get<std::string>(), inline_);
-    std::array<Vec3d, 3> t;
-    if (mesh && index < mesh->triangleCount()) {
-      const Triangle m = mesh->triangle(std::uint32_t(index));
-      t = {m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()};
-    } else if (!mesh && index < inline_.size()) {
-      t = inline_[index];
-    } else {
-      continue;
-    }
-    if (degenerate({V{t[0].x(), t[0].y(), t[0].z()}, V{t[1].x(), t[1].y(), t[1].z()}, V{t[2].x(), t[2].y(), t[2].z()}}))
-      return true;
+    const auto t = caseMeshTriangle(c, query[side]["mesh"].get<std::string>(), got[key].get<std::size_t>());
+    if (t && degenerate(*t)) return true;
   }
   return false;
 }

@@ -46,6 +46,18 @@ std::string describe(const Classification& k) {
   return std::string(verdictName(k.verdict)) + " (" + k.cause + "): " + k.detail;
 }
 
+/// `got` is peer wrong on `c` for `cause`; with the query replaced by `otherQuery`, the same
+/// answer is not put on that cause.
+void expectCauseOnlyHere(DiffRunner& runner, DiffCase c, const std::string& backend, const J& got,
+                         const std::string& cause, const std::string& otherQuery) {
+  auto k = classify(runner, c, backend, got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, cause);
+  c.query = otherQuery;
+  k = classify(runner, c, backend, got);
+  EXPECT_NE(k.cause, cause) << describe(k);
+}
+
 // A triangle and a sphere touching at the corner (0,0,0); a second sphere 1 unit away.
 const std::string kTouching =
     R"({"op":"triangle_sphere","triangle":[[0,0,0],[4,0,0],[0,4,0]],"sphere":{"center":[-2,0,0],"radius":2}})";
@@ -127,13 +139,9 @@ TEST(DiffClassify, BulletPlaneEndpointOnAPlacedModel) {
                   {"point", J::array({1.0000003793876697, -1.0000003161563917, 1.264625564267874e-07})},
                   {"normal", J::array({-0.9486832950702815, 0.31622777495753496, 0.0})},
                   {"triangle", 0}};
-  auto k = classify(runner, c, "bullet", got);
-  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "plane-endpoint");
   // the origin 1 behind n3's plane (x + y = -1): the same answer is not explained by it
-  c.query = R"({"op":"scene_ray","ray":{"origin":[-5.5,3.5,-2],"dir":[6,-5,2]}})";
-  k = classify(runner, c, "bullet", got);
-  EXPECT_NE(k.cause, "plane-endpoint") << describe(k);
+  expectCauseOnlyHere(runner, c, "bullet", got, "plane-endpoint",
+                      R"({"op":"scene_ray","ray":{"origin":[-5.5,3.5,-2],"dir":[6,-5,2]}})");
 }
 
 TEST(DiffClassify, DegenerateTriangle) {
@@ -381,13 +389,9 @@ TEST(DiffClassify, BulletBroadphaseFaceRay) {
       R"({"op":"add_model","name":"n2","mesh":"m0","transform":{"rotation":[0.7071067811865476,-0.7071067811865476,0,0],"translation":[-4,-4,0]}})"};
   const J got = J::parse(
       R"({"op":"scene_ray","hit":true,"model":"n2","t":10.440306843716101,"point":[-9.620566698842481e-08,-7.000000320685556,2.0],"triangle":0})");
-  auto k = classify(runner, c, "bullet", got);
-  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "broadphase-face-ray");
   // the ray at z = 1.5, inside n0's box: a miss of n0 there is not this cause
-  c.query = R"({"op":"scene_ray","ray":{"origin":[3,3,1.5],"dir":[-3,-10,0]}})";
-  k = classify(runner, c, "bullet", got);
-  EXPECT_NE(k.cause, "broadphase-face-ray") << describe(k);
+  expectCauseOnlyHere(runner, c, "bullet", got, "broadphase-face-ray",
+                      R"({"op":"scene_ray","ray":{"origin":[3,3,1.5],"dir":[-3,-10,0]}})");
 }
 
 TEST(DiffClassify, BulletSphereTriangleSmallNormal) {
