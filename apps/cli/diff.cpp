@@ -1268,6 +1268,29 @@ bool peerWitnessOnDegenerateTriangle(const DiffCase& c, const J& query, const J&
   return false;
 }
 
+/// `contacts` with a mesh operand: exact's deepest contact lies on a mesh triangle
+/// (`feature_a` / `feature_b`) that is collinear or has repeated corners. Bullet's per-triangle
+/// tests see no normal there (SphereTriangleDetector skips |n|² < FLT_EPSILON²) and report no
+/// contact with it (seed 98765 case 419716: a sphere 0.59 deep on a mesh triangle that repeats
+/// a corner).
+bool exactContactOnDegenerateTriangle(const DiffCase& c, const J& query, const J& exact) {
+  if (c.op != "contacts" || !exact.contains("contacts") || !exact["contacts"].is_array() || exact["contacts"].empty())
+    return false;
+  const J* deepest = nullptr;
+  for (const J& k : exact["contacts"])
+    if (!deepest || k.value("depth", 0.0) > deepest->value("depth", 0.0)) deepest = &k;
+  for (const char* side : {"a", "b"}) {
+    const std::string key = std::string("feature_") + side;
+    if (!query.contains(side) || !query[side].is_object() || !query[side].contains("mesh") ||
+        !query[side]["mesh"].is_string() || !deepest->contains(key) || !(*deepest)[key].is_number_integer() ||
+        (*deepest)[key].get<long long>() < 0)
+      continue;
+    const auto t = caseMeshTriangle(c, query[side]["mesh"].get<std::string>(), (*deepest)[key].get<std::size_t>());
+    if (t && degenerate(*t)) return true;
+  }
+  return false;
+}
+
 /// A zero-radius sphere, a flat box, a capsule with a = b, a hull of fewer than 4 points or a
 /// degenerate triangle among the operands of a narrow-phase query.
 bool degenerateOperand(const J& query) {
@@ -1769,6 +1792,9 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (degenerateOperand(query)) return peer("degenerate-shape");
     // exact's nearest triangle pair includes a collinear or repeated-corner triangle
     if (exactWitnessOnDegenerateTriangle(c, query, exact)) return peer("degenerate-triangle");
+    // Bullet misses a contact that exact finds deepest on a degenerate mesh triangle
+    if (bullet && diff == Difference::Boolean && !narrowVerdict(c.op, got) && exactContactOnDegenerateTriangle(c, query, exact))
+      return peer("degenerate-triangle");
     // FCL's nearest triangle of a mesh operand is degenerate: its distance there is 0, garbage points
     if (fcl && peerWitnessOnDegenerateTriangle(c, query, got)) return peer("degenerate-triangle");
     // Bullet's sphere–triangle detector skips a triangle whose float normal is below FLT_EPSILON
@@ -1790,7 +1816,9 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     }
     // boxes whose Minkowski difference is mirror-symmetric about a plane through the origin:
     // Bullet's EPA ends on a face inside it, its depth short
-    if (bullet && c.op == "contacts" && diff == Difference::Numeric && boxesMirrorSymmetric(query, numTol))
+    // (or no contact at all: a depth at rounding level of 0 comes out as a separation)
+    if (bullet && c.op == "contacts" && (diff == Difference::Numeric || !narrowVerdict(c.op, got)) &&
+        boxesMirrorSymmetric(query, numTol))
       return peer("epa-symmetric-boxes");
     // shapes that touch (exact distance within τ of 0): libccd's GJK, with its absolute 1e-6
     // tolerance, declares them colliding, and its EPA, run on a Minkowski difference with the

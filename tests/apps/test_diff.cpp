@@ -478,6 +478,34 @@ TEST(DiffClassify, BulletEpaOnMirrorSymmetricBoxes) {
       false);
   k = classify(runner, c, "bullet", got);
   EXPECT_NE(k.cause, "epa-symmetric-boxes") << describe(k);
+  // seed 98765 case 410123 (huge family): boxes 1e6 deep whose centres share x and z; Bullet
+  // reports no contact at all (its depth ~0 comes out as a separation), at any scale; b moved
+  // 1e5 along x, Bullet answers depth 1e6
+  const J none = J{{"op", "contacts"}, {"contacts", J::array()}};
+  c = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[1000000,0,0],"half":[1000000,2000000,1000000],"axes":[[0,0,1],[0,1,0],[-1,0,0]]}},"b":{"box":{"center":[1000000,2000000,0],"half":[1000000,1000000,1000000],"axes":[[-1,0,0],[0,0,-1],[0,-1,0]]}}})",
+      false);
+  k = classify(runner, c, "bullet", none);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "epa-symmetric-boxes");
+}
+
+TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
+  // seed 98765 case 419716: a sphere 0.59 deep on mesh triangle 3, which repeats a corner (a
+  // segment); exact's deepest contact lies on it, Bullet reports none
+  DiffRunner runner;
+  const J none = J{{"op", "contacts"}, {"contacts", J::array()}};
+  DiffCase c = primitive(R"({"op":"contacts","a":{"sphere":{"center":[4,-3,-1],"radius":2}},"b":{"mesh":"m"}})", true);
+  c.setup = {
+      R"({"op":"mesh","name":"m","vertices":[[-2,4,4],[0,3,2],[1,4,-3],[-4,3,2],[-3,-2,3],[0,-4,-2],[2,-3,2],[-3,-2,-3],[-4,-1,-3],[3,-3,-2],[2,-2,-2],[3,-3,-2],[0,1,-4],[1,1,-2],[0,3,-1],[-3,3,3],[1,2,2],[-1,3,0]],"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17]]})"};
+  auto k = classify(runner, c, "bullet", none);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "degenerate-triangle");
+  // the triangle made proper ((3,-3,-2) -> (3,-3,-1)): a miss there is not this cause
+  c.setup = {
+      R"({"op":"mesh","name":"m","vertices":[[-2,4,4],[0,3,2],[1,4,-3],[-4,3,2],[-3,-2,3],[0,-4,-2],[2,-3,2],[-3,-2,-3],[-4,-1,-3],[3,-3,-2],[2,-2,-2],[3,-3,-1],[0,1,-4],[1,1,-2],[0,3,-1],[-3,3,3],[1,2,2],[-1,3,0]],"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17]]})"};
+  k = classify(runner, c, "bullet", none);
+  EXPECT_NE(k.cause, "degenerate-triangle") << describe(k);
 }
 
 TEST(DiffClassify, ModelTouchingThroughTrianglesThatOnlyTouch) {
