@@ -1814,6 +1814,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
               std::fabs(narrowNumber(c.op, exact) - query[side][rounded]["radius"].get<double>()) <= tau)
             return peer("core-on-surface");
     }
+    // Bullet answers the same case scaled down by a power of two right: its absolute epsilons
+    // (before the symmetric boxes, which Bullet then gets right at the smaller scale)
+    if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
+      return peer("absolute-epsilons");
     // boxes whose Minkowski difference is mirror-symmetric about a plane through the origin:
     // Bullet's EPA ends on a face inside it, its depth short
     // (or no contact at all: a depth at rounding level of 0 comes out as a separation)
@@ -1830,9 +1834,6 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
         narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(c, query, got, numTol))
       return peer("gjk-equal-norm-stop");
-    // Bullet answers the same case scaled down by a power of two right: its absolute epsilons
-    if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
-      return peer("absolute-epsilons");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));
       return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");

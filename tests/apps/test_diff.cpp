@@ -46,6 +46,14 @@ std::string describe(const Classification& k) {
   return std::string(verdictName(k.verdict)) + " (" + k.cause + "): " + k.detail;
 }
 
+/// `got` is peer wrong on `c`, for `cause`.
+void expectPeerWrong(DiffRunner& runner, const DiffCase& c, const std::string& backend, const J& got,
+                     const std::string& cause) {
+  const auto k = classify(runner, c, backend, got);
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, cause);
+}
+
 /// `got` is peer wrong on `c` for `cause`; with the query replaced by `otherQuery`, the same
 /// answer is not put on that cause.
 void expectCauseOnlyHere(DiffRunner& runner, DiffCase c, const std::string& backend, const J& got,
@@ -332,9 +340,7 @@ TEST(DiffClassify, BulletAbsoluteEpsilons) {
   c = primitive(
       R"({"op":"contacts","a":{"box":{"center":[0,-1000000,1000000],"half":[1000000,1000000,1000000],"axes":[[-1,0,0],[0,0,1],[0,1,0]]}},"b":{"box":{"center":[1000000,-1000000,1000000],"half":[1000000,2000000,1000000],"axes":[[0,-1,0],[-1,0,0],[0,0,-1]]}}})",
       false);
-  k = classify(runner, c, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}});
-  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "absolute-epsilons");
+  expectPeerWrong(runner, c, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}}, "absolute-epsilons");
   // the triangles at coordinates ~4 (scaled by 2^-20): a made-up miss is not put on the scale
   J small = J::parse(tt);
   for (const char* side : {"a", "b"})
@@ -485,9 +491,7 @@ TEST(DiffClassify, BulletEpaOnMirrorSymmetricBoxes) {
   c = primitive(
       R"({"op":"contacts","a":{"box":{"center":[1000000,0,0],"half":[1000000,2000000,1000000],"axes":[[0,0,1],[0,1,0],[-1,0,0]]}},"b":{"box":{"center":[1000000,2000000,0],"half":[1000000,1000000,1000000],"axes":[[-1,0,0],[0,0,-1],[0,-1,0]]}}})",
       false);
-  k = classify(runner, c, "bullet", none);
-  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "epa-symmetric-boxes");
+  expectPeerWrong(runner, c, "bullet", none, "epa-symmetric-boxes");
 }
 
 TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
@@ -498,13 +502,11 @@ TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
   DiffCase c = primitive(R"({"op":"contacts","a":{"sphere":{"center":[4,-3,-1],"radius":2}},"b":{"mesh":"m"}})", true);
   c.setup = {
       R"({"op":"mesh","name":"m","vertices":[[-2,4,4],[0,3,2],[1,4,-3],[-4,3,2],[-3,-2,3],[0,-4,-2],[2,-3,2],[-3,-2,-3],[-4,-1,-3],[3,-3,-2],[2,-2,-2],[3,-3,-2],[0,1,-4],[1,1,-2],[0,3,-1],[-3,3,3],[1,2,2],[-1,3,0]],"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17]]})"};
-  auto k = classify(runner, c, "bullet", none);
-  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
-  EXPECT_EQ(k.cause, "degenerate-triangle");
+  expectPeerWrong(runner, c, "bullet", none, "degenerate-triangle");
   // the triangle made proper ((3,-3,-2) -> (3,-3,-1)): a miss there is not this cause
   c.setup = {
       R"({"op":"mesh","name":"m","vertices":[[-2,4,4],[0,3,2],[1,4,-3],[-4,3,2],[-3,-2,3],[0,-4,-2],[2,-3,2],[-3,-2,-3],[-4,-1,-3],[3,-3,-2],[2,-2,-2],[3,-3,-1],[0,1,-4],[1,1,-2],[0,3,-1],[-3,3,3],[1,2,2],[-1,3,0]],"triangles":[[0,1,2],[3,4,5],[6,7,8],[9,10,11],[12,13,14],[15,16,17]]})"};
-  k = classify(runner, c, "bullet", none);
+  const auto k = classify(runner, c, "bullet", none);
   EXPECT_NE(k.cause, "degenerate-triangle") << describe(k);
 }
 
