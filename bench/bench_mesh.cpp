@@ -790,6 +790,11 @@ int main(int argc, char** argv) {
   auto embreeD = std::make_unique<EmbreePeer>(in.arrays, embreeDefault);
   auto embreeR = std::make_unique<EmbreePeer>(in.arrays, embreeRobust);
   auto embreeH = std::make_unique<EmbreePeer>(in.arrays, embreeHigh);
+  // Embree picks its widest ISA (BVH8, AVX-512 code on an AVX-512 machine); capped at SSE4.2 it
+  // runs a 4-wide BVH4 with SSE code, the like-for-like peer of crux's baseline build.
+  EmbreeConfig embreeSse42 = embreeRobust;
+  embreeSse42.maxIsa = "sse4.2";
+  auto embree4 = std::make_unique<EmbreePeer>(in.arrays, embreeSse42);
   info.emplace_back("embree", embreeVersion());
   std::cout << "   embree " << embreeVersion() << " (back-face culling " << (embreeR->backfaceCulling() ? "ON" : "off")
             << ")\n";
@@ -860,6 +865,7 @@ int main(int argc, char** argv) {
     w.notes.push_back("crux work: " + measureRayWork(mesh, rays.data(), rays.size(), false).text());
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](RayAnswer* out) { embreeR->closestHits(rays.data(), rays.size(), out); });
+    add("embree", embreeSse42.label(), [&](RayAnswer* out) { embree4->closestHits(rays.data(), rays.size(), out); });
     add("embree", embreeDefault.label(), [&](RayAnswer* out) { embreeD->closestHits(rays.data(), rays.size(), out); });
     add("embree", embreeHigh.label(), [&](RayAnswer* out) { embreeH->closestHits(rays.data(), rays.size(), out); });
     w.notes.push_back("embree: rtcIntersect1 per ray, tnear 0, tfar inf; robust = RTC_SCENE_FLAG_ROBUST (watertight "
@@ -921,6 +927,7 @@ int main(int argc, char** argv) {
     w.notes.push_back("crux work: " + measureRayWork(mesh, rays.data(), rays.size(), true).text());
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->anyHits(rays.data(), rays.size(), out); });
+    add("embree", embreeSse42.label(), [&](std::uint8_t* out) { embree4->anyHits(rays.data(), rays.size(), out); });
     add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->anyHits(rays.data(), rays.size(), out); });
     w.notes.push_back("embree: rtcOccluded1 per ray, tnear 0, tfar inf");
 #endif
@@ -951,6 +958,7 @@ int main(int argc, char** argv) {
     add("crux", "4-wide BVH, exact predicates", [&](std::uint8_t* out) { cruxSegments(mesh, segments, out); });
 #if CRUX_BENCH_HAVE_EMBREE
     add("embree", embreeRobust.label(), [&](std::uint8_t* out) { embreeR->segmentHits(segments.data(), segments.size(), out); });
+    add("embree", embreeSse42.label(), [&](std::uint8_t* out) { embree4->segmentHits(segments.data(), segments.size(), out); });
     add("embree", embreeDefault.label(), [&](std::uint8_t* out) { embreeD->segmentHits(segments.data(), segments.size(), out); });
     w.notes.push_back("embree: rtcOccluded1 with dir = end - start, tnear 0, tfar 1");
 #endif

@@ -413,6 +413,10 @@ int main(int argc, char** argv) {
 #if CRUX_BENCH_HAVE_EMBREE
     auto embree1 = std::make_unique<EmbreePeer>(in.arrays, EmbreeConfig{true, false, 1});
     auto embreeN = std::make_unique<EmbreePeer>(in.arrays, EmbreeConfig{true, false, 0});
+    // the like-for-like peer of crux's 4-wide SSE build (rays only; EmbreeConfig::maxIsa)
+    EmbreeConfig sse42{true, false, 1};
+    sse42.maxIsa = "sse4.2";
+    auto embree4 = std::make_unique<EmbreePeer>(in.arrays, sse42);
     builds.push_back({"embree", "robust,medium", 1, [&] { return embree1->rebuild(); }});
     builds.back().bytesPerTriangle = double(embree1->sceneBytes() + 4 * in.arrays.positions.size() +
                                             4 * in.arrays.indices.size()) / double(nt);
@@ -465,6 +469,12 @@ int main(int argc, char** argv) {
     rayEngines.push_back({"embree", "robust,medium", 1, [&] {
                             const Stopwatch w;
                             e1.closestHits(rays.data(), nr, answers.data());
+                            return w.elapsed();
+                          }});
+    const EmbreePeer& e4 = *embree4;
+    rayEngines.push_back({"embree", e4.config().label(), 1, [&] {
+                            const Stopwatch w;
+                            e4.closestHits(rays.data(), nr, answers.data());
                             return w.elapsed();
                           }});
     if (s.threads > 1)

@@ -29,6 +29,7 @@ std::string EmbreeConfig::label() const {
   s += highQuality ? ",high" : ",medium";
   if (threads != 1) s += threads == 0 ? ",all threads" : "," + std::to_string(threads) + " threads";
   if (refit) s = std::string(robust ? "robust" : "default") + ",dynamic,refit geometry";
+  if (!maxIsa.empty()) s += ",max_isa=" + maxIsa;
   return s;
 }
 
@@ -44,7 +45,8 @@ struct EmbreePeer::Impl {
 EmbreePeer::EmbreePeer(const MeshArrays& mesh, const EmbreeConfig& config)
     : impl_(std::make_unique<Impl>()), config_(config) {
   impl_->mesh = &mesh;
-  const std::string cfg = config.threads > 0 ? "threads=" + std::to_string(config.threads) : std::string();
+  std::string cfg = config.threads > 0 ? "threads=" + std::to_string(config.threads) : std::string();
+  if (!config.maxIsa.empty()) cfg += (cfg.empty() ? "" : ",") + std::string("max_isa=") + config.maxIsa;
   impl_->device = rtcNewDevice(cfg.empty() ? nullptr : cfg.c_str());
   if (!impl_->device) throw std::runtime_error("embree: rtcNewDevice failed");
   rtcSetDeviceErrorFunction(impl_->device, recordError, &impl_->error);

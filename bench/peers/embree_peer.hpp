@@ -21,6 +21,11 @@ struct EmbreeConfig {
   /// geometry quality RTC_BUILD_QUALITY_REFIT; refit() then updates the vertex buffer and
   /// recommits. (Without DYNAMIC, Embree 3.13.5 rebuilds the REFIT geometry on every commit.)
   bool refit = false;
+  /// Embree's `max_isa` device setting (empty: Embree picks the widest ISA the CPU has, which
+  /// on an AVX-512 machine is an 8-wide BVH8<triangle4v> with AVX-512 intersectors). "sse4.2"
+  /// gives its 4-wide BVH4<triangle4v> with SSE4.2 code: the like-for-like peer of crux's
+  /// baseline x86-64 (SSE2, 4-wide) build.
+  std::string maxIsa;
 
   std::string label() const;
 };
