@@ -49,5 +49,8 @@ Wide rayLength(const Vec3& dir);
 /// The hit at crossing c: world distance, point and unit normal, exactly as raycast(Ray,
 /// Triangle) reports it; nullopt when the distance exceeds maxT or is not finite.
 std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT);
+/// rayHitAt with rayLength(ray.dir) already known (a query that tests many triangles forms it
+/// once per ray): the same hit, bit for bit.
+std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT, Wide length);
 
 }  // namespace crux::geometry_detail

@@ -283,8 +283,8 @@ std::optional<SlabEntry> slabs(const WVec3& o, const WVec3& d, const WVec3& lo, 
 
 /// The hit at parameter s (world distance s|d|), or nullopt beyond maxT. A zero `normal`
 /// means "no surface normal here" and becomes -d/|d|.
-std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec3& normal, Real maxT) {
-  const Wide len = scaledNorm(d);  // d.norm(), but finite where |d|² overflows
+/// len: scaledNorm(d), d.norm() but finite where |d|² overflows (geometry_detail::rayLength).
+std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec3& normal, Real maxT, Wide len) {
   RayHit hit;
   hit.t = Real(s * len);
   // A distance that overflows Real (found by fuzz_geometry: a ray almost parallel to a plane)
@@ -296,6 +296,9 @@ std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec
   const Wide nn = ns.norm();
   hit.normal = (nn > 0 && std::isfinite(nn) ? WVec3(ns / nn) : WVec3(-d / len)).cast<Real>();
   return hit;
+}
+std::optional<RayHit> makeHit(const WVec3& o, const WVec3& d, Wide s, const WVec3& normal, Real maxT) {
+  return makeHit(o, d, s, normal, maxT, scaledNorm(d));
 }
 
 /// The world coordinates of an OBB's frame applied to a vector: (u_i · v)_i.
@@ -413,6 +416,10 @@ Wide rayLength(const Vec3& dir) { return scaledNorm(wide(dir)); }
 
 std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT) {
   return makeHit(wide(ray.origin), wide(ray.dir), c.s, c.normal, maxT);
+}
+
+std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT, Wide length) {
+  return makeHit(wide(ray.origin), wide(ray.dir), c.s, c.normal, maxT, length);
 }
 
 }  // namespace geometry_detail

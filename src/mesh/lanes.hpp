@@ -93,6 +93,9 @@ inline Lanes lanesMin(const Lanes& a, const Lanes& b) {
 #endif
 }
 
+/// Lane i of x in all four lanes.
+inline Lanes lanesBroadcast(const Lanes& x, int i) { return Lanes{x[i], x[i], x[i], x[i]}; }
+
 /// The sign bits of a comparison result's four lanes, lane i as bit i.
 inline unsigned laneMask(const LaneBits& m) {
 #if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED

@@ -53,9 +53,9 @@ class TriangleRayTest {
     RayCrossing crossing;
   };
 
-  /// The filter's products are taken about the line's point nearest the mesh's box centre
-  /// (RayTriangleFilter's anchored form: far origins leave fewer triangles undecided). The
-  /// filter and the ray's length are made at the first triangle: a ray that reaches no leaf
+  /// For a far origin the filter's products are taken about the line's point nearest the mesh's
+  /// box centre (RayTriangleFilter's anchored form: far origins leave fewer triangles
+  /// undecided; filterOf). The filter and the ray's length are made at the first triangle: a ray that reaches no leaf
   /// (most candidates of a scene ray) never pays for them.
   TriangleRayTest(const Ray& ray, const RayQueryOptions& options, const Mesh& mesh)
       : ray_(ray), options_(options), mesh_(mesh) {}
@@ -100,7 +100,7 @@ class TriangleRayTest {
   /// certified by the filter stage alone).
   MeshRayHit hit(const Candidate& c, std::uint32_t tri) const {
     // (never empty: the candidate's t was formed by the same rule and checked against maxDistance)
-    const std::optional<RayHit> h = geometry_detail::rayHitAt(ray_, c.crossing, options_.maxDistance);
+    const std::optional<RayHit> h = geometry_detail::rayHitAt(ray_, c.crossing, options_.maxDistance, setup().length);
     return {h->t, h->point, h->normal, tri};
   }
 
@@ -112,10 +112,21 @@ class TriangleRayTest {
     Wide length;  // rayLength(dir): a crossing's parameter times it is its world distance
   };
   const Setup& setup() const {
-    if (!setup_) setup_.emplace(Setup{mesh_detail::RayTriangleFilter(ray_, mesh_.bounds().center()),
-                                      geometry_detail::rayLength(ray_.dir)});
+    if (!setup_) setup_.emplace(Setup{filterOf(ray_, mesh_), geometry_detail::rayLength(ray_.dir)});
     return *setup_;
   }
+  /// The filter of the ray's line against the mesh: anchored at the mesh's box centre only for
+  /// an origin farther from it than kFilterAnchorExtents times the box's largest extent, where
+  /// the products about the origin would grow with that distance; about the origin otherwise
+  /// (the anchor's projection costs more than the rest of the set-up).
+  static mesh_detail::RayTriangleFilter filterOf(const Ray& ray, const Mesh& mesh) {
+    const Aabb& b = mesh.bounds();
+    const Vec3 center = b.center();
+    if ((ray.origin - center).cwiseAbs().maxCoeff() > kFilterAnchorExtents * (b.max - b.min).maxCoeff())
+      return mesh_detail::RayTriangleFilter(ray, center);
+    return mesh_detail::RayTriangleFilter(ray);
+  }
+  static constexpr Real kFilterAnchorExtents = 4;
 
   const Ray& ray_;
   const RayQueryOptions& options_;

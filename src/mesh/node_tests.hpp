@@ -77,34 +77,42 @@ class RayBoxTest {
   RayBoxTest(const Vec3& origin, const Vec3& dir, Real scale) {
     const Real m = dir.cwiseAbs().maxCoeff();
     // Scaling by 2^k is exact (unless a component underflows); one multiplier when 2^k is finite.
-    Real f = reciprocalPowerOfTwo(m);  // the usual case, from the exponent bits
-    int k = 0;
-    bool oneFactor = true;
-    if (f == 0) {
-      k = (m > 0 && std::isfinite(m)) ? -std::ilogb(m) : 0;
-      oneFactor = k < std::numeric_limits<Real>::max_exponent;
-      f = oneFactor ? std::ldexp(Real(1), k) : Real(1);
+    // The three axes are set up together, one per lane (lane 3 unused).
+    const Lanes raw = {dir.x(), dir.y(), dir.z(), 0};
+    Lanes d;
+    if (const Real f = reciprocalPowerOfTwo(m); f != 0) {  // the usual case, from the exponent bits
+      d = raw * f;
+    } else {
+      const int k = (m > 0 && std::isfinite(m)) ? -std::ilogb(m) : 0;
+      if (k < std::numeric_limits<Real>::max_exponent) d = raw * std::ldexp(Real(1), k);
+      else d = Lanes{std::ldexp(dir.x(), k), std::ldexp(dir.y(), k), std::ldexp(dir.z(), k), 0};
     }
     const Real pad = kNodeBoxPad * scale;
-    Vec3 scaled;
+    const LaneBits negative = (LaneBits)d < 0;  // sign bits (−0 included: 1/−0 = −inf)
+    Lanes inv = Real(1) / d;
+    const Lanes nan = {std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::quiet_NaN(),
+                       std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::quiet_NaN()};
+    inv = lanesSelect((raw != 0) & (lanesAbs(d) < std::numeric_limits<Real>::min()), nan, inv);
+    const Lanes invNear = inv * (1 - kSlabRoundingPad), invFar = inv * (1 + kSlabRoundingPad);
+    const Lanes o = {origin.x(), origin.y(), origin.z(), 0};
+    const Lanes originNear = lanesSelect(negative, o - pad, o + pad);
+    const Lanes originFar = lanesSelect(negative, o + pad, o - pad);
+    const unsigned negativeAxes = laneMask(negative);
     for (int i = 0; i < 3; ++i) {
-      const Real d = oneFactor ? dir[i] * f : std::ldexp(dir[i], k);
-      const bool negative = std::signbit(d);
-      Real inv = Real(1) / d;
-      if (dir[i] != 0 && std::fabs(d) < std::numeric_limits<Real>::min()) inv = std::numeric_limits<Real>::quiet_NaN();
-      const Real invNear = inv * (1 - kSlabRoundingPad), invFar = inv * (1 + kSlabRoundingPad);
-      const Real originNear = negative ? origin[i] - pad : origin[i] + pad;
-      const Real originFar = negative ? origin[i] + pad : origin[i] - pad;
+      const bool neg = negativeAxes >> i & 1u;
       // WideBvhNode's coordinate arrays: minX..minZ, maxX..maxZ, four Reals each
-      nearOffset_[i] = 4 * (negative ? 3 + i : i);
-      farOffset_[i] = 4 * (negative ? i : 3 + i);
-      originNear_[i] = Lanes{originNear, originNear, originNear, originNear};
-      originFar_[i] = Lanes{originFar, originFar, originFar, originFar};
-      invNear_[i] = Lanes{invNear, invNear, invNear, invNear};
-      invFar_[i] = Lanes{invFar, invFar, invFar, invFar};
-      scaled[i] = d;
+      nearOffset_[i] = 4 * (neg ? 3 + i : i);
+      farOffset_[i] = 4 * (neg ? i : 3 + i);
+      originNear_[i] = lanesBroadcast(originNear, i);
+      originFar_[i] = lanesBroadcast(originFar, i);
+      invNear_[i] = lanesBroadcast(invNear, i);
+      invFar_[i] = lanesBroadcast(invFar, i);
     }
+    const Vec3 scaled(d[0], d[1], d[2]);
     length_ = scaled.norm();
+    // (a product instead of a division per parameterLimit; 2ε more pad covers the reciprocal's
+    // and the product's roundings, so the limit stays at least the quotient's)
+    limitFactor_ = (1 + kSlabRoundingPad + 2 * kEps) / length_;
     absSlack_ = kRayPruneSlack * scale;
   }
 
@@ -113,7 +121,7 @@ class RayBoxTest {
   /// segment whose ends coincide) has no parameter scale and gets no limit.
   Real parameterLimit(Real limit) const {
     if (!(length_ > 0)) return std::numeric_limits<Real>::infinity();
-    return (limit * (1 + kRayPruneSlack) + absSlack_) / length_ * (1 + kSlabRoundingPad);
+    return (limit * (1 + kRayPruneSlack) + absSlack_) * limitFactor_;
   }
 
   /// Whether the ray enters the padded box at a parameter <= sLimit; `key` receives the entry
@@ -160,6 +168,7 @@ class RayBoxTest {
   Lanes originNear_[3], originFar_[3], invNear_[3], invFar_[3];
   int nearOffset_[3], farOffset_[3];
   Real length_ = 1;
+  Real limitFactor_ = 1 + kSlabRoundingPad;  // (1 + pad) / length_, rounded up (see the constructor)
   Real absSlack_ = 0;
 };
 
