@@ -1126,6 +1126,38 @@ bool fclGjkStoppedOnEqualNorm(const DiffCase& c, const J& query, const J& got, d
   return false;
 }
 
+/// FCL's `distance` of penetrating convex shapes answered as a touching contact by libccd's EPA
+/// on a two-point GJK simplex: GJK's first support points, along libccd's first direction
+/// (1, 0, 0) and then along −w0, are w0 and w1 = −λ·w0 (λ > 0, within `tau`), a segment through
+/// the origin, so GJK reports an intersection at once (doSimplex2, FCL 0.7 gjk_libccd-inl.h).
+/// EPA's simplexToPolytope2 then declares a touching contact as soon as a support point it draws
+/// equals w0 or w1 (a vertex of a polytope is the support point of a whole cone of directions,
+/// so this happens deep inside too) and answers the segment: depth 0, both points at the
+/// origin's place on it. Shown by FCL's reported points: point_a and point_b are A's point of
+/// that place, (1 − t)·a0 + t·a1 with t = |w0| / (|w0| + |w1|), within `tau`.
+bool fclEpaTouchingOnGjkSegment(const J& query, const J& got, double tau) {
+  if (!got.contains("point_a") || !got.contains("point_b") || !got.contains("distance")) return false;
+  const J& a = query["a"];
+  const J& b = query["b"];
+  const Vec3d pa = toVec(got["point_a"]), pb = toVec(got["point_b"]);
+  if (std::fabs(got["distance"].get<double>()) > tau || (pa - pb).norm() > tau) return false;
+  const Vec3d first(1, 0, 0);
+  for (const Vec3d& a0 : supportPoints(a, first, tau))
+    for (const Vec3d& b0 : supportPoints(b, -first, tau)) {
+      const Vec3d w0 = a0 - b0;
+      if (!(w0.norm() > tau)) continue;
+      for (const Vec3d& a1 : supportPoints(a, -w0, tau))
+        for (const Vec3d& b1 : supportPoints(b, w0, tau)) {
+          const Vec3d w1 = a1 - b1;
+          const double t = w0.norm() / (w0.norm() + w1.norm());
+          if (w0.dot(w1) < 0 && w0.cross(w1).norm() <= tau * (w0.norm() + w1.norm()) &&
+              ((1 - t) * a0 + t * a1 - pa).norm() <= tau)
+            return true;
+        }
+    }
+  return false;
+}
+
 /// Two box operands whose Minkowski difference is mirror-symmetric about a plane through the
 /// origin: a face axis u of one is a face axis of the other (world frames, |u·v| within 1e-9 of
 /// 1) and their centres project to the same point on it (within `tau`). Reflection in the plane
@@ -1834,6 +1866,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
         narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(c, query, got, numTol))
       return peer("gjk-equal-norm-stop");
+    // penetrating polytopes whose GJK ended on a segment through the origin: libccd's EPA takes
+    // it for a touching contact (a support point equal to a segment end) and answers depth 0
+    if (fcl && c.op == "distance" && narrowNumber(c.op, exact) < -tau && fclEpaTouchingOnGjkSegment(query, got, numTol))
+      return peer("epa-segment-touching");
     if (diff == Difference::Numeric) {
       const double worst = std::fabs(narrowNumber(c.op, got) - narrowNumber(c.op, exact));
       return peer(worst <= 1e-3 * std::max(s, 1.0) ? "precision" : "unexplained");

@@ -644,6 +644,35 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
   EXPECT_EQ(classify(runner, mesh, "fcl", got).cause, "unexplained");
 }
 
+TEST(DiffClassify, FclEpaTouchingOnAGjkSegmentThroughTheOrigin) {
+  // seed 98765 case 347347 (huge family): boxes 1e6 deep. libccd's GJK, from (1, 0, 0), finds
+  // w0 = (3e6, -2e6, -1e6) and then, along -w0, w1 = -w0: a segment through the origin, an
+  // intersection at once. EPA's simplexToPolytope2 draws a support point equal to w1 and calls it
+  // a touching contact: depth 0, both points at the segment's midpoint on A, (0, 1e6, 1e6)
+  DiffRunner runner;
+  const auto boxes = primitive(
+      R"({"op":"distance","a":{"box":{"center":[0,1000000,0],"half":[2000000,1000000,1000000],"axes":[[0,-1,0],[1,0,0],[0,0,1]]}},"b":{"box":{"center":[0,2000000,2000000],"half":[2000000,2000000,1000000],"axes":[[-1,0,0],[0,-1,0],[0,0,1]]},"transform":{"rotation":[1,0,0,0],"translation":[0,1000000,-1000000]}}})",
+      false);
+  const auto touching = [](const J& p) {
+    return J{{"op", "distance"}, {"distance", -0.0}, {"point_a", p}, {"point_b", p}, {"normal", J::array({0.0, 0.0, 1.0})}};
+  };
+  expectPeerWrong(runner, boxes, "fcl", touching(J::array({0.0, 1e6, 1e6})), "epa-segment-touching");
+  // depth 0 at another point of the overlap: not the segment's, not explained
+  auto k = classify(runner, boxes, "fcl", touching(J::array({0.0, 2e6, 5e5})));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+  // seed 98765 case 132472 (degenerate family): hulls 0.68 deep; w0 = (2, -2, -4), w1 = (-1, 1, 2),
+  // the origin at 2/3 of the segment: FCL's points (-4/3, 4/3, 1) up to rounding
+  const auto hulls = primitive(
+      R"({"op":"distance","a":{"hull":{"points":[[-1,1,1],[-2,1,2],[-2,0,-1],[-2,-1,-2],[-1,2,0],[0,2,-1]]}},"b":{"hull":{"points":[[0,4,0],[-1,4,-2],[0,0,-1],[1,2,-2],[3,4,0],[0,3,-2],[2,3,2],[0,1,2]]},"transform":{"rotation":[0.7071067811865476,0.7071067811865476,0,0],"translation":[-1,2,-1]}}})",
+      true);
+  J got{{"op", "distance"},
+        {"distance", -1.3322676295501878e-15},
+        {"point_a", J::array({-1.3333333333333333, 1.3333333333333335, 1.0})},
+        {"point_b", J::array({-1.3333333333333335, 1.3333333333333348, 1.0})},
+        {"normal", J::array({-0.1643989873053573, 0.9863939238321437, 0.0})}};
+  expectPeerWrong(runner, hulls, "fcl", got, "epa-segment-touching");
+}
+
 TEST(DiffClassify, CastTimesKeepTheirGuaranteeOrAreWrong) {
   // A box of half 1 from z = 4 down by 8 onto a box of half 1 at the origin: exact t = 2/8.
   // Native's t a hair early (the shapes 1e-11 apart at it: within the contact tolerance) is
