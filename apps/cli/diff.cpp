@@ -1040,15 +1040,14 @@ std::string witnessProblem(const DiffCase& c, const J& query, const J& answer, d
   return out.str();
 }
 
-/// The points a support function of a box, hull, triangle, sphere or capsule operand (world
-/// coordinates, under its `transform`) may return along `dir`: for the polytopes, the vertices
-/// whose support value is within `tie` of the largest; for a sphere, centre + r·dir̂; for a capsule,
-/// the end (both ends within `tie`) + r·dir̂, as libccd's supportSphere and supportCap compute
-/// them. Empty for other operands.
-std::vector<Vec3d> supportPoints(const J& operand, const Vec3d& dir, double tie) {
+/// The core points of a box, hull, triangle, sphere or capsule operand (world coordinates, under
+/// its `transform`) and its rounding radius: the polytopes' corners (radius 0); a sphere's centre
+/// or a capsule's segment ends, with the radius (libccd and Bullet take them as core ⊕ ball).
+/// Empty for other operands.
+std::vector<Vec3d> corePoints(const J& operand, double* radius) {
   const Placement place(operand.contains("transform") ? &operand["transform"] : nullptr);
   std::vector<Vec3d> corners;
-  Vec3d rounding = Vec3d::Zero();  // r·dir̂ of a sphere or capsule
+  *radius = 0;
   if (operand.contains("box")) {
     const J& b = operand["box"];
     for (int k = 0; k < 8; ++k) {
@@ -1068,8 +1067,20 @@ std::vector<Vec3d> supportPoints(const J& operand, const Vec3d& dir, double tie)
       corners.push_back(place.r * toVec(r["a"]) + place.t);
       corners.push_back(place.r * toVec(r["b"]) + place.t);
     }
-    rounding = r["radius"].get<double>() * dir.normalized();
+    *radius = r["radius"].get<double>();
   }
+  return corners;
+}
+
+/// The points a support function of a box, hull, triangle, sphere or capsule operand (world
+/// coordinates, under its `transform`) may return along `dir`: for the polytopes, the vertices
+/// whose support value is within `tie` of the largest; for a sphere, centre + r·dir̂; for a capsule,
+/// the end (both ends within `tie`) + r·dir̂, as libccd's supportSphere and supportCap compute
+/// them. Empty for other operands.
+std::vector<Vec3d> supportPoints(const J& operand, const Vec3d& dir, double tie) {
+  double radius = 0;
+  const std::vector<Vec3d> corners = corePoints(operand, &radius);
+  const Vec3d rounding = radius > 0 ? Vec3d(radius * dir.normalized()) : Vec3d::Zero();  // r·dir̂ of a sphere or capsule
   double best = -std::numeric_limits<double>::infinity();
   for (const Vec3d& p : corners) best = std::max(best, p.dot(dir));
   std::vector<Vec3d> out;
@@ -1155,6 +1166,83 @@ bool fclEpaTouchingOnGjkSegment(const J& query, const J& got, double tau) {
             return true;
         }
     }
+  return false;
+}
+
+/// The point of segment ab nearest the origin (double).
+Vec3d segmentPointNearestOrigin(const Vec3d& a, const Vec3d& b) {
+  const Vec3d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp(-a.dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return a + t * ab;
+}
+
+/// The point of triangle abc nearest the origin (double): the origin's projection on its plane
+/// when inside, else the nearest of its edges' points.
+Vec3d trianglePointNearestOrigin(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d n = (b - a).cross(c - a);
+  if (n.squaredNorm() > 0) {
+    const Vec3d q = n * (a.dot(n) / n.squaredNorm());  // the origin projected on the plane
+    if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 && (a - c).cross(q - c).dot(n) >= 0) return q;
+  }
+  Vec3d best = segmentPointNearestOrigin(a, b);
+  for (const Vec3d& e : {segmentPointNearestOrigin(b, c), segmentPointNearestOrigin(c, a)})
+    if (e.norm() < best.norm()) best = e;
+  return best;
+}
+
+/// Bullet's `contacts` of two convex operands stopped by btGjkPairDetector before converging.
+/// Bullet runs GJK on the cores (a sphere's centre, a capsule's segment; polytopes as they are)
+/// and reports distance |v| − r, r the radii, along v̂, v the closest point of its simplex to the
+/// origin; EPA runs only when the cores cross or |v| < gGjkEpaPenetrationTolerance (1e-3). GJK
+/// stops without its convergence test when btVoronoiSimplexSolver::closest rejects the new
+/// simplex (m_degenerateSimplex 3): the closest point's barycentric coordinates must all be ≥ 0,
+/// and in the face-region formula 1 − v − w rounds to −1 float ulp when the closest point lies on
+/// an edge (seed 98765 cases 9175 and 503147, checked on Bullet itself); GJK then reports the
+/// previous simplex's v. Shown on the case: Bullet's answer is v = ±(r − depth)·n̂ for the
+/// deepest contact (or, when Bullet reports none, for the deepest of its answer to the case with
+/// `margin` 4s, `probePeer`, which lets the GJK distance through), v is the point nearest the
+/// origin of 1–3 points of the cores' Minkowski difference (a GJK simplex, within `tau`), |v| ≥
+/// 1e-3 (no EPA), and |v| exceeds the cores' true distance, r − exact's deepest depth (itself
+/// beyond `tau`: cores that cross go to EPA), by more than `tau`: a converged GJK (REL_ERROR2 =
+/// 1e-6 on |v|²) cannot report that.
+bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, const J& exact, double s, double tau,
+                           const std::function<Answer(const DiffCase&)>& probePeer) {
+  if (!c.setup.empty() || !query.contains("a") || !query.contains("b") || !narrowVerdict(c.op, exact)) return false;
+  double ra = 0, rb = 0;
+  const std::vector<Vec3d> pa = corePoints(query["a"], &ra), pb = corePoints(query["b"], &rb);
+  if (pa.empty() || pb.empty()) return false;
+  J answer = got;
+  if (!narrowVerdict(c.op, got)) {
+    if (!probePeer) return false;
+    DiffCase wider = c;
+    J q = query;
+    q["margin"] = 4 * s;
+    wider.query = q.dump();
+    answer = probePeer(wider);
+    if (hasError(answer) || !narrowVerdict(c.op, answer)) return false;
+  }
+  const J* deepest = nullptr;
+  for (const auto& k : answer["contacts"])
+    if (!deepest || k["depth"].get<double>() > (*deepest)["depth"].get<double>()) deepest = &k;
+  const Vec3d n = toVec((*deepest)["normal"]);
+  const double r = ra + rb, length = r - (*deepest)["depth"].get<double>();
+  const double trueLength = r - narrowNumber(c.op, exact);
+  if (!(n.norm() > 0) || !(trueLength > tau) || !(length >= 1e-3) || !(length > trueLength + tau)) return false;
+  std::vector<Vec3d> w;
+  for (const Vec3d& p : pa)
+    for (const Vec3d& q : pb) w.push_back(p - q);
+  for (const double sign : {1.0, -1.0}) {
+    const Vec3d v = sign * length * n.normalized();
+    for (std::size_t i = 0; i < w.size(); ++i) {
+      if ((w[i] - v).norm() <= tau) return true;
+      for (std::size_t j = i + 1; j < w.size(); ++j) {
+        if ((segmentPointNearestOrigin(w[i], w[j]) - v).norm() <= tau) return true;
+        for (std::size_t k = j + 1; k < w.size(); ++k)
+          if ((trianglePointNearestOrigin(w[i], w[j], w[k]) - v).norm() <= tau) return true;
+      }
+    }
+  }
   return false;
 }
 
@@ -1850,6 +1938,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // (before the symmetric boxes, which Bullet then gets right at the smaller scale)
     if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
       return peer("absolute-epsilons");
+    // Bullet's GJK stopped on a rejected simplex and reported its previous closest point
+    if (bullet && c.op == "contacts" && (diff == Difference::Numeric || !narrowVerdict(c.op, got)) &&
+        bulletGjkStoppedEarly(c, query, got, exact, s, numTol, probePeer))
+      return peer("gjk-early-stop");
     // boxes whose Minkowski difference is mirror-symmetric about a plane through the origin:
     // Bullet's EPA ends on a face inside it, its depth short
     // (or no contact at all: a depth at rounding level of 0 comes out as a separation)

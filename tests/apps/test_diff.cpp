@@ -494,6 +494,40 @@ TEST(DiffClassify, BulletEpaOnMirrorSymmetricBoxes) {
   expectPeerWrong(runner, c, "bullet", none, "epa-symmetric-boxes");
 }
 
+TEST(DiffClassify, BulletGjkEarlyStop) {
+  // seed 98765 case 503147 (grid family): a hull and a capsule of radius 1, 0.304 deep (their
+  // cores 0.696 apart). Bullet's GJK on the cores has the simplex (-3, -2, 3), (1.2e-7, -1, 2),
+  // (1.2e-7, 1, 0), whose point nearest the origin lies on an edge; btVoronoiSimplexSolver's face
+  // formula gives it the barycentric 1 - v - w = -1.5e-8, closest() rejects it, and GJK reports the
+  // previous simplex's v, 0.811 long: depth 1 - 0.811 = 0.189, no EPA
+  DiffRunner runner;
+  const auto contact = [](const J& n, double depth) {
+    return J{{"op", "contacts"},
+             {"contacts", J::array({J{{"point_a", J::array({1.736842155456543, 0.6578947901725769, -1.6052632331848145})},
+                                      {"point_b", J::array({1.675557255744934, 0.8111072182655334, -1.5133358240127563})},
+                                      {"normal", n},
+                                      {"depth", depth},
+                                      {"feature_a", nullptr},
+                                      {"feature_b", nullptr}}})}};
+  };
+  const auto c = primitive(
+      R"({"op":"contacts","a":{"hull":{"points":[[2,-1,0],[-2,1,2],[0,0,-1],[-2,-1,-1],[-1,-2,1],[2,1,-2]]}},"b":{"capsule":{"a":[3,0,2],"b":[0,0,0],"radius":1},"transform":{"rotation":[0,0,1,0],"translation":[2,0,-2]}}})",
+      true);
+  const J n = J::array({-0.32444265484809875, 0.8111072182655334, 0.48666420578956604});
+  expectPeerWrong(runner, c, "bullet", contact(n, 0.18889296054840088), "gjk-early-stop");
+  // the same depth along a normal no GJK simplex of the cores has: not explained
+  auto k = classify(runner, c, "bullet", contact(J::array({0.0, 0.6, 0.8}), 0.18889296054840088));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+  // seed 98765 case 9175 (near_degenerate family): a capsule of radius 2 whose segment lies
+  // 1.6e-7 off parallel to a box face, 3.2e-7 beyond it; with margin 1 Bullet reports nothing:
+  // its GJK stopped the same way (a barycentric of -6e-8) at |v| = 3.48, 1.48 beyond the
+  // radius. The rule asks Bullet the case with a wider margin, where it reports that distance
+  const auto capsule = primitive(
+      R"({"op":"contacts","a":{"box":{"center":[-1,0,-1],"half":[2,1,1],"axes":[[1,0,0],[0,1,0],[0,0,1]]}},"b":{"capsule":{"a":[-2,3.000000476837158,-1],"b":[-2,3,2],"radius":2}},"margin":1})",
+      false);
+  expectPeerWrong(runner, capsule, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}}, "gjk-early-stop");
+}
+
 TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
   // seed 98765 case 419716: a sphere 0.59 deep on mesh triangle 3, which repeats a corner (a
   // segment); exact's deepest contact lies on it, Bullet reports none
