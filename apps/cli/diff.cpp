@@ -1246,6 +1246,45 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
   return false;
 }
 
+/// Bullet's `contacts` of two polytopes (boxes, hulls, triangles: radius 0) answered from an inner
+/// face of its EPA polytope. btGjkEpa2's EPA (which btGjkPairDetector calls for crossing shapes)
+/// grows a polytope of support points of A − B and reports its face nearest the origin; when a
+/// step fails (`expand` finds no horizon: InvalidHull; or out of vertices) it stops and reports
+/// the best face so far, inside A − B (seed 98765 case 176110: InvalidHull at iteration 5, a
+/// face 0.742 from the origin for a depth of 1; with another initial direction EPA reaches 1).
+/// Shown on the case: the plane of Bullet's deepest contact, ±n̂·x = depth, passes through three
+/// non-collinear vertices of A − B (within `tau`), and A − B reaches beyond it along its normal
+/// by more than `tau` (it is not a supporting plane, as a converged EPA's face is).
+bool bulletEpaInnerFace(const J& query, const J& got, double tau) {
+  double ra = 0, rb = 0;
+  const std::vector<Vec3d> pa = corePoints(query["a"], &ra), pb = corePoints(query["b"], &rb);
+  if (pa.empty() || pb.empty() || ra != 0 || rb != 0 || !got.contains("contacts") || got["contacts"].empty()) return false;
+  const J* deepest = nullptr;
+  for (const auto& k : got["contacts"])
+    if (!deepest || k["depth"].get<double>() > (*deepest)["depth"].get<double>()) deepest = &k;
+  const double depth = (*deepest)["depth"].get<double>();
+  const Vec3d n = toVec((*deepest)["normal"]);
+  if (!(depth > tau) || !(n.norm() > 0)) return false;
+  std::vector<Vec3d> w;
+  for (const Vec3d& p : pa)
+    for (const Vec3d& q : pb) w.push_back(p - q);
+  for (const double sign : {1.0, -1.0}) {
+    const Vec3d m = sign * n.normalized();
+    std::vector<Vec3d> on;
+    double reach = -std::numeric_limits<double>::infinity();
+    for (const Vec3d& x : w) {
+      reach = std::max(reach, m.dot(x));
+      if (std::fabs(m.dot(x) - depth) <= tau) on.push_back(x);
+    }
+    if (!(reach > depth + tau)) continue;
+    for (std::size_t i = 0; i < on.size(); ++i)
+      for (std::size_t j = i + 1; j < on.size(); ++j)
+        for (std::size_t k = j + 1; k < on.size(); ++k)
+          if ((on[j] - on[i]).cross(on[k] - on[i]).norm() > tau * std::max(1.0, (on[j] - on[i]).norm())) return true;
+  }
+  return false;
+}
+
 /// Two box operands whose Minkowski difference is mirror-symmetric about a plane through the
 /// origin: a face axis u of one is a face axis of the other (world frames, |u·v| within 1e-9 of
 /// 1) and their centres project to the same point on it (within `tau`). Reflection in the plane
@@ -1948,6 +1987,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     if (bullet && c.op == "contacts" && (diff == Difference::Numeric || !narrowVerdict(c.op, got)) &&
         boxesMirrorSymmetric(query, numTol))
       return peer("epa-symmetric-boxes");
+    // Bullet's EPA stopped early (InvalidHull) and reported an inner face of its polytope
+    if (bullet && c.op == "contacts" && diff == Difference::Numeric && narrowNumber(c.op, got) < narrowNumber(c.op, exact) &&
+        bulletEpaInnerFace(query, got, numTol))
+      return peer("epa-inner-face");
     // shapes that touch (exact distance within τ of 0): libccd's GJK, with its absolute 1e-6
     // tolerance, declares them colliding, and its EPA, run on a Minkowski difference with the
     // origin on its boundary, reports a depth that is not there

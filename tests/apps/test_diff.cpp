@@ -528,6 +528,33 @@ TEST(DiffClassify, BulletGjkEarlyStop) {
   expectPeerWrong(runner, capsule, "bullet", J{{"op", "contacts"}, {"contacts", J::array()}}, "gjk-early-stop");
 }
 
+TEST(DiffClassify, BulletEpaInnerFace) {
+  // seed 98765 case 176110 (degenerate family): a hull lying face to face in a box, 1 deep.
+  // btGjkEpa2's EPA, started from calcPenDepth's guess (b's origin minus a's), fails to expand
+  // its polytope at iteration 5 (InvalidHull) and reports its best face so far: the plane
+  // through the vertices (1, -3, -2), (-1, 0, 0), (-1, 1, 3) of A - B, 0.742 from the origin,
+  // which A - B passes by 1.27
+  DiffRunner runner;
+  const auto contact = [](const J& n, double depth) {
+    return J{{"op", "contacts"},
+             {"contacts", J::array({J{{"point_a", J::array({-1.550561785697937, -0.617977499961853, -0.39325839281082153})},
+                                      {"point_b", J::array({-0.9999999403953552, -0.14606735110282898, -0.550561785697937})},
+                                      {"normal", n},
+                                      {"depth", depth},
+                                      {"feature_a", nullptr},
+                                      {"feature_b", nullptr}}})}};
+  };
+  const auto c = primitive(
+      R"({"op":"contacts","a":{"hull":{"points":[[0,-2,0],[2,2,1],[-1,0,-1],[1,2,2],[2,0,-2],[0,-2,-1],[-2,-1,-1],[-2,2,2]]}},"b":{"box":{"center":[-3,0,0],"half":[1,2,1],"axes":[[0,-1,0],[-1,0,0],[0,0,1]]}},"margin":1})",
+      true);
+  expectPeerWrong(runner, c, "bullet",
+                  contact(J::array({0.741998553276062, 0.6359987854957581, -0.2119995653629303}), 0.741998553276062),
+                  "epa-inner-face");
+  // the same depth along x, a plane through no three vertices of A - B: not explained
+  auto k = classify(runner, c, "bullet", contact(J::array({1.0, 0.0, 0.0}), 0.741998553276062));
+  EXPECT_EQ(k.cause, "unexplained") << describe(k);
+}
+
 TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
   // seed 98765 case 419716: a sphere 0.59 deep on mesh triangle 3, which repeats a corner (a
   // segment); exact's deepest contact lies on it, Bullet reports none
