@@ -317,6 +317,18 @@ double smallestHeight(const std::array<V, 3>& t) {
   return longest > 0 ? (b - a).cross(c - a).norm() / longest : 0;
 }
 
+/// x rounded to Real as the backends read it, through a volatile: every rule rounds through this
+/// helper. GCC 12.2's SLP vectoriser drops a plain double(float(x)) on some lanes: in
+///   std::array<double, 3> f(std::array<double, 3> v) { for (double& x : v) x = double(float(x)); return v; }
+/// at -O2 or -O3 (with or without -frounding-math; not with -fno-tree-slp-vectorize) only v[2]
+/// comes back rounded, v[0] and v[1] are copied unchanged. The float replay's `asReal` is that
+/// loop, and with a plain cast DiffClassify.BulletFloatRayTriangle (seed 98765 case 56163)
+/// fails: the ray's origin stays unrounded.
+double roundedToReal(double x) {
+  volatile Real r = Real(x);
+  return double(r);
+}
+
 /// The gap between the shapes of a triangle_plane or triangle_triangle case as the backends see
 /// them (coordinates in Real): the triangle's distance to the plane (0 when its corners are on
 /// both sides), or the triangles' distance (closestPoints); NaN for other ops.
@@ -329,8 +341,8 @@ double caseGap(const DiffCase& c, const J& query) {
   if (c.op == "triangle_plane" && query.contains("triangle") && query.contains("plane")) {
     const Triangle t = triangle(query["triangle"]);
     const V nv = readV(query["plane"]["normal"]);
-    const Vec3d n = Vec3d(double(Real(nv[0])), double(Real(nv[1])), double(Real(nv[2])));
-    const double d = double(Real(query["plane"]["d"].get<double>())), len = n.norm();
+    const Vec3d n = Vec3d(roundedToReal(nv[0]), roundedToReal(nv[1]), roundedToReal(nv[2]));
+    const double d = roundedToReal(query["plane"]["d"].get<double>()), len = n.norm();
     if (!(len > 0)) return NAN;
     double lo = INFINITY, hi = -INFINITY;
     for (const Vec3& p : {t.a, t.b, t.c}) {
@@ -363,14 +375,6 @@ bool endpointOnPlane(const J& query, const std::vector<std::array<V, 3>>& tris) 
 /// counts as inside an edge when cross(v_i − p, v_j − p)·n >= −1e-4·|n|², i.e. its barycentric
 /// coordinate opposite that edge is at least −1e-4.
 constexpr long double kBulletRayEdgeTolerance = 1e-4L;
-
-/// x rounded to Real as the backends read it, through memory: GCC 12 at -O3 on this file (with
-/// -frounding-math) kept the unrounded double for a plain double(Real(x)) assigned to a ray's
-/// origin (seed 98765 case 56163).
-double roundedToReal(double x) {
-  volatile Real r = Real(x);
-  return double(r);
-}
 
 /// The smallest barycentric coordinate of the point where a ray or segment crosses the plane of
 /// a (non-degenerate) triangle (long double, on the coordinates rounded to Real as the backends
