@@ -1173,6 +1173,23 @@ bool fclEpaTouchingOnGjkSegment(const J& query, const J& got, double tau) {
   return false;
 }
 
+/// The deepest contact of a `contacts` answer; null when it has none.
+const J* deepestContact(const J& answer) {
+  const J* deepest = nullptr;
+  for (const auto& k : answer["contacts"])
+    if (!deepest || k["depth"].get<double>() > (*deepest)["depth"].get<double>()) deepest = &k;
+  return deepest;
+}
+
+/// The points p − q over p in a, q in b: the vertices (and inner points) of the Minkowski
+/// difference of two polytopes, or of two cores.
+std::vector<Vec3d> differences(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b) {
+  std::vector<Vec3d> w;
+  for (const Vec3d& p : a)
+    for (const Vec3d& q : b) w.push_back(p - q);
+  return w;
+}
+
 /// The point of segment ab nearest the origin (double).
 Vec3d segmentPointNearestOrigin(const Vec3d& a, const Vec3d& b) {
   const Vec3d ab = b - a;
@@ -1226,16 +1243,12 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
     answer = probePeer(wider);
     if (hasError(answer) || !narrowVerdict(c.op, answer)) return false;
   }
-  const J* deepest = nullptr;
-  for (const auto& k : answer["contacts"])
-    if (!deepest || k["depth"].get<double>() > (*deepest)["depth"].get<double>()) deepest = &k;
+  const J* deepest = deepestContact(answer);
   const Vec3d n = toVec((*deepest)["normal"]);
   const double r = ra + rb, length = r - (*deepest)["depth"].get<double>();
   const double trueLength = r - narrowNumber(c.op, exact);
   if (!(n.norm() > 0) || !(trueLength > tau) || !(length >= 1e-3) || !(length > trueLength + tau)) return false;
-  std::vector<Vec3d> w;
-  for (const Vec3d& p : pa)
-    for (const Vec3d& q : pb) w.push_back(p - q);
+  const std::vector<Vec3d> w = differences(pa, pb);
   for (const double sign : {1.0, -1.0}) {
     const Vec3d v = sign * length * n.normalized();
     for (std::size_t i = 0; i < w.size(); ++i) {
@@ -1263,15 +1276,11 @@ bool bulletEpaInnerFace(const J& query, const J& got, double tau) {
   double ra = 0, rb = 0;
   const std::vector<Vec3d> pa = corePoints(query["a"], &ra), pb = corePoints(query["b"], &rb);
   if (pa.empty() || pb.empty() || ra != 0 || rb != 0 || !got.contains("contacts") || got["contacts"].empty()) return false;
-  const J* deepest = nullptr;
-  for (const auto& k : got["contacts"])
-    if (!deepest || k["depth"].get<double>() > (*deepest)["depth"].get<double>()) deepest = &k;
+  const J* deepest = deepestContact(got);
   const double depth = (*deepest)["depth"].get<double>();
   const Vec3d n = toVec((*deepest)["normal"]);
   if (!(depth > tau) || !(n.norm() > 0)) return false;
-  std::vector<Vec3d> w;
-  for (const Vec3d& p : pa)
-    for (const Vec3d& q : pb) w.push_back(p - q);
+  const std::vector<Vec3d> w = differences(pa, pb);
   for (const double sign : {1.0, -1.0}) {
     const Vec3d m = sign * n.normalized();
     std::vector<Vec3d> on;
