@@ -1212,6 +1212,20 @@ Vec3d trianglePointNearestOrigin(const Vec3d& a, const Vec3d& b, const Vec3d& c)
   return best;
 }
 
+/// Whether v is, within `tau`, the point nearest the origin of one, two or three of the points
+/// `w` (a GJK simplex over them).
+bool nearestOnASimplex(const std::vector<Vec3d>& w, const Vec3d& v, double tau) {
+  for (std::size_t i = 0; i < w.size(); ++i) {
+    if ((w[i] - v).norm() <= tau) return true;
+    for (std::size_t j = i + 1; j < w.size(); ++j) {
+      if ((segmentPointNearestOrigin(w[i], w[j]) - v).norm() <= tau) return true;
+      for (std::size_t k = j + 1; k < w.size(); ++k)
+        if ((trianglePointNearestOrigin(w[i], w[j], w[k]) - v).norm() <= tau) return true;
+    }
+  }
+  return false;
+}
+
 /// Bullet's `contacts` of two convex operands stopped by btGjkPairDetector before converging.
 /// Bullet runs GJK on the cores (a sphere's centre, a capsule's segment; polytopes as they are)
 /// and reports distance |v| − r, r the radii, along v̂, v the closest point of its simplex to the
@@ -1249,16 +1263,44 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
   const double trueLength = r - narrowNumber(c.op, exact);
   if (!(n.norm() > 0) || !(trueLength > tau) || !(length >= 1e-3) || !(length > trueLength + tau)) return false;
   const std::vector<Vec3d> w = differences(pa, pb);
+  for (const double sign : {1.0, -1.0})
+    if (nearestOnASimplex(w, sign * length * n.normalized(), tau)) return true;
+  return false;
+}
+
+/// Bullet's miss of a `triangle_triangle` crossing: btGjkPairDetector hands the crossing pair to
+/// btGjkEpaPenetrationDepthSolver, whose first guess is (1, 0, 0) (both triangles sit at the
+/// identity: b's origin minus a's is zero); btGjkEpa2's GJK from there stops on a support point
+/// within GJK_DUPLICATED_EPS of one of the last four it saw, though it had dropped that point
+/// from its simplex and the point lies beyond the origin, and returns the old simplex as
+/// separated; `Distance` (the same GJK) gives the gap and btGjkPairDetector reports it (seed
+/// 98765 case 191086: 0.0709 apart for 0.08 deep; checked on Bullet's own btGjkEpa2.cpp).
+/// Shown on the case, by asking Bullet the same triangles as a `contacts` pair with `margin` 4s
+/// (`probePeer`; contactPairTest runs the same convex–convex algorithm): its gap d along n̂ is
+/// v = ±d·n̂, the point nearest the origin of 1–3 points of A − B (a GJK simplex, within `tau`),
+/// and A − B has a point w with v̂·w < d − `tau`: a support point GJK stopped short of (it had not
+/// converged), while exact finds the triangles crossing.
+bool bulletTrianglesApartOnAnUnfinishedGjk(const DiffCase& c, const J& query, double s, double tau,
+                                          const std::function<Answer(const DiffCase&)>& probePeer) {
+  if (!probePeer || !c.setup.empty() || c.op != "triangle_triangle" || !query.contains("a") || !query.contains("b"))
+    return false;
+  const J a{{"triangle", query["a"]}}, b{{"triangle", query["b"]}};
+  DiffCase pair = c;
+  pair.op = "contacts";
+  pair.query = J{{"op", "contacts"}, {"a", a}, {"b", b}, {"margin", 4 * s}}.dump();
+  const Answer answer = probePeer(pair);
+  if (hasError(answer) || !narrowVerdict("contacts", answer)) return false;
+  const J* deepest = deepestContact(answer);
+  const double gap = -(*deepest)["depth"].get<double>();
+  const Vec3d n = toVec((*deepest)["normal"]);
+  if (!(gap > tau) || !(n.norm() > 0)) return false;
+  double ra = 0, rb = 0;
+  const std::vector<Vec3d> w = differences(corePoints(a, &ra), corePoints(b, &rb));
   for (const double sign : {1.0, -1.0}) {
-    const Vec3d v = sign * length * n.normalized();
-    for (std::size_t i = 0; i < w.size(); ++i) {
-      if ((w[i] - v).norm() <= tau) return true;
-      for (std::size_t j = i + 1; j < w.size(); ++j) {
-        if ((segmentPointNearestOrigin(w[i], w[j]) - v).norm() <= tau) return true;
-        for (std::size_t k = j + 1; k < w.size(); ++k)
-          if ((trianglePointNearestOrigin(w[i], w[j], w[k]) - v).norm() <= tau) return true;
-      }
-    }
+    const Vec3d u = sign * n.normalized(), v = gap * u;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const Vec3d& x : w) lowest = std::min(lowest, u.dot(x));
+    if (lowest < gap - tau && nearestOnASimplex(w, v, tau)) return true;
   }
   return false;
 }
@@ -2096,6 +2138,11 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer("touching");
   if (bullet && probeFlips(c, query, exact, got, 0.04, numTol, probeExact, false)) return peer("margin");
   if (bullet && c.op == "mesh_mesh") return peer("gimpact-miss");
+  // Bullet's GJK (btGjkEpa2) stopped on a support point it had seen and dropped: crossing
+  // triangles come out apart
+  if (bullet && diff == Difference::Boolean && exact.value("hit", false) &&
+      bulletTrianglesApartOnAnUnfinishedGjk(c, query, s, numTol, probePeer))
+    return peer("gjk-duplicate-stop");
   if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
     return peer("absolute-epsilons");
   return peer("unexplained");

@@ -555,6 +555,24 @@ TEST(DiffClassify, BulletEpaInnerFace) {
   EXPECT_EQ(k.cause, "unexplained") << describe(k);
 }
 
+TEST(DiffClassify, BulletGjkDuplicateStop) {
+  // seed 98765 case 191086 (general family): triangles crossing 0.08 deep. btGjkEpa2's GJK,
+  // from calcPenDepth's first guess (1, 0, 0), stops at iteration 3 on the support point
+  // (-2, 0.4375, 0.34375), one of the last four it saw (dropped from its simplex since), which
+  // lies beyond the origin; Bullet reports the triangles 0.0709 apart. The rule asks Bullet the
+  // pair as `contacts` with a wide margin, where it reports that gap
+  DiffRunner runner;
+  const auto c = primitive(
+      R"({"op":"triangle_triangle","a":[[0.375,-0.40625,0],[1,0,-0.140625],[-1,-0.4375,0]],"b":[[1,-0.875,-0.34375],[-0.28125,-0.5625,-0.109375],[0.28125,0,0.1015625]]})",
+      false);
+  expectPeerWrong(runner, c, "bullet", answer("triangle_triangle", false), "gjk-duplicate-stop");
+  // a miss planted on triangles crossing 0.5 deep, whose contacts Bullet finds: not this cause
+  const auto crossing = primitive(
+      R"({"op":"triangle_triangle","a":[[-1,-1,0],[1,-1,0],[0,1,0]],"b":[[0.25,-0.5,-0.5],[0.25,0.5,-0.5],[0.25,0,0.5]]})",
+      false);
+  EXPECT_NE(classify(runner, crossing, "bullet", answer("triangle_triangle", false)).cause, "gjk-duplicate-stop");
+}
+
 TEST(DiffClassify, BulletContactOnADegenerateMeshTriangle) {
   // seed 98765 case 419716: a sphere 0.59 deep on mesh triangle 3, which repeats a corner (a
   // segment); exact's deepest contact lies on it, Bullet reports none
