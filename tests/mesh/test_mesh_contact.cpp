@@ -15,13 +15,16 @@
 #include <functional>
 #include <iomanip>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <new>
 #include <limits>
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -1078,6 +1081,175 @@ TEST(MeshContact, BadMarginForeignAdjacencyAndNanBoundAreInvalidInput) {
   EXPECT_TRUE(contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &own));
 }
 
+
+// --- Seeded manifolds against a pinned hash ----------------------------------------------------
+
+/// SplitMix64 (Steele, Lea, Flood 2014): a portable seeded integer stream. Reals come from its
+/// top 53 bits by an explicit mapping, never from <random>'s distributions, whose results differ
+/// between standard libraries: the hash below must see the same inputs everywhere.
+class PortableRandom {
+ public:
+  explicit PortableRandom(std::uint64_t seed) : state_(seed) {}
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  /// Uniform in [lo, hi) (a dyadic double in [0, 1) scaled, then rounded once to Real).
+  Real uniform(double lo, double hi) { return Real(lo + (hi - lo) * (double(next() >> 11) * 0x1p-53)); }
+  /// Uniform integer in [0, n) (n small: the modulo bias is irrelevant to a regression hash).
+  std::uint32_t below(std::uint32_t n) { return std::uint32_t(next() % n); }
+  /// A point with coordinates uniform in [lo, hi), drawn x, y, z in turn (one statement per draw:
+  /// the order of a call's arguments is unspecified, GCC and Clang differ).
+  Vec3 point(double lo, double hi) {
+    const Real x = uniform(lo, hi);
+    const Real y = uniform(lo, hi);
+    const Real z = uniform(lo, hi);
+    return Vec3(x, y, z);
+  }
+  /// A unit quaternion from four uniform coordinates (not uniform on SO(3); any rotation will do).
+  Quat rotation() {
+    const Vec3 v = point(-1, 1);
+    const Real w = uniform(-1, 1);
+    Quat q(w, v.x(), v.y(), v.z());
+    if (!(q.norm() > Real(0.1))) q = Quat::Identity();
+    return q.normalized();
+  }
+
+ private:
+  std::uint64_t state_;
+};
+
+/// FNV-1a over the bytes of every value fed to it.
+class OutputHash {
+ public:
+  template <class T>
+  void add(const T& value) {
+    unsigned char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    for (unsigned char b : bytes) value_ = (value_ ^ b) * 0x100000001B3ull;
+  }
+  void add(const Vec3& v) {
+    for (int i = 0; i < 3; ++i) add(v[i]);
+  }
+  std::uint64_t value() const { return value_; }
+
+ private:
+  std::uint64_t value_ = 0xCBF29CE484222325ull;
+};
+
+/// A closed, bumpy sphere of radius ~2: a cube's surface split into n × n cells per face, each
+/// lattice point pushed to the radius 2 + bump (square roots and divisions only, so the same
+/// positions everywhere), corners shared across the cube's edges so the adjacency sees one surface.
+Mesh bumpySphere(int n, PortableRandom& rng) {
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  std::map<std::array<int, 3>, std::uint32_t> index;
+  auto vertex = [&](int x, int y, int z) {
+    const std::array<int, 3> key{x, y, z};
+    const auto it = index.find(key);
+    if (it != index.end()) return it->second;
+    const Vec3 p(Real(2 * x - n), Real(2 * y - n), Real(2 * z - n));
+    v.push_back(p / p.norm() * (Real(2) + rng.uniform(-0.15, 0.15)));
+    return index[key] = std::uint32_t(v.size() - 1);
+  };
+  // Each face: an axis, a side and two in-plane axes ordered so that the normal points outwards.
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+      auto at = [&](int i, int j) {
+        int c[3];
+        c[axis] = side * n;
+        c[u] = side ? i : j;
+        c[w] = side ? j : i;
+        return vertex(c[0], c[1], c[2]);
+      };
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          const auto a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+          t.push_back({a, b, c});
+          t.push_back({a, c, d});
+        }
+    }
+  return Mesh(std::move(v), std::move(t), "bumpy sphere");
+}
+
+// Bit-for-bit regression of the mesh contact rules: 6,400 seeded queries (sphere, capsule, box
+// and convex hull near random points of an open bumpy grid and of a closed bumpy sphere, both
+// rotated and moved, each query with and without the adjacency data) hash every output bit —
+// the verdict, the count, and per point both positions, the normal, the separation, the
+// triangle and the shape's feature — and compare with a hash pinned per precision. A
+// refactoring must leave it unchanged. When a contact rule changes on purpose, re-pin: run
+// `test_mesh_contact --gtest_filter=MeshContact.SeededManifoldsMatchPinnedHash` in a float and
+// in a double (CRUX_DOUBLE_PRECISION=ON) build, check the change against the exact backend,
+// copy the printed hashes into kPinned below, and name the change in the commit. The inputs
+// come from PortableRandom (one draw per statement) and the meshes from + - × ÷ and √ only, so
+// they are the same on every standard library and compiler; the outputs assume IEEE arithmetic
+// without contraction (no -ffast-math, no FMA unless the build asks for it): GCC -O3 and Clang
+// -O1 (the sanitizer stage) give the same hash.
+TEST(MeshContact, SeededManifoldsMatchPinnedHash) {
+#if CRUX_DOUBLE_PRECISION_ENABLED
+  constexpr std::uint64_t kPinned = 0x2b38dffa8ce276ffull;
+#else
+  constexpr std::uint64_t kPinned = 0x4bd487bba889dce8ull;
+#endif
+  PortableRandom rng(20261129);
+  std::vector<Real> heights(17 * 17);
+  for (Real& h : heights) h = rng.uniform(-0.3, 0.3);
+  const Mesh grid = gridMesh(16, 16, Real(0.5), [&](int i, int j) { return heights[j * 17 + i]; });
+  const Mesh sphere = bumpySphere(8, rng);
+  std::vector<Vec3> hullPoints;
+  for (int i = 0; i < 16; ++i) hullPoints.push_back(rng.point(-0.4, 0.4));
+  const ConvexHull hull = ConvexHull::build(hullPoints);
+  const Real margin = Real(0.05);
+  OutputHash hash;
+  int queries = 0, withContacts = 0, changedByAdjacency = 0;
+  for (const Mesh* mesh : {&grid, &sphere}) {
+    const MeshAdjacency adjacency(*mesh);
+    for (const ShapeCase& sc : shapes(hull)) {
+      for (int trial = 0; trial < 400; ++trial) {
+        // The shape's centre near a random point of a random triangle: from 0.3 below to 1.0
+        // above it along the face normal, both the mesh and the shape rotated.
+        const Triangle tri = mesh->triangle(rng.below(std::uint32_t(mesh->triangleCount())));
+        Real s = rng.uniform(0, 1), w = rng.uniform(0, 1);
+        if (s + w > 1) s = 1 - s, w = 1 - w;
+        const Vec3 normal = (tri.b - tri.a).cross(tri.c - tri.a).normalized();
+        const Vec3 local = tri.a + s * (tri.b - tri.a) + w * (tri.c - tri.a) + rng.uniform(-0.3, 1.0) * normal;
+        Transform meshPose;
+        meshPose.rotation = rng.rotation();
+        meshPose.translation = rng.point(-3, 3);
+        const Transform shapePose{rng.rotation(), meshPose.apply(local)};
+        MeshContactManifold plain, corrected;
+        const bool hit = contacts(*mesh, meshPose, sc.shape, shapePose, margin, plain);
+        contacts(*mesh, meshPose, sc.shape, shapePose, margin, corrected, &adjacency);
+        queries += 2;
+        withContacts += hit;
+        for (const MeshContactManifold* m : {&plain, &corrected}) {
+          hash.add(m->count > 0);
+          hash.add(m->count);
+          for (int i = 0; i < m->count; ++i) {
+            const MeshContactPoint& p = m->points[i];
+            hash.add(p.pointA);
+            hash.add(p.pointB);
+            hash.add(p.normal);
+            hash.add(p.separation);
+            hash.add(p.triangle);
+            hash.add(p.featureB);
+          }
+        }
+        changedByAdjacency += plain.count != corrected.count || (hit && plain.points[0].normal != corrected.points[0].normal);
+      }
+    }
+  }
+  std::printf("%d queries, %d poses with contacts, %d changed by the adjacency, hash 0x%016llxull\n", queries,
+              withContacts, changedByAdjacency, static_cast<unsigned long long>(hash.value()));
+  // The hash covers real manifolds (most poses touch) and the internal-edge correction.
+  EXPECT_GT(withContacts, queries / 4);
+  EXPECT_GT(changedByAdjacency, queries / 100);
+  EXPECT_EQ(hash.value(), kPinned) << std::hex << "hash 0x" << hash.value() << ": a contact output changed; if on "
+                                   << "purpose, re-pin (see the comment above this test)";
+}
 
 // Non-queryable shapes or poses (precondition.hpp): no contact and no distance; a non-finite pose
 // used to crash the BVH walk.
