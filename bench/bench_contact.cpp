@@ -4,7 +4,7 @@
 /// distance (mesh_distance.hpp) against fcl::distance on BVHModel<OBBRSSd> with nearest points:
 /// a real mesh (bunny00) and a rotated copy at several separations (Bullet has no mesh–mesh
 /// distance: btGjkPairDetector is convex-only, so it is reported unsupported); and sphere, box
-/// and capsule vs mesh contacts (mesh_contact.hpp, with MeshAdjacency) against fcl::collide
+/// and capsule vs mesh contacts (mesh_contact.hpp, with the MeshQueryData) against fcl::collide
 /// (BVHModel<OBBRSSd> vs the shape, enable_contact) and Bullet's contactPairTest (the shape vs a
 /// btBvhTriangleMeshShape, margins 0), on placements penetrating the mesh's surface by a small
 /// depth and placements separated from it by less than the contact margin.
@@ -22,6 +22,7 @@
 #include <crux/geometry/contact.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 
 #include "bench_output.hpp"
 #include "peer_rows.hpp"
@@ -372,11 +373,12 @@ void runMeshDistance(const std::string& path, int perSeparation) {
               "no mesh-mesh distance)\n",
               m.triangleCount(), R);
   const auto a0 = std::chrono::steady_clock::now();
-  const MeshDistanceAccel accel(m);
+  const MeshQueryData data(m, MeshQueryParts::Distance);
   const double accelSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a0).count();
   MeshDistanceOptions withAccel;
-  withAccel.accelA = withAccel.accelB = &accel;
-  std::printf("MeshDistanceAccel (oriented boxes per node) built in %.3f s (once per mesh)\n", accelSeconds);
+  withAccel.dataA = withAccel.dataB = &data;
+  std::printf("MeshQueryData distance part (oriented boxes per node) built in %.3f s (once per mesh)\n",
+              accelSeconds);
 #if CRUX_BENCH_HAVE_FCL
   const std::shared_ptr<FclMesh> fm = fclMesh(m);
 #endif
@@ -440,7 +442,7 @@ void runMeshDistance(const std::string& path, int perSeparation) {
     };
     std::printf("%-34s %12s %14s\n", "query (interleaved rounds)", "us/query", "fcl/this");
     const bool haveFcl = tm.median.size() > 2;
-    std::printf("%-34s %12.1f %14.2f\n", "crux distance + MeshDistanceAccel", tm.median[0] * 1e-3,
+    std::printf("%-34s %12.1f %14.2f\n", "crux distance + MeshQueryData", tm.median[0] * 1e-3,
                 haveFcl ? roundRatio(2, 0) : NAN);
     std::printf("%-34s %12.1f %14.2f\n", "crux distance (BVH only)", tm.median[1] * 1e-3, haveFcl ? roundRatio(2, 1) : NAN);
     if (haveFcl) std::printf("%-34s %12.1f %14s\n", "fcl::distance (OBBRSS, nearest)", tm.median[2] * 1e-3, "-");
@@ -448,11 +450,11 @@ void runMeshDistance(const std::string& path, int perSeparation) {
                                 title, ps.size());
     row.notes.push_back(path + ", " + std::to_string(m.triangleCount()) + " triangles, R = " + bench::jsonNumber(R));
     row.notes.push_back("bullet: unsupported (btGjkPairDetector is convex-only; no mesh-mesh distance)");
-    row.notes.push_back("crux + MeshDistanceAccel: oriented boxes per BVH node, built once in " +
+    row.notes.push_back("crux + MeshQueryData (distance part): oriented boxes per BVH node, built once in " +
                         bench::jsonNumber(accelSeconds) + " s");
     row.notes.push_back("engines timed interleaved, " + std::to_string(tm.runs[0].size()) + " rounds");
     lastRuns = tm.runs[0];
-    addEngine("crux distance + MeshDistanceAccel", sizeof(Real) == 8 ? "double" : "float", tm.median[0]);
+    addEngine("crux distance + MeshQueryData", sizeof(Real) == 8 ? "double" : "float", tm.median[0]);
     lastRuns = tm.runs[1];
     addEngine("crux distance (BVH vs BVH, no accelerator)", sizeof(Real) == 8 ? "double" : "float", tm.median[1], "agree");
 #if CRUX_BENCH_HAVE_FCL
@@ -523,9 +525,9 @@ struct ContactAnswer {
 };
 
 ContactAnswer cruxAnswer(const Mesh& m, const ConvexShape& shape, const Transform& pose, Real margin,
-                         const MeshAdjacency* adjacency) {
+                         const MeshQueryData* data) {
   MeshContactManifold out;
-  contacts(m, Transform::identity(), shape, pose, margin, out, adjacency);
+  contacts(m, Transform::identity(), shape, pose, margin, out, data);
   ContactAnswer a;
   a.points = out.count;
   double minSeparation = std::numeric_limits<double>::infinity();
@@ -570,10 +572,10 @@ void runMeshContacts(const std::string& path, int perKind) {
   const Aabb box = m.bounds();
   const double R = 0.5 * double((box.max - box.min).norm());
   const auto a0 = std::chrono::steady_clock::now();
-  const MeshAdjacency adjacency(m);
+  const MeshQueryData data(m, MeshQueryParts::Contacts);
   const double adjacencySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a0).count();
-  std::printf("%zu triangles, R = %.4g; MeshAdjacency built in %.3f s (once per mesh)\n", m.triangleCount(), R,
-              adjacencySeconds);
+  std::printf("%zu triangles, R = %.4g; MeshQueryData contacts part (adjacency) built in %.3f s (once per mesh)\n",
+              m.triangleCount(), R, adjacencySeconds);
 #if CRUX_BENCH_HAVE_FCL
   const std::shared_ptr<FclMesh> fm = fclMesh(m);
   const fcl::Transform3d fclIdentity = fcl::Transform3d::Identity();
@@ -620,7 +622,7 @@ void runMeshContacts(const std::string& path, int perKind) {
     int cruxWrong = 0, adjDiffer = 0, speculative = 0;
     double adjWorst = 0;
     for (const ShapePlacement& p : ps) {
-      withAdj.push_back(cruxAnswer(m, cs.shape, p.pose, cruxMargin, &adjacency));
+      withAdj.push_back(cruxAnswer(m, cs.shape, p.pose, cruxMargin, &data));
       plain.push_back(cruxAnswer(m, cs.shape, p.pose, cruxMargin, nullptr));
       cruxWrong += withAdj.back().touching != p.penetrating || plain.back().touching != p.penetrating;
       speculative += !p.penetrating && withAdj.back().points > 0;
@@ -728,12 +730,12 @@ void runMeshContacts(const std::string& path, int perKind) {
     // (peer time / crux time) in the same round.
     std::vector<std::function<double()>> bodies;
     std::vector<std::string> names;
-    names.push_back("crux contacts + MeshAdjacency");
+    names.push_back("crux contacts + MeshQueryData");
     bodies.push_back([&] {
       double sum = 0;
       MeshContactManifold out;
       for (const ShapePlacement& p : ps) {
-        contacts(m, Transform::identity(), cs.shape, p.pose, cruxMargin, out, &adjacency);
+        contacts(m, Transform::identity(), cs.shape, p.pose, cruxMargin, out, &data);
         sum += out.count;
       }
       return sum;
@@ -793,7 +795,7 @@ void runMeshContacts(const std::string& path, int perKind) {
                         "compared) or, for box and capsule, libccd MPR (ccdMPRPenetration in GJKCollide: not a "
                         "minimum-depth method, deeper than EPA); bullet: btGjkEpa2 EPA in float for box and capsule, "
                         "SphereTriangleDetector for the sphere");
-    row.notes.push_back("MeshAdjacency built once in " + bench::jsonNumber(adjacencySeconds) + " s");
+    row.notes.push_back("MeshQueryData (contacts part: adjacency) built once in " + bench::jsonNumber(adjacencySeconds) + " s");
     row.notes.push_back("checked: touching verdict on every placement; deepest depth within 1e-3 s of crux's "
                         "per-triangle (no adjacency) depth; fcl::collide has no margin (separated placements: no "
                         "contact), Bullet asked for points within the margin (m_closestDistanceThreshold)");
@@ -806,7 +808,7 @@ void runMeshContacts(const std::string& path, int perKind) {
                         "100000, enable_contact true) on a BVHModel<OBBRSSd> (FCL's default for meshes), all "
                         "contacts; Bullet btBvhTriangleMeshShape (quantized AABB tree) with margin 0, shapes with "
                         "margin 0 (box) or all-margin (sphere, capsule: exact), m_closestDistanceThreshold = "
-                        "margin; crux with margin = the same margin and a MeshAdjacency");
+                        "margin; crux with margin = the same margin and a MeshQueryData (adjacency)");
     lastRuns = tm.runs[e];
     addEngine(names[e], sizeof(Real) == 8 ? "double" : "float", tm.median[e]);
     ++e;

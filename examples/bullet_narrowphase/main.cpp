@@ -8,7 +8,7 @@
 ///   --narrowphase crux    `CruxMeshAlgorithm`, a btCollisionAlgorithm registered with the
 ///                         dispatcher for SPHERE/BOX/CAPSULE × TRIANGLE_MESH (both orders), which
 ///                         calls crux::contacts(mesh, ..., shape, ...) with the internal-edge
-///                         correction (MeshAdjacency) and feeds the points to the btManifoldResult.
+///                         correction (MeshQueryData) and feeds the points to the btManifoldResult.
 /// Body–body pairs use Bullet's convex algorithms in both modes. After the run each body must be
 /// at rest and still inside the closed mesh (a body outside it, or below its bounding box, fell
 /// through the surface); the program prints steps/s and the bodies' gaps to the surface and exits
@@ -85,10 +85,10 @@ using crux_example::kExitFailure;
 // ---- crux inside Bullet's dispatcher -------------------------------------------------------------
 
 /// What the crux algorithm needs besides the two bodies: the crux copy of the static mesh (built
-/// once from the same vertices as the btBvhTriangleMeshShape), its adjacency, and counters.
+/// once from the same vertices as the btBvhTriangleMeshShape), its query data, and counters.
 struct CruxMeshContext {
   const crux::Mesh* mesh = nullptr;
-  const crux::MeshAdjacency* adjacency = nullptr;
+  const crux::MeshQueryData* queryData = nullptr;
   std::uint64_t queries = 0;  ///< crux::contacts calls
   std::uint64_t points = 0;   ///< contact points handed to Bullet
 };
@@ -134,7 +134,7 @@ class CruxMeshAlgorithm final : public btActivatingCollisionAlgorithm {
     const Real margin = Real(manifold_->getContactBreakingThreshold());
     crux::MeshContactManifold contacts;
     crux::contacts(*context_.mesh, toCrux(meshBody.getWorldTransform()), shape,
-                   toCrux(convexBody.getWorldTransform()), margin, contacts, context_.adjacency);
+                   toCrux(convexBody.getWorldTransform()), margin, contacts, context_.queryData);
     ++context_.queries;
     context_.points += std::uint64_t(contacts.count);
     const bool meshIsA = manifold_->getBody0() == meshBody.getCollisionObject();  // false by construction
@@ -317,7 +317,7 @@ RunResult run(const StaticMesh& m, const std::vector<Spawn>& spawns, int steps, 
 
   // Convex–mesh pairs, both orders: crux (CruxMeshAlgorithm) or Bullet's own create functions
   // (btConvexConcaveCollisionAlgorithm, and its swapped variant), each wrapped in the timer.
-  CruxMeshContext context{m.mesh.get(), m.adjacency.get()};
+  CruxMeshContext context{m.mesh.get(), m.queryData.get()};
   CruxMeshCreateFunc cruxCreate(context);
   AlgorithmTimer timer;
   std::vector<std::unique_ptr<TimedCreateFunc>> timed;
@@ -333,7 +333,7 @@ RunResult run(const StaticMesh& m, const std::vector<Spawn>& spawns, int steps, 
   const auto array = crux_example::bulletTriangles(m);
   btBvhTriangleMeshShape meshShape(array.get(), true, true);
   // Stock mode with Bullet's own ghost-contact fix (btInternalEdgeUtility), the counterpart of
-  // crux's MeshAdjacency correction: per-triangle edge angles, applied to each new contact point
+  // crux's internal-edge correction (MeshQueryData): per-triangle edge angles, applied to each new contact point
   // by the contact-added callback.
   btTriangleInfoMap triangleInfo;
   if (!useCrux) btGenerateInternalEdgeInfo(&meshShape, &triangleInfo);

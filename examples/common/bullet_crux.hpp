@@ -5,6 +5,7 @@
 
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/mesh/mesh_volume.hpp>
 
 #include <btBulletCollisionCommon.h>
@@ -121,11 +122,12 @@ inline double threadCpuSeconds() {
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
-/// A static triangle mesh in both forms: the crux Mesh (+ adjacency, + volume view when closed)
+/// A static triangle mesh in both forms: the crux Mesh (+ its query data for contacts, + volume
+/// view when closed)
 /// and the arrays behind Bullet's btBvhTriangleMeshShape, with the same vertices.
 struct StaticMesh {
   std::unique_ptr<crux::Mesh> mesh;
-  std::unique_ptr<crux::MeshAdjacency> adjacency;
+  std::unique_ptr<crux::MeshQueryData> queryData;  ///< contacts part (internal-edge correction)
   std::unique_ptr<crux::MeshVolume> volume;  ///< null when the mesh is not closed
   std::vector<int> indices;
   std::vector<btScalar> positions;
@@ -161,7 +163,7 @@ inline StaticMesh makeStaticMesh(const crux::Mesh& loaded, double scale, Winding
   for (const crux::TriangleIndices& t : triangles)
     for (int i = 0; i < 3; ++i) out.indices.push_back(int(t[i]));
   out.mesh = std::make_unique<crux::Mesh>(std::move(vertices), std::move(triangles), loaded.name());
-  out.adjacency = std::make_unique<crux::MeshAdjacency>(*out.mesh);
+  out.queryData = std::make_unique<crux::MeshQueryData>(*out.mesh, crux::MeshQueryParts::Contacts);
   if (out.mesh->stats().closed()) out.volume = std::make_unique<crux::MeshVolume>(*out.mesh);
   return out;
 }

@@ -3,6 +3,7 @@
 
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/mesh/mesh_volume.hpp>
 #include <crux/scene/scene.hpp>
 
@@ -19,7 +20,7 @@ namespace py = pybind11;
 
 /// A Python `crux.Mesh`: an immutable crux::Mesh (shared with the scenes it is added to) plus the
 /// per-mesh structures some queries need, built on first use and kept: the solid view
-/// (closedness checked once) and the edge adjacency of contact queries.
+/// (closedness checked once) and the query data (edge adjacency) of contact queries.
 class PyMesh {
  public:
   explicit PyMesh(std::shared_ptr<const Mesh> mesh) : mesh_(std::move(mesh)) {}
@@ -29,15 +30,16 @@ class PyMesh {
   const MeshVolume& volume() const;
   /// Whether the mesh is closed (crux::isClosed, computed once).
   bool closed() const;
-  /// The edge adjacency of contacts(), built once.
-  const MeshAdjacency& adjacency() const;
+  /// The query data of contacts() (its contacts part: the edge adjacency), built once; the mesh
+  /// is immutable, so it stays current.
+  const MeshQueryData& queryData() const;
 
  private:
   std::shared_ptr<const Mesh> mesh_;
   mutable std::mutex lock_;
   mutable int closed_ = -1;  // unknown, 0, 1
   mutable std::unique_ptr<MeshVolume> volume_;
-  mutable std::unique_ptr<MeshAdjacency> adjacency_;
+  mutable std::unique_ptr<MeshQueryData> queryData_;
 };
 
 /// A Python `crux.Scene`: a crux::Scene behind a reader–writer lock (scene_bindings.cpp).

@@ -39,10 +39,10 @@ bool PyMesh::closed() const {
   return closed_ == 1;
 }
 
-const MeshAdjacency& PyMesh::adjacency() const {
+const MeshQueryData& PyMesh::queryData() const {
   std::lock_guard<std::mutex> guard(lock_);
-  if (!adjacency_) adjacency_ = std::make_unique<MeshAdjacency>(*mesh_);
-  return *adjacency_;
+  if (!queryData_) queryData_ = std::make_unique<MeshQueryData>(*mesh_, MeshQueryParts::Contacts);
+  return *queryData_;
 }
 
 const ResultTypes& resultTypes() {
@@ -505,11 +505,11 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
         const ConvexShape shape = asConvexShape(kind, shapeIn, "shape");
         const Transform tm = asTransform(meshPose, "mesh_pose"), ts = asTransform(shapePose, "shape_pose");
         validateContactMargin(margin);
-        const MeshAdjacency& adjacency = mesh.adjacency();
+        const MeshQueryData& data = mesh.queryData();
         MeshContactManifold manifold;
         {
           py::gil_scoped_release release;
-          contacts(mesh.mesh(), tm, shape, ts, margin, manifold, &adjacency);
+          contacts(mesh.mesh(), tm, shape, ts, margin, manifold, &data);
         }
         const py::ssize_t k = manifold.count;
         py::array_t<Real> pa({k, py::ssize_t(3)}), pb({k, py::ssize_t(3)}), n({k, py::ssize_t(3)}), sep(k);
@@ -529,7 +529,7 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
       "Contacts(point_a, point_b, normal, separation, triangle), k rows each. kind 'sphere': shape = center,\n"
       "radius (4); 'capsule': a, b, radius (7); 'box': center, half extents, axes u, v, w (15), in the\n"
       "shape's frame placed by shape_pose. normal: unit, from the shape into the mesh; separation < 0 is\n"
-      "penetration; internal-edge contacts are corrected (crux::contacts with the mesh's adjacency).");
+      "penetration; internal-edge contacts are corrected (crux::contacts with the mesh's query data).");
 }
 
 }  // namespace crux::python

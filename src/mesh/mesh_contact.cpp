@@ -4,6 +4,7 @@
 // and the mesh–shape distance.
 
 #include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/precondition.hpp>
 
 #include <crux/error.hpp>
@@ -96,8 +97,6 @@ MeshAdjacency::MeshAdjacency(const Mesh& mesh) {
   bySlot_.resize(prims.size());
   for (std::size_t k = 0; k < prims.size(); ++k)
     bySlot_[k] = {tolerances[prims[k]], activity_[prims[k]]};
-  vertexCount_ = mesh.vertices().size();
-  geometryId_ = mesh.geometryId();
 }
 
 std::size_t MeshAdjacency::memoryBytes() const {
@@ -181,17 +180,12 @@ void collideMesh(const Mesh& mesh, const Collider& collider, Real margin, Real m
 }  // namespace
 
 bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
-              Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency, QueryPath path) {
+              Real margin, MeshContactManifold& out, const MeshQueryData* data, QueryPath path) {
   out.count = 0;
   validateContactMargin(margin);
   if (!detail::entryPreconditions("contacts(Mesh, ConvexShape)", detail::rule::kShapesAtPoses, meshPose, shape, shapePose))
     return false;
-  if (adjacency && (adjacency->triangleCount() != mesh.triangleCount() ||
-                    adjacency->vertexCount() != mesh.vertices().size()))
-    throw InvalidInput("adjacency: built for a mesh of " + std::to_string(adjacency->triangleCount()) +
-                       " triangles and " + std::to_string(adjacency->vertexCount()) + " vertices, this mesh has " +
-                       std::to_string(mesh.triangleCount()) + " and " + std::to_string(mesh.vertices().size()));
-  if (adjacency) requireCurrentGeometry(mesh, adjacency->geometryId(), "adjacency");
+  const MeshAdjacency* adjacency = data ? &data->adjacencyFor(mesh) : nullptr;
   const Real size = shape.size();
   const Real mergeTol = kMeshContactMergeRelativeTolerance * (size > 0 ? size : Real(1));
   const LocalShape ls(shape, meshPose, shapePose);

@@ -4,6 +4,7 @@
 
 #include <crux/error.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/precondition.hpp>
 
 #include "geometry/bits.hpp"
@@ -725,13 +726,16 @@ void validateDistanceBound(Real value, const char* field) {
 
 }  // namespace
 
+std::size_t MeshDistanceAccel::memoryBytes() const {
+  return nodes_.capacity() * sizeof(Node) + corners_.capacity() * sizeof(Vec3) + ranges_.capacity() * sizeof(Range);
+}
+
 MeshDistanceAccel::MeshDistanceAccel(const Mesh& mesh) {
   const WideBvh& bvh = mesh.bvh();
   const std::size_t ids = wideSubtreeCount(bvh.nodes.size());
   nodes_.assign(ids, Node{});
   ranges_.assign(ids, Range{});
   corners_ = mesh.slotCorners();
-  geometryId_ = mesh.geometryId();
   std::vector<std::uint32_t> stack;
   // Calls f(corner) for every corner of every triangle under subtree id (in double).
   auto corners = [&](std::uint32_t id, auto&& f) {
@@ -799,24 +803,14 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
   if (!detail::entryPreconditions("distance(Mesh, Mesh)", detail::rule::kPoses, ta,
                                   tb))
     return {};
-  // A foreign accelerator (another node or triangle count) would be read out of range.
-  auto checkAccel = [](const MeshDistanceAccel* accel, const Mesh& m, const char* field, const char* mesh,
-                       const char* label) {
-    const std::size_t ids = wideSubtreeCount(m.bvh().nodes.size());
-    if (accel && (accel->nodes().size() != ids || accel->corners().size() != 3 * m.triangleCount()))
-      throw InvalidInput(std::string("mesh distance options.") + field + " was not built from mesh " + mesh + " (" +
-                         std::to_string(accel->nodes().size()) + " nodes and " +
-                         std::to_string(accel->corners().size() / 3) + " triangles, mesh has " +
-                         std::to_string(ids) + " and " + std::to_string(m.triangleCount()) + ")");
-    if (accel) requireCurrentGeometry(m, accel->geometryId(), label);
-  };
-  checkAccel(options.accelA, a, "accelA", "a", "mesh distance options.accelA");
-  checkAccel(options.accelB, b, "accelB", "b", "mesh distance options.accelB");
+  // The one check (MeshQueryData: part held, geometry current) before anything is read.
+  const MeshDistanceAccel* accelA = options.dataA ? &options.dataA->distanceAccelFor(a, "mesh distance options.dataA") : nullptr;
+  const MeshDistanceAccel* accelB = options.dataB ? &options.dataB->distanceAccelFor(b, "mesh distance options.dataB") : nullptr;
   const Relative rel(ta, tb);
   Best best{options.maxDistance, options.stopDistance, {}, false};
   if (options.path == QueryPath::BruteForce) bruteForce(a, b, rel, best);
   else if (!a.bvh().empty() && !b.bvh().empty()) {
-    descend(a, b, rel, options.accelA, options.accelB, best);
+    descend(a, b, rel, accelA, accelB, best);
   }
   MeshMeshDistanceResult r = best.r;
   r.stoppedEarly = best.done && r.distance > 0;

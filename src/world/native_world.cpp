@@ -10,6 +10,7 @@
 #include <crux/scene/scene_cast.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/mesh/mesh_volume.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
@@ -147,11 +148,12 @@ Real toRealBound(double bound) {
 }
 
 /// Per-mesh structures of the narrow phase and volume mode, built on first use (std::call_once,
-/// so concurrent queries may race to it safely): the edge adjacency that removes ghost contacts
-/// on internal edges (mesh_contact.hpp), and the closed-solid view (mesh_volume.hpp).
+/// so concurrent queries may race to it safely): the query data whose contacts part removes
+/// ghost contacts on internal edges (mesh_query_data.hpp), and the closed-solid view
+/// (mesh_volume.hpp). A world's meshes never move their vertices, so the data stays current.
 struct NativeMeshExtras {
-  std::once_flag adjacencyOnce;
-  std::unique_ptr<MeshAdjacency> adjacency;
+  std::once_flag queryDataOnce;
+  std::unique_ptr<MeshQueryData> queryData;
   std::once_flag volumeOnce;
   std::unique_ptr<MeshVolume> volume;
 };
@@ -228,7 +230,7 @@ class NativeWorld final : public CollisionWorld {
     // a mesh operand is a (CollisionWorld::contacts swaps a shape-first pair)
     const MeshHandle h = std::get<MeshHandle>(a.shape);
     MeshContactManifold manifold;
-    crux::contacts(mesh(h), a.pose, convexOf(b), b.pose, m, manifold, &adjacency(h));
+    crux::contacts(mesh(h), a.pose, convexOf(b), b.pose, m, manifold, &queryData(h));
     for (int i = 0; i < manifold.count; ++i) {
       const MeshContactPoint& p = manifold.points[i];
       out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), p.normal.cast<double>(),
@@ -448,10 +450,12 @@ class NativeWorld final : public CollisionWorld {
     return scene_.placed(require(model, field));
   }
   NativeMeshExtras& extras(MeshHandle m) const { return *extras_.at(m.index); }
-  const MeshAdjacency& adjacency(MeshHandle m) const {
+  /// The contacts part of the mesh's query data, built on first use.
+  const MeshQueryData& queryData(MeshHandle m) const {
     NativeMeshExtras& e = extras(m);
-    std::call_once(e.adjacencyOnce, [&] { e.adjacency = std::make_unique<MeshAdjacency>(mesh(m)); });
-    return *e.adjacency;
+    std::call_once(e.queryDataOnce,
+                   [&] { e.queryData = std::make_unique<MeshQueryData>(mesh(m), MeshQueryParts::Contacts); });
+    return *e.queryData;
   }
   /// The closed-solid view (the base checked closedness before any volume hook runs).
   const MeshVolume& volume(MeshHandle m) const {

@@ -7,6 +7,7 @@
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/mesh/mesh_contact.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 
 #include <crux/error.hpp>
 
@@ -150,7 +151,7 @@ TEST(MeshContact, BvhAgreesWithBruteForceAndPerTriangleRoutine) {
   const Real margin = Real(0.05);
   int withContacts = 0, checked = 0;
   for (const Mesh* mesh : {&bumpy, &soup}) {
-    const MeshAdjacency adjacency(*mesh);
+    const MeshQueryData data(*mesh, MeshQueryParts::Contacts);
     for (const ShapeCase& sc : shapes(hull)) {
       for (int trial = 0; trial < 60; ++trial) {
         Transform meshPose;
@@ -173,8 +174,8 @@ TEST(MeshContact, BvhAgreesWithBruteForceAndPerTriangleRoutine) {
         MeshContactManifold bvh, brute, adj, adjBrute;
         const bool hit = contacts(*mesh, meshPose, sc.shape, shapePose, margin, bvh);
         contacts(*mesh, meshPose, sc.shape, shapePose, margin, brute, nullptr, QueryPath::BruteForce);
-        contacts(*mesh, meshPose, sc.shape, shapePose, margin, adj, &adjacency);
-        contacts(*mesh, meshPose, sc.shape, shapePose, margin, adjBrute, &adjacency, QueryPath::BruteForce);
+        contacts(*mesh, meshPose, sc.shape, shapePose, margin, adj, &data);
+        contacts(*mesh, meshPose, sc.shape, shapePose, margin, adjBrute, &data, QueryPath::BruteForce);
         // The mesh routine works in the mesh's frame (and with closed-form sphere/capsule
         // routines), the reference in the world: equal up to kPerTriangleAgreement; BVH and
         // brute force run the same per-triangle code and agree exactly.
@@ -280,7 +281,7 @@ TEST(MeshContact, DistancePruningKeepsTheBruteForceAnswerOnDeepPlacements) {
 
 TEST(MeshContact, SphereOnFlatGridHasOneVerticalContactEvenAtInternalEdges) {
   const Mesh grid = gridMesh(8, 8, 1, [](int, int) { return Real(0); });
-  const MeshAdjacency adjacency(grid);
+  const MeshQueryData data(grid, MeshQueryParts::Contacts);
   const Real r = Real(0.5);
   const Real tol = 100 * kEps * 8;
   int ghostsWithoutAdjacency = 0, cases = 0;
@@ -291,7 +292,7 @@ TEST(MeshContact, SphereOnFlatGridHasOneVerticalContactEvenAtInternalEdges) {
       const Transform pose{Quat::Identity(), c};
       const std::string info = "sphere centre " + str(c);
       MeshContactManifold m;
-      ASSERT_TRUE(contacts(grid, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, Real(0.02), m, &adjacency))
+      ASSERT_TRUE(contacts(grid, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, Real(0.02), m, &data))
           << info;
       ASSERT_EQ(m.count, 1) << info;
       ASSERT_LE((m.points[0].normal - Vec3(0, 0, -1)).norm(), tol) << info << " normal " << str(m.points[0].normal);
@@ -312,7 +313,7 @@ TEST(MeshContact, SphereOnFlatGridHasOneVerticalContactEvenAtInternalEdges) {
 
 TEST(MeshContact, RotatedBoxAndCapsuleOnFlatGridHaveOnlyVerticalNormals) {
   const Mesh grid = gridMesh(8, 8, 1, [](int, int) { return Real(0); });
-  const MeshAdjacency adjacency(grid);
+  const MeshQueryData data(grid, MeshQueryParts::Contacts);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(2, 6), a(0, 6.283185307179586);
   const Real tol = 100 * kEps * 8;
@@ -329,7 +330,7 @@ TEST(MeshContact, RotatedBoxAndCapsuleOnFlatGridHaveOnlyVerticalNormals) {
       const Transform pose{Quat(Eigen::AngleAxis<Real>(angle, Vec3::UnitZ())), xy + Vec3(0, 0, h - depth)};
       const std::string info = std::string(s == 0 ? "box" : "capsule") + " pose " + str(pose);
       MeshContactManifold m;
-      ASSERT_TRUE(contacts(grid, Transform::identity(), shape, pose, Real(0.02), m, &adjacency)) << info;
+      ASSERT_TRUE(contacts(grid, Transform::identity(), shape, pose, Real(0.02), m, &data)) << info;
       // box: the 4 corners of its bottom face; capsule: its two ends, plus possibly a rounded end
       // over a seam reported by its own triangle, slightly shallower (a real contact, not a ghost)
       if (s == 0) ASSERT_EQ(m.count, 4) << info;
@@ -347,11 +348,11 @@ TEST(MeshContact, ConvexEdgeKeepsItsNormal) {
   std::vector<Vec3> v = {{-1, -1, -1}, {0, -1, 0}, {0, 1, 0}, {-1, 1, -1}, {1, -1, -1}, {1, 1, -1}};
   std::vector<TriangleIndices> t = {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
   const Mesh roof(std::move(v), std::move(t), "roof");
-  const MeshAdjacency adjacency(roof);
+  const MeshQueryData data(roof, MeshQueryParts::Contacts);
   const Real r = Real(0.3);
   const Transform pose{Quat::Identity(), Vec3(0, 0, r - Real(0.01))};
   MeshContactManifold m;
-  ASSERT_TRUE(contacts(roof, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, 0, m, &adjacency));
+  ASSERT_TRUE(contacts(roof, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, 0, m, &data));
   ASSERT_EQ(m.count, 1);
   EXPECT_LE((m.points[0].normal - Vec3(0, 0, -1)).norm(), 100 * kEps) << str(m.points[0].normal);
 }
@@ -361,7 +362,7 @@ TEST(MeshContact, SphereInConcaveValleyGetsOnlyFaceNormals) {
   std::vector<Vec3> v = {{-2, -2, 0}, {0, -2, 0}, {0, 2, 0}, {-2, 2, 0}, {2, -2, 2}, {2, 2, 2}};
   std::vector<TriangleIndices> t = {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
   const Mesh valley(std::move(v), std::move(t), "valley");
-  const MeshAdjacency adjacency(valley);
+  const MeshQueryData data(valley, MeshQueryParts::Contacts);
   const Real r = Real(0.5), h = Real(0.49), margin = Real(0.02);
   const Vec3 floorN(0, 0, -1);
   const Vec3 wallN = Vec3(1, 0, -1).normalized();
@@ -372,7 +373,7 @@ TEST(MeshContact, SphereInConcaveValleyGetsOnlyFaceNormals) {
     const std::string info = "sphere centre " + str(c);
     MeshContactManifold m;
     const bool hit = contacts(valley, Transform::identity(), Sphere{Vec3::Zero(), r}, Transform{Quat::Identity(), c},
-                              margin, m, &adjacency);
+                              margin, m, &data);
     // analytic: the floor is touched (sep h - r) while the centre is over it; the wall when the
     // centre's projection on its plane lies on it (x + h >= 0) at sep |h - x|/√2 - r
     Real expected = kNoLimit;
@@ -393,7 +394,7 @@ TEST(MeshContact, SphereInConcaveValleyGetsOnlyFaceNormals) {
 
 TEST(MeshContact, BoxOnBunnyPointsLieOnBothSurfaces) {
   const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
-  const MeshAdjacency adjacency(bunny);
+  const MeshQueryData data(bunny, MeshQueryParts::Contacts);
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   const Real scale = diag + bunny.bounds().max.cwiseAbs().maxCoeff() + bunny.bounds().min.cwiseAbs().maxCoeff();
   const Real tol = 1000 * kEps * scale;
@@ -415,7 +416,7 @@ TEST(MeshContact, BoxOnBunnyPointsLieOnBothSurfaces) {
     const Real margin = Real(0.001) * diag;
     const std::string info = "triangle " + std::to_string(ti) + " box pose " + str(pose);
     MeshContactManifold m;
-    ASSERT_TRUE(contacts(bunny, Transform::identity(), box, pose, margin, m, &adjacency)) << info;
+    ASSERT_TRUE(contacts(bunny, Transform::identity(), box, pose, margin, m, &data)) << info;
     for (int k = 0; k < m.count; ++k) {
       const MeshContactPoint& p = m.points[k];
       // on the mesh: some triangle within tol (mesh_query's exact sphere test, independent code)
@@ -439,7 +440,7 @@ TEST(MeshContact, BoxOnBunnyPointsLieOnBothSurfaces) {
 // seams (where the correction acts) and on the bunny.
 TEST(MeshContact, LeftHandedBoxFrameGivesTheSameManifold) {
   const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
-  const MeshAdjacency adjacency(bunny);
+  const MeshQueryData data(bunny, MeshQueryParts::Contacts);
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   const Real tol = 1000 * kEps * diag;
   std::mt19937 rng(17);
@@ -458,8 +459,8 @@ TEST(MeshContact, LeftHandedBoxFrameGivesTheSameManifold) {
     left.axes.col(2) = -right.axes.col(2);
     const Real margin = Real(0.001) * diag;
     MeshContactManifold a, b, raw;
-    contacts(bunny, Transform::identity(), right, Transform::identity(), margin, a, &adjacency);
-    contacts(bunny, Transform::identity(), left, Transform::identity(), margin, b, &adjacency);
+    contacts(bunny, Transform::identity(), right, Transform::identity(), margin, a, &data);
+    contacts(bunny, Transform::identity(), left, Transform::identity(), margin, b, &data);
     contacts(bunny, Transform::identity(), right, Transform::identity(), margin, raw);
     ASSERT_EQ(a.count, b.count) << "trial " << trial;
     for (int k = 0; k < a.count; ++k) {
@@ -485,7 +486,7 @@ TEST(MeshContact, LeftHandedBoxFrameGivesTheSameManifold) {
 // deepest triangle (the signed distance), with or without adjacency.
 TEST(MeshContact, CorrectionNeverLosesTheDeepestPenetration) {
   const Mesh blob = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/blob-closed.off");
-  const MeshAdjacency adjacency(blob);
+  const MeshQueryData data(blob, MeshQueryParts::Contacts);
   const std::vector<std::vector<Vec3>> hulls = {
       {{0, 0, 0}, {Real(0.05859375), 0, Real(-0.1171875)}, {Real(-0.0625), 0, 0}},  // the shrunk case
       {{0, 0, 0}, {Real(0.05859375), 0, Real(-0.1171875)}, {Real(-0.0625), 0, 0}, {0, Real(0.001), 0}},
@@ -505,7 +506,7 @@ TEST(MeshContact, CorrectionNeverLosesTheDeepestPenetration) {
       if (!(d.distance < 0)) continue;  // penetrating placements only
       SCOPED_TRACE("hull " + std::to_string(points.size()) + " points, pose " + str(pose));
       ++checked;
-      for (const MeshAdjacency* adj : {static_cast<const MeshAdjacency*>(nullptr), &adjacency}) {
+      for (const MeshQueryData* adj : {static_cast<const MeshQueryData*>(nullptr), &data}) {
         MeshContactManifold m;
         contacts(blob, Transform::identity(), shape, pose, 0, m, adj);
         ASSERT_GT(m.count, 0) << std::setprecision(17) << "placement " << k << " adjacency " << (adj != nullptr) << ": distance "
@@ -521,7 +522,7 @@ TEST(MeshContact, CorrectionNeverLosesTheDeepestPenetration) {
 
 TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
   const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
-  const MeshAdjacency adjacency(bunny);
+  const MeshQueryData data(bunny, MeshQueryParts::Contacts);
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   std::mt19937 rng(11);
   const ConvexHull hull = randomHull(rng);
@@ -551,8 +552,8 @@ TEST(MeshContact, BunnyBvhAgreesWithBruteForce) {
         if (shape.kind == ConvexKind::Box) shape.p[0] = Vec3::Zero();
       }
       MeshContactManifold a, b;
-      contacts(bunny, meshPose, shape, shapePose, margin, a, &adjacency);
-      contacts(bunny, meshPose, shape, shapePose, margin, b, &adjacency, QueryPath::BruteForce);
+      contacts(bunny, meshPose, shape, shapePose, margin, a, &data);
+      contacts(bunny, meshPose, shape, shapePose, margin, b, &data, QueryPath::BruteForce);
       ASSERT_EQ(a.count > 0, b.count > 0) << info;
       if (a.count > 0) {
         ++hits;
@@ -581,19 +582,23 @@ TEST(MeshAdjacency, MemoryBytesCountsEveryArrayItHolds) {
   EXPECT_LE(adjacency.memoryBytes(), 2 * (perTriangle + 8) * n);
 }
 
-// An adjacency records the mesh's geometry id: after setVertices (same counts, new positions)
-// its activity bits, tolerances and corner copy describe the old surface, so contacts() refuses
-// it for every shape (the box path read its corner copy, the others its activity bits), naming
-// it and the mesh. A copy of the mesh shares the id; an adjacency rebuilt after the move is
-// accepted and finds the contact at the new position.
-TEST(MeshContact, AdjacencyBuiltBeforeSetVerticesIsRefusedForEveryShape) {
+// Query data records the mesh's geometry id: after setVertices (same counts, new positions)
+// its activity bits and tolerances describe the old surface, so contacts() refuses it for every
+// shape, naming it and the mesh. A copy of the mesh shares the id; refresh() rebuilds the data
+// for the moved mesh, which is then accepted and finds the contact at the new position (and then
+// refused for the unmoved copy).
+TEST(MeshContact, QueryDataBuiltBeforeSetVerticesIsRefusedForEveryShapeUntilRefreshed) {
   Mesh grid = gridMesh(6, 6, 1, [](int, int) { return Real(0); });
   const Mesh copy = grid;
-  const MeshAdjacency before(grid);
+  const MeshQueryData before(grid, MeshQueryParts::Contacts);
   std::vector<Vec3> moved = grid.vertices();
   for (Vec3& p : moved) p += Vec3(0, 0, 10);
   grid.setVertices(moved);
-  const MeshAdjacency after(grid);
+  MeshQueryData after = before;
+  EXPECT_FALSE(after.isCurrentFor(grid));
+  EXPECT_TRUE(after.refresh(grid));
+  EXPECT_TRUE(after.isCurrentFor(grid));
+  EXPECT_FALSE(after.refresh(grid));
   const ConvexShape shapes[] = {Sphere{Vec3::Zero(), Real(0.5)},
                                 Capsule{Vec3(Real(-0.5), 0, 0), Vec3(Real(0.5), 0, 0), Real(0.5)},
                                 Obb{Vec3::Zero(), Vec3(Real(0.5), Real(0.5), Real(0.5)), Mat3::Identity()}};
@@ -602,14 +607,14 @@ TEST(MeshContact, AdjacencyBuiltBeforeSetVerticesIsRefusedForEveryShape) {
     MeshContactManifold m;
     try {
       contacts(grid, Transform::identity(), shape, atNew, Real(0.01), m, &before);
-      FAIL() << "a stale adjacency was accepted, shape kind " << int(shape.kind);
+      FAIL() << "stale query data was accepted, shape kind " << int(shape.kind);
     } catch (const InvalidInput& e) {
       const std::string msg = e.what();
-      EXPECT_EQ(msg.rfind("adjacency", 0), 0u) << msg;
+      EXPECT_EQ(msg.rfind("data", 0), 0u) << msg;
       EXPECT_NE(msg.find("stale"), std::string::npos) << msg;
     }
     EXPECT_THROW(contacts(copy, Transform::identity(), shape, atOld, Real(0.01), m, &after), InvalidInput);
-    // the old adjacency serves the unmoved copy, the rebuilt one the moved mesh
+    // the old data serves the unmoved copy, the refreshed one the moved mesh
     EXPECT_TRUE(contacts(copy, Transform::identity(), shape, atOld, Real(0.01), m, &before));
     EXPECT_NEAR(m.points[0].pointA.z(), 0, 1e-5);
     EXPECT_TRUE(contacts(grid, Transform::identity(), shape, atNew, Real(0.01), m, &after));
@@ -624,7 +629,7 @@ TEST(MeshContact, AdjacencyBuiltBeforeSetVerticesIsRefusedForEveryShape) {
 // manifolds must agree point for point (separations, normals, positions).
 TEST(MeshContact, SphereCorrectionAgreesWithTheGenericOneOnAPointCapsule) {
   const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
-  const MeshAdjacency adjacency(bunny);
+  const MeshQueryData data(bunny, MeshQueryParts::Contacts);
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   std::mt19937 rng(20261122);
   std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(bunny.triangleCount() - 1));
@@ -644,8 +649,8 @@ TEST(MeshContact, SphereCorrectionAgreesWithTheGenericOneOnAPointCapsule) {
     const Vec3 q = t.a + w1 * (t.b - t.a) + w2 * (t.c - t.a) + (r * Real(0.7 + 0.3 * u(rng)) + margin * Real(u(rng))) * n;
     const Vec3 centre = meshPose.apply(q);
     MeshContactManifold sphere, capsule;
-    contacts(bunny, meshPose, Sphere{centre, r}, Transform::identity(), margin, sphere, &adjacency);
-    contacts(bunny, meshPose, Capsule{centre, centre, r}, Transform::identity(), margin, capsule, &adjacency);
+    contacts(bunny, meshPose, Sphere{centre, r}, Transform::identity(), margin, sphere, &data);
+    contacts(bunny, meshPose, Capsule{centre, centre, r}, Transform::identity(), margin, capsule, &data);
     std::ostringstream info;
     info.precision(17);
     info << "case " << k << " centre " << str(centre) << " radius " << double(r) << " margin " << double(margin)
@@ -764,7 +769,7 @@ TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
   std::uniform_real_distribution<double> u(0, 1);
   int points = 0, corrected = 0, dropped = 0, placements = 0;
   for (const Mesh* mesh : {&bunny, &grid}) {
-    const MeshAdjacency adjacency(*mesh);
+    const MeshQueryData data(*mesh, MeshQueryParts::Contacts);
     const Real diag = (mesh->bounds().max - mesh->bounds().min).norm();
     const Real s = Real(0.025) * diag;
     const Real margin = Real(0.01) * s;
@@ -834,7 +839,7 @@ TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
           for (int k = 0; any && k < m.count; ++k) {
             RefPoint p{m.points[k].pointA, m.points[k].pointB, m.normal, m.points[k].separation, ti};
             const RefPoint raw = p;
-            if (!referenceCorrect(adjacency, tri, ft, ref, margin, p)) {
+            if (!referenceCorrect(data.adjacencyFor(*mesh), tri, ft, ref, margin, p)) {
               ++dropped;
               if (!hasDropped || raw.separation < deepestDropped.separation ||
                   (raw.separation == deepestDropped.separation && raw.triangle < deepestDropped.triangle))
@@ -852,7 +857,7 @@ TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
         for (const RefPoint& p : kept) refMin = std::min(refMin, p.separation);
 
         MeshContactManifold out;
-        contacts(*mesh, Transform::identity(), shape, pose, margin, out, &adjacency);
+        contacts(*mesh, Transform::identity(), shape, pose, margin, out, &data);
         const std::string info = std::string(mesh == &bunny ? "bunny" : "grid") + " kind " +
                                  std::to_string(int(shape.kind)) + " trial " + std::to_string(trial) + " pose " +
                                  str(pose);
@@ -885,7 +890,7 @@ TEST(MeshContact, CorrectionAgreesWithAReferenceWrittenFromTheRule) {
 
 TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: shared machine)
   const Mesh bunny = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/bunny00.off");
-  const MeshAdjacency adjacency(bunny);
+  const MeshQueryData data(bunny, MeshQueryParts::Contacts);
   const Real diag = (bunny.bounds().max - bunny.bounds().min).norm();
   Obb box;
   box.half = Vec3(Real(0.03), Real(0.02), Real(0.015)) * diag;
@@ -913,7 +918,7 @@ TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: share
     int hits = 0;
     const auto t0 = std::chrono::steady_clock::now();
     for (const Transform& pose : poses) hits += contacts(bunny, Transform::identity(), shapesOnBunny[s], pose,
-                                                         Real(0.001) * diag, m, &adjacency);
+                                                         Real(0.001) * diag, m, &data);
     const auto t1 = std::chrono::steady_clock::now();
     Real sink = 0;
     for (const Transform& pose : poses) sink += distance(bunny, Transform::identity(), shapesOnBunny[s], pose).distance;
@@ -927,7 +932,7 @@ TEST(MeshContact, TimingOnBunny) {  // figures only (no assertion on time: share
 
 TEST(MeshContact, QueriesDoNotAllocate) {
   const Mesh grid = gridMesh(8, 8, 1, [](int, int) { return Real(0.1); });
-  const MeshAdjacency adjacency(grid);
+  const MeshQueryData data(grid, MeshQueryParts::Contacts);
   std::mt19937 rng(3);
   const ConvexHull hull = randomHull(rng);
   const std::vector<ShapeCase> cases = shapes(hull);
@@ -938,7 +943,7 @@ TEST(MeshContact, QueriesDoNotAllocate) {
     for (int i = 0; i < 20; ++i) {
       const Transform pose{Quat(Eigen::AngleAxis<Real>(Real(0.3) * i, Vec3::UnitX())),
                            Vec3(1 + Real(0.3) * i, 2, Real(0.3))};
-      contacts(grid, Transform::identity(), sc.shape, pose, Real(0.05), m, &adjacency);
+      contacts(grid, Transform::identity(), sc.shape, pose, Real(0.05), m, &data);
       sink += m.depth() + distance(grid, Transform::identity(), sc.shape, pose, Real(1)).distance;
     }
   EXPECT_EQ(test::allocationCount(), before) << sink;
@@ -1055,10 +1060,11 @@ TEST(MeshContact, EdgeActivityMatchesTheDihedralSignOnABumpyGridAndBySlotWithThe
 namespace crux {
 namespace {
 
-TEST(MeshContact, BadMarginForeignAdjacencyAndNanBoundAreInvalidInput) {
+TEST(MeshContact, BadMarginForeignOrPartlessDataAndNanBoundAreInvalidInput) {
   const Mesh grid = gridMesh(4, 4, 1, [](int, int) { return Real(0); });
   const Mesh other = gridMesh(2, 2, 1, [](int, int) { return Real(0); });
-  const MeshAdjacency foreign(other);
+  const MeshQueryData foreign(other, MeshQueryParts::Contacts);
+  const MeshQueryData distanceOnly(grid, MeshQueryParts::Distance);
   const Sphere s{Vec3::Zero(), Real(0.5)};
   const Transform pose{Quat::Identity(), Vec3(2, 2, Real(0.4))};
   MeshContactManifold m;
@@ -1071,13 +1077,16 @@ TEST(MeshContact, BadMarginForeignAdjacencyAndNanBoundAreInvalidInput) {
     return "no error";
   };
   EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(-1), m); }).rfind("margin: ", 0), 0u);
-  EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &foreign); }).rfind("adjacency: ", 0),
+  EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &foreign); }).rfind("data is stale", 0),
+            0u);
+  EXPECT_EQ(message([&] { contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &distanceOnly); })
+                .rfind("data: this MeshQueryData was built without its contacts part", 0),
             0u);
   EXPECT_EQ(message([&] { distance(grid, Transform::identity(), s, pose, std::numeric_limits<Real>::quiet_NaN()); })
                 .rfind("maxDistance: ", 0),
             0u);
-  // The mesh's own adjacency is accepted.
-  const MeshAdjacency own(grid);
+  // The mesh's own data is accepted.
+  const MeshQueryData own(grid, MeshQueryParts::Contacts);
   EXPECT_TRUE(contacts(grid, Transform::identity(), s, pose, Real(0.01), m, &own));
 }
 
@@ -1206,7 +1215,7 @@ TEST(MeshContact, SeededManifoldsMatchPinnedHash) {
   OutputHash hash;
   int queries = 0, withContacts = 0, changedByAdjacency = 0;
   for (const Mesh* mesh : {&grid, &sphere}) {
-    const MeshAdjacency adjacency(*mesh);
+    const MeshQueryData data(*mesh, MeshQueryParts::Contacts);
     for (const ShapeCase& sc : shapes(hull)) {
       for (int trial = 0; trial < 400; ++trial) {
         // The shape's centre near a random point of a random triangle: from 0.3 below to 1.0
@@ -1222,7 +1231,7 @@ TEST(MeshContact, SeededManifoldsMatchPinnedHash) {
         const Transform shapePose{rng.rotation(), meshPose.apply(local)};
         MeshContactManifold plain, corrected;
         const bool hit = contacts(*mesh, meshPose, sc.shape, shapePose, margin, plain);
-        contacts(*mesh, meshPose, sc.shape, shapePose, margin, corrected, &adjacency);
+        contacts(*mesh, meshPose, sc.shape, shapePose, margin, corrected, &data);
         queries += 2;
         withContacts += hit;
         for (const MeshContactManifold* m : {&plain, &corrected}) {

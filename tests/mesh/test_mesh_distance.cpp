@@ -8,6 +8,7 @@
 #include <crux/error.hpp>
 #include <crux/geometry/closest_point.hpp>
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/mesh/mesh_query.hpp>
 #include <crux/model/model_query.hpp>
 
@@ -123,11 +124,11 @@ TEST(MeshDistance, BvhEqualsBruteForceAndExactOnSoups) {
     ASSERT_TRUE(bvh.found && ref.found) << what;
     EXPECT_EQ(bvh.distance, ref.distance) << what;
     // The oriented-box accelerators only prune: same minimum, on either or both sides.
-    const MeshDistanceAccel accA(*a), accB(*b);
+    const MeshQueryData accA(*a, MeshQueryParts::Distance), accB(*b, MeshQueryParts::Distance);
     MeshDistanceOptions withAccel;
-    withAccel.accelA = &accA;
+    withAccel.dataA = &accA;
     EXPECT_EQ(distance(*a, ta, *b, tb, withAccel).distance, ref.distance) << what;
-    withAccel.accelB = &accB;
+    withAccel.dataB = &accB;
     EXPECT_EQ(distance(*a, ta, *b, tb, withAccel).distance, ref.distance) << what;
     EXPECT_NEAR(double(bvh.distance), exact, kRelative * exact + kAbsolute * scale + kMapUlps * scale) << what;
     checkPoints(*a, ta, *b, tb, bvh, kMapUlps * scale + kRelative * exact, what);
@@ -220,9 +221,9 @@ TEST(MeshDistance, RealMeshAgainstBruteForce) {
     std::uniform_real_distribution<double> sep(0.2, 1.5);
     const Eigen::Vector3d dir = Eigen::Vector3d::Random().normalized();
     tb.translation = (dir * sep(rng) * size).cast<Real>();
-    const MeshDistanceAccel acc(blob);
+    const MeshQueryData acc(blob, MeshQueryParts::Distance);
     MeshDistanceOptions withAccel;
-    withAccel.accelA = withAccel.accelB = &acc;
+    withAccel.dataA = withAccel.dataB = &acc;
     const MeshMeshDistanceResult r = distance(blob, Transform::identity(), blob, tb, withAccel);
     EXPECT_EQ(distance(blob, Transform::identity(), blob, tb).distance, r.distance) << "case " << c;
     MeshDistanceOptions brute;
@@ -253,7 +254,7 @@ TEST(MeshDistance, ParallelGridsWithManyTiedPairsEqualBruteForce) {
     return Mesh(std::move(v), std::move(t), "grid");
   };
   const Mesh a = grid(crux::test::testScale() < 1 ? 12 : 24);
-  const MeshDistanceAccel acc(a);
+  const MeshQueryData acc(a, MeshQueryParts::Distance);
   const int poses = crux::test::scaledCases(3, 1);
   for (int c = 0; c < poses; ++c) {
     Transform tb;
@@ -263,7 +264,7 @@ TEST(MeshDistance, ParallelGridsWithManyTiedPairsEqualBruteForce) {
     brute.path = QueryPath::BruteForce;
     const MeshMeshDistanceResult ref = distance(a, Transform::identity(), a, tb, brute);
     MeshDistanceOptions withAccel;
-    withAccel.accelA = withAccel.accelB = &acc;
+    withAccel.dataA = withAccel.dataB = &acc;
     EXPECT_EQ(distance(a, Transform::identity(), a, tb).distance, ref.distance) << "case " << c;
     EXPECT_EQ(distance(a, Transform::identity(), a, tb, withAccel).distance, ref.distance) << "case " << c;
   }
@@ -291,7 +292,7 @@ TEST(MeshDistance, ConcentricSpheresOverflowTheBestFirstHeapAndStayExact) {
     return Mesh(std::move(v), std::move(t), "sphere");
   };
   const Mesh outer = sphere(20, 1.0), inner = sphere(10, 0.5);
-  const MeshDistanceAccel accOuter(outer), accInner(inner);
+  const MeshQueryData accOuter(outer, MeshQueryParts::Distance), accInner(inner, MeshQueryParts::Distance);
   MeshDistanceOptions brute;
   brute.path = QueryPath::BruteForce;
   Rng rng(17);
@@ -299,8 +300,8 @@ TEST(MeshDistance, ConcentricSpheresOverflowTheBestFirstHeapAndStayExact) {
     const Transform tb = randomPose(rng, 0.05);
     const MeshMeshDistanceResult ref = distance(outer, Transform::identity(), inner, tb, brute);
     MeshDistanceOptions withAccel;
-    withAccel.accelA = &accOuter;
-    withAccel.accelB = &accInner;
+    withAccel.dataA = &accOuter;
+    withAccel.dataB = &accInner;
     EXPECT_EQ(distance(outer, Transform::identity(), inner, tb).distance, ref.distance) << "case " << c;
     EXPECT_EQ(distance(outer, Transform::identity(), inner, tb, withAccel).distance, ref.distance) << "case " << c;
   }
@@ -364,11 +365,11 @@ TEST(MeshDistance, AcceleratedBoundsNeverPruneTheAnswerOnDegenerateMeshes) {
     brute.path = QueryPath::BruteForce;
     const MeshMeshDistanceResult ref = distance(a, Transform::identity(), b, tb, brute);
     ASSERT_TRUE(ref.found) << what;
-    const MeshDistanceAccel accA(a), accB(b);
+    const MeshQueryData accA(a, MeshQueryParts::Distance), accB(b, MeshQueryParts::Distance);
     for (int k = 0; k < 4; ++k) {
       MeshDistanceOptions o;
-      o.accelA = (k & 1) ? &accA : nullptr;
-      o.accelB = (k & 2) ? &accB : nullptr;
+      o.dataA = (k & 1) ? &accA : nullptr;
+      o.dataB = (k & 2) ? &accB : nullptr;
       const MeshMeshDistanceResult r = distance(a, Transform::identity(), b, tb, o);
       ASSERT_TRUE(r.found) << what << " accelerators " << k;
       EXPECT_EQ(r.distance, ref.distance) << std::setprecision(17) << what << " accelerators " << k << " bvh "
@@ -391,13 +392,13 @@ TEST(MeshDistance, AcceleratedIntegerGridsTouchExactlyWhenTheyOverlap) {
   const int cases = crux::test::scaledCases(600, 150);
   for (int c = 0; c < cases; ++c) {
     const Mesh a = gridSoup(rng, 12), b = gridSoup(rng, 12);
-    const MeshDistanceAccel accA(a), accB(b);
+    const MeshQueryData accA(a, MeshQueryParts::Distance), accB(b, MeshQueryParts::Distance);
     Transform tb;
     tb.rotation = quatFromEulerDegrees(Real(90 * turn(rng)), 0, Real(90 * turn(rng)));
     tb.translation = Vec3(Real(g(rng) * 2), Real(g(rng) * 2), Real(g(rng) * 2));
     MeshDistanceOptions o, brute;
-    o.accelA = &accA;
-    o.accelB = &accB;
+    o.dataA = &accA;
+    o.dataB = &accB;
     brute.path = QueryPath::BruteForce;
     const MeshMeshDistanceResult r = distance(a, Transform::identity(), b, tb, o);
     EXPECT_EQ(r.distance == 0, overlaps(a, Transform::identity(), b, tb)) << "case " << c << " tb " << show(tb);
@@ -442,31 +443,31 @@ TEST(MeshDistance, InvalidOptionsThrowNamingTheField) {
     EXPECT_NE(std::string(e.what()).find("stopDistance"), std::string::npos) << e.what();
   }
   const auto other = test::bumpySphere(5, 6);
-  const MeshDistanceAccel foreign(*other);
+  const MeshQueryData foreign(*other, MeshQueryParts::Distance);
   o = {};
-  o.accelB = &foreign;
+  o.dataB = &foreign;
   try {
     distance(*a, Transform::identity(), *a, Transform::identity(), o);
     FAIL() << "no throw";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("accelB"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("dataB"), std::string::npos) << e.what();
   }
 }
 
-// A caller-held accelerator records the mesh's geometry id: after setVertices (same counts, new
+// Caller-held query data records the mesh's geometry id: after setVertices (same counts, new
 // positions) the query refuses it, naming the field and the mesh, instead of reading the old
 // corners (it answered 2, the distance of the old positions, where the truth is sqrt(85)). A copy
-// of the mesh shares the id, and an accelerator rebuilt after the move gives the brute-force answer.
-TEST(MeshDistance, AcceleratorBuiltBeforeSetVerticesIsRefusedNamingTheFieldAndMesh) {
+// of the mesh shares the id, and data refreshed after the move gives the brute-force answer.
+TEST(MeshDistance, QueryDataBuiltBeforeSetVerticesIsRefusedNamingTheFieldAndMeshUntilRefreshed) {
   const std::vector<Vec3> v{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
   const std::vector<TriangleIndices> t{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   Mesh a(v, t, "a");
   const Mesh b(v, t, "b");
-  const MeshDistanceAccel accA(a), accB(b);
+  const MeshQueryData accA(a, MeshQueryParts::Distance), accB(b, MeshQueryParts::Distance);
   Transform ta, tb;
   tb.translation = Vec3(3, 0, 0);
   MeshDistanceOptions o;
-  o.accelA = &accA, o.accelB = &accB;
+  o.dataA = &accA, o.dataB = &accB;
   EXPECT_EQ(distance(a, ta, b, tb, o).distance, 2);
   const Mesh copy = a;  // shares the geometry id: the accelerator serves it
   EXPECT_EQ(distance(copy, ta, b, tb, o).distance, 2);
@@ -479,22 +480,24 @@ TEST(MeshDistance, AcceleratorBuiltBeforeSetVerticesIsRefusedNamingTheFieldAndMe
   EXPECT_NEAR(truth, std::sqrt(Real(85)), 1e-4);  // a's corner (1,0,10) to b's (3,0,1)
   try {
     distance(a, ta, b, tb, o);
-    FAIL() << "a stale accelerator was accepted";
+    FAIL() << "stale query data was accepted";
   } catch (const InvalidInput& e) {
     const std::string m = e.what();
-    EXPECT_NE(m.find("accelA"), std::string::npos) << m;
+    EXPECT_NE(m.find("dataA"), std::string::npos) << m;
     EXPECT_NE(m.find("stale"), std::string::npos) << m;
     EXPECT_NE(m.find("\"a\""), std::string::npos) << m;
   }
   // as mesh b of the query (the other field)
   MeshDistanceOptions swapped;
-  swapped.accelB = &accA;
+  swapped.dataB = &accA;
   EXPECT_THROW(distance(b, tb, a, ta, swapped), InvalidInput);
-  // the old accelerator still serves the unmoved copy; a rebuilt one serves the moved mesh
+  // the old data still serves the unmoved copy; refreshed, it serves the moved mesh
   EXPECT_EQ(distance(copy, ta, b, tb, o).distance, 2);
-  const MeshDistanceAccel rebuilt(a);
-  o.accelA = &rebuilt;
+  MeshQueryData refreshed = accA;
+  EXPECT_TRUE(refreshed.refresh(a));
+  o.dataA = &refreshed;
   EXPECT_EQ(distance(a, ta, b, tb, o).distance, truth);
+  EXPECT_THROW(distance(copy, ta, b, tb, o), InvalidInput);
   EXPECT_EQ(distance(a, ta, b, tb).distance, truth);
 }
 
@@ -508,30 +511,40 @@ TEST(MeshDistance, IdenticalPosesGiveZeroAndFarMeshesNotFound) {
   EXPECT_FALSE(distance(*a, Transform::identity(), *a, far, o).found);
 }
 
-TEST(MeshDistance, ForeignAcceleratorWithTheSameNodeCountButOtherTrianglesIsRefused) {
-  // The node counts agree (one leaf each), only the triangle counts differ: the accelerator's
-  // corner copy would be read past its end. Refused naming the accelerator's field.
+TEST(MeshDistance, ForeignQueryDataWithTheSameNodeCountButOtherTrianglesIsRefused) {
+  // The node counts agree (one leaf each), only the triangle counts differ: the data's corner
+  // copy would be read past its end. Refused (another geometry) naming the data's field.
   const Mesh one({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}, {{0, 1, 2}}, "one");
   const Mesh quad({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}, {{0, 1, 2}, {0, 2, 3}}, "quad");
   ASSERT_EQ(one.bvh().nodes.size(), quad.bvh().nodes.size()) << "the case needs equal node counts";
   ASSERT_NE(one.triangleCount(), quad.triangleCount());
-  const MeshDistanceAccel accelQuad(quad), accelOne(one);
+  const MeshQueryData accelQuad(quad, MeshQueryParts::Distance), accelOne(one, MeshQueryParts::Distance);
   Transform apart;
   apart.translation = Vec3(0, 0, 2);
   for (const bool sideA : {true, false}) {
     MeshDistanceOptions o;
-    (sideA ? o.accelA : o.accelB) = &accelQuad;
+    (sideA ? o.dataA : o.dataB) = &accelQuad;
     try {
       distance(one, Transform::identity(), one, apart, o);
       FAIL() << "no throw, side " << (sideA ? "a" : "b");
     } catch (const InvalidInput& e) {
-      EXPECT_NE(std::string(e.what()).find(sideA ? "accelA" : "accelB"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("triangles"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(sideA ? "dataA" : "dataB"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("stale"), std::string::npos) << e.what();
     }
   }
-  // The matching accelerators are accepted and give the brute-force answer.
+  // Data without the distance part is refused too, naming the missing part.
+  const MeshQueryData contactsOnly(one, MeshQueryParts::Contacts);
+  MeshDistanceOptions partless;
+  partless.dataA = &contactsOnly;
+  try {
+    distance(one, Transform::identity(), one, apart, partless);
+    FAIL() << "no throw for data without the distance part";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("distance part"), std::string::npos) << e.what();
+  }
+  // The matching data are accepted and give the brute-force answer.
   MeshDistanceOptions own;
-  own.accelA = &accelOne, own.accelB = &accelQuad;
+  own.dataA = &accelOne, own.dataB = &accelQuad;
   MeshDistanceOptions brute;
   brute.path = QueryPath::BruteForce;
   EXPECT_EQ(distance(one, Transform::identity(), quad, apart, own).distance,

@@ -6,6 +6,7 @@
 // one is wrong. Skipped when FCL is not installed.
 
 #include <crux/mesh/mesh_distance.hpp>
+#include <crux/mesh/mesh_query_data.hpp>
 
 #include <gtest/gtest.h>
 
@@ -89,7 +90,7 @@ void compare(const std::string& name, const Mesh& m, const std::shared_ptr<Model
   // Mapping b into a's frame rounds in Real: the budget covers it, and 1e-6 relative (double).
   const double budget0 = 16 * double(std::numeric_limits<Real>::epsilon()) * scale;
   const Vec3 centre = box.center();
-  const MeshDistanceAccel accel(m);
+  const MeshQueryData data(m, MeshQueryParts::Distance);
   for (const double sep : {-0.8, -0.6, 0.001, 0.02, 0.1, 0.5}) {
     for (int k = 0; k < 3; ++k) {
       const Transform ta = test::randomPose(rng, 0.1 * size);
@@ -102,7 +103,7 @@ void compare(const std::string& name, const Mesh& m, const std::shared_ptr<Model
       tb.translation = ta.apply(centre) - tb.rotation * centre + (dir * (sep + 1.0) * size).cast<Real>();
       const auto t0 = std::chrono::steady_clock::now();
       MeshDistanceOptions options;
-      options.accelA = options.accelB = &accel;
+      options.dataA = options.dataB = &data;
       const MeshMeshDistanceResult c = distance(m, ta, m, tb, options);
       const auto t1 = std::chrono::steady_clock::now();
       fcl::DistanceRequestd request(true, true, 0.0, 0.0, 1e-12);

@@ -110,8 +110,8 @@ class Mesh {
 /// use loadMesh(path, LoadMeshOptions) with MeshImportIsolation::Subprocess (mesh_io.hpp).
 Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
 
-/// The one check of every caller-held object derived from a mesh's geometry (MeshDistanceAccel,
-/// MeshAdjacency): throws InvalidInput unless `builtFrom`, the Mesh::geometryId the object
+/// The one check of every caller-held object derived from a mesh's geometry (MeshQueryData,
+/// mesh_query_data.hpp): throws InvalidInput unless `builtFrom`, the Mesh::geometryId the object
 /// recorded when it was built, is `mesh`'s current one, i.e. the object was built from this mesh
 /// (or a copy) and no setVertices has moved its vertices since. `object` names the object in the
 /// message, which also names the mesh and says to rebuild it. No allocation unless it throws.

@@ -46,14 +46,14 @@
 /// edge region's edge or a corner's two edges hold the point, other edges take the per-edge
 /// test), the same rule with fewer closest-point tests (tested against a point capsule, which
 /// takes the per-edge path).
-/// The adjacency is a separate `MeshAdjacency` value built once per mesh (O(n log n)) and kept by
-/// the caller (a Mesh is immutable and shared: it holds no lazily built cache). Without it
-/// (nullptr) no correction is made. Meshes with unmerged duplicate vertices have no adjacency
-/// across those seams (loadMesh merges identical vertices). Queries walk the mesh's 4-wide BVH
-/// (a box tests four lanes at once). The adjacency records the mesh's geometryId: after
-/// Mesh::setVertices its activity bits, tolerances, boxes and corners describe the old positions,
-/// and a query given it throws InvalidInput (requireCurrentGeometry) instead of reading them;
-/// rebuild it then.
+/// The adjacency (`MeshAdjacency`, O(n log n)) is the contacts part of the caller-held
+/// `MeshQueryData` (mesh_query_data.hpp), built once per mesh and kept by the caller (a Mesh is
+/// immutable and shared: it holds no lazily built cache). Without it (nullptr) no correction is
+/// made. Meshes with unmerged duplicate vertices have no adjacency across those seams (loadMesh
+/// merges identical vertices). Queries walk the mesh's 4-wide BVH (a box tests four lanes at
+/// once). The data records the mesh's geometryId: after Mesh::setVertices its activity bits and
+/// tolerances describe the old positions, and a query given it throws InvalidInput
+/// (requireCurrentGeometry) instead of reading them; MeshQueryData::refresh rebuilds it then.
 ///
 /// Reduction: per-triangle points go to a fixed buffer (kMeshContactBuffer, deepest kept on
 /// overflow); points with the same mesh position (within kMeshContactMergeRelativeTolerance ×
@@ -76,9 +76,12 @@
 
 namespace crux {
 
+class MeshQueryData;
+
 /// Edge adjacency of a mesh: for triangle t and edge i (from corner i to corner (i+1) mod 3)
 /// the index of the one other triangle sharing that undirected edge, or kNone when the edge is a
-/// boundary (one triangle) or non-manifold (more than two). Built by sorting the edges.
+/// boundary (one triangle) or non-manifold (more than two). Built by sorting the edges. Callers
+/// hold it as the contacts part of a MeshQueryData, which keys it to the mesh's geometry.
 class MeshAdjacency {
  public:
   static constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
@@ -108,12 +111,8 @@ class MeshAdjacency {
   /// triangle (the same value a query would compute: a square root and nine maxima per
   /// triangle, 2-4 % of a box-vs-mesh contact query when recomputed, docs/narrowphase.md).
   Real featureToleranceBySlot(std::uint32_t k) const { return bySlot_[k].tolerance; }
+  /// Triangle count of the mesh it was built from.
   std::size_t triangleCount() const { return neighbors_.size() / 3; }
-  /// Vertex count of the mesh it was built from (a query checks it with the triangle count).
-  std::size_t vertexCount() const { return vertexCount_; }
-  /// Mesh::geometryId of the mesh (and vertex positions) it was built from; contacts() refuses
-  /// the adjacency for any other (requireCurrentGeometry).
-  std::uint64_t geometryId() const { return geometryId_; }
   /// Bytes held (neighbours, opposite vertices, activity, per-slot data).
   std::size_t memoryBytes() const;
 
@@ -128,8 +127,6 @@ class MeshAdjacency {
     std::uint8_t activity;
   };
   std::vector<SlotData> bySlot_;
-  std::size_t vertexCount_ = 0;
-  std::uint64_t geometryId_ = 0;
 };
 
 /// Cosine of the face normal cone: a contact normal within acos(kMeshFaceConeCos) of the
@@ -169,15 +166,15 @@ struct MeshContactManifold {
 
 /// Contact points between `mesh` (A, placed by meshPose) and `shape` (B, placed by shapePose)
 /// with separation <= margin (>= 0): BVH query of the shape's AABB in the mesh frame grown by
-/// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when
-/// `adjacency` (built from this mesh in its current geometry; any other, or one built before
-/// the mesh's last setVertices, throws InvalidInput) is given,
-/// reduction to 4. `path` BruteForce tests every
-/// triangle (reference). Returns out.count > 0. Throws InvalidInput for a margin that is negative
-/// or not finite (validateContactMargin) or a foreign adjacency; otherwise never throws and does
-/// not allocate (but for the exact margin decision's rare spill, see above).
+/// the margin, `contacts(triangle, ...)` per candidate, internal-edge correction when `data`
+/// (a MeshQueryData with the contacts part, current for this mesh: one built from another mesh,
+/// or before the mesh's last setVertices, throws InvalidInput) is given, reduction to 4. `path`
+/// BruteForce tests every triangle (reference). Returns out.count > 0. Throws InvalidInput for a
+/// margin that is negative or not finite (validateContactMargin) or data that is stale, foreign
+/// or without the contacts part; otherwise never throws and does not allocate (but for the exact
+/// margin decision's rare spill, see above).
 bool contacts(const Mesh& mesh, const Transform& meshPose, const ConvexShape& shape, const Transform& shapePose,
-              Real margin, MeshContactManifold& out, const MeshAdjacency* adjacency = nullptr,
+              Real margin, MeshContactManifold& out, const MeshQueryData* data = nullptr,
               QueryPath path = QueryPath::Bvh);
 
 /// Result of distance(mesh, ..., shape, ...).

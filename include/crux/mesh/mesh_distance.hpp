@@ -8,7 +8,7 @@
 /// followed down its nearest child pair (the larger subtree split into its four lanes), and the
 /// search ends when the smallest pending bound exceeds the best distance. Bounds: b's box as an
 /// OBB in a's frame (Euclidean box gaps);
-/// with MeshDistanceAccel on both sides instead the two oriented boxes (gap on the line of
+/// with the distance part of a MeshQueryData (MeshDistanceAccel) on both sides instead the two oriented boxes (gap on the line of
 /// centres, then, for pairs close against their size, Euclidean gaps in either box's frame); at
 /// leaves, the triangles' corners projected on the line of centres. Leaf pairs call
 /// closestPoints(Triangle, Triangle) (triangle_distance.hpp), so the answer is exactly the
@@ -21,10 +21,13 @@
 #include <crux/mesh/mesh.hpp>
 #include <crux/mesh/mesh_query.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
 namespace crux {
+
+class MeshQueryData;
 
 /// Oriented boxes around every subtree of a mesh's 4-wide BVH (the root and every lane,
 /// numbered as wideSubtree numbers them), fitted to the subtree's triangle corners (principal
@@ -32,10 +35,10 @@ namespace crux {
 /// query's bounds: a nearly flat surface patch gets a thin box, so pairs of patches are bounded
 /// almost as tightly as FCL's RSS volumes do, where the BVH's axis-aligned boxes are as thick as
 /// the patch is wide. Built once per mesh (O(n log n) time, 64 bytes per subtree and 36 per
-/// triangle in float builds) and kept by the caller next to the mesh, like MeshAdjacency: a Mesh
-/// holds no lazily built cache. It records the mesh's geometryId: after Mesh::setVertices (or
+/// triangle in float builds) as the distance part of the caller-held MeshQueryData
+/// (mesh_query_data.hpp), which records the mesh's geometryId: after Mesh::setVertices (or
 /// given with another mesh) the distance query refuses it with InvalidInput
-/// (requireCurrentGeometry), never reading the old corners; rebuild it then.
+/// (requireCurrentGeometry), never reading the old corners; MeshQueryData::refresh rebuilds it.
 class MeshDistanceAccel {
  public:
   /// One subtree's box: centre, unit axes (columns), half extents along them; `child` is the
@@ -63,14 +66,13 @@ class MeshDistanceAccel {
     std::uint32_t first = 0, count = 0;
   };
   const std::vector<Range>& leafRanges() const { return ranges_; }
-  /// Mesh::geometryId of the mesh (and vertex positions) it was built from.
-  std::uint64_t geometryId() const { return geometryId_; }
+  /// Bytes held (boxes, corners, leaf ranges).
+  std::size_t memoryBytes() const;
 
  private:
   std::vector<Node> nodes_;
   std::vector<Vec3> corners_;
   std::vector<Range> ranges_;
-  std::uint64_t geometryId_ = 0;
 };
 
 namespace mesh_detail {
@@ -112,11 +114,12 @@ struct MeshDistanceOptions {
   /// minimum, except that a pair at distance exactly 0 ends the search.
   Real stopDistance = 0;
   QueryPath path = QueryPath::Bvh;  ///< BruteForce: every triangle pair (the reference)
-  /// Optional accelerators built from mesh a / mesh b in their current geometry (a foreign one,
-  /// or one built before the mesh's last setVertices, throws InvalidInput naming the field). Same
-  /// answer, fewer node pairs visited near contact.
-  const MeshDistanceAccel* accelA = nullptr;
-  const MeshDistanceAccel* accelB = nullptr;
+  /// Optional per-mesh data (mesh_query_data.hpp) of mesh a / mesh b with the distance part,
+  /// current for that mesh (one built from another mesh, or before the mesh's last setVertices,
+  /// throws InvalidInput naming the field). Same answer, fewer node pairs visited near contact
+  /// (fewest with both).
+  const MeshQueryData* dataA = nullptr;
+  const MeshQueryData* dataB = nullptr;
 };
 
 /// Result of mesh–mesh distance. Points in world space.

@@ -1,0 +1,146 @@
+// Tests of src/mesh/mesh_query_data.cpp: the caller-held per-mesh data of contact and distance
+// queries: the parts it builds, its key to the mesh's geometry (stale data refused by both kinds
+// of query, refresh() rebuilding it), and const sharing between threads.
+
+#include <crux/mesh/mesh_query_data.hpp>
+
+#include <crux/error.hpp>
+
+#include <gtest/gtest.h>
+
+#include "support/invalid_input.hpp"
+
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace crux {
+namespace {
+
+/// n × n unit cells on z = 0.1·((i·j) mod 3), two triangles per cell: ridges and valleys.
+Mesh wavyGrid(int n, const char* name) {
+  std::vector<Vec3> v;
+  std::vector<TriangleIndices> t;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) v.emplace_back(Real(i), Real(j), Real(0.1) * Real((i * j) % 3));
+  auto id = [&](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      t.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      t.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return Mesh(std::move(v), std::move(t), name);
+}
+
+using test_support::invalidInputMessage;
+
+TEST(MeshQueryData, BuildsOnlyThePartsAskedForAndCountsTheirBytes) {
+  const Mesh grid = wavyGrid(8, "grid");
+  const MeshQueryData all(grid), contactsOnly(grid, MeshQueryParts::Contacts),
+      distanceOnly(grid, MeshQueryParts::Distance);
+  EXPECT_EQ(all.parts(), MeshQueryParts::All);
+  EXPECT_EQ(all.geometryId(), grid.geometryId());
+  EXPECT_TRUE(all.isCurrentFor(grid));
+  EXPECT_EQ(all.memoryBytes(), MeshAdjacency(grid).memoryBytes() + MeshDistanceAccel(grid).memoryBytes());
+  EXPECT_EQ(contactsOnly.memoryBytes(), MeshAdjacency(grid).memoryBytes());
+  EXPECT_EQ(distanceOnly.memoryBytes(), MeshDistanceAccel(grid).memoryBytes());
+  EXPECT_EQ(all.adjacencyFor(grid).triangleCount(), grid.triangleCount());
+  EXPECT_EQ(all.distanceAccelFor(grid).corners().size(), 3 * grid.triangleCount());
+  EXPECT_EQ(invalidInputMessage([&] { contactsOnly.distanceAccelFor(grid, "field"); }).rfind("field: ", 0), 0u);
+  EXPECT_NE(invalidInputMessage([&] { distanceOnly.adjacencyFor(grid); }).find("contacts part"), std::string::npos);
+  // Empty data holds nothing, matches no mesh and cannot be refreshed into anything.
+  MeshQueryData empty;
+  EXPECT_FALSE(empty.isCurrentFor(grid));
+  EXPECT_FALSE(empty.refresh(grid));
+  EXPECT_EQ(empty.memoryBytes(), 0u);
+  EXPECT_THROW(empty.adjacencyFor(grid), InvalidInput);
+}
+
+// The query data of a mesh whose vertices moved (Mesh::setVertices) describes the old surface:
+// a contact query and a mesh–mesh distance query given it both throw InvalidInput saying it is
+// stale, never answering from the old edge flags or corners. refresh() rebuilds it, after which
+// both queries answer exactly as with data built from scratch (and as the brute-force paths).
+TEST(MeshQueryData, StaleDataIsRefusedByContactsAndDistanceUntilRefreshed) {
+  Mesh grid = wavyGrid(8, "moving grid");
+  const Mesh other = wavyGrid(4, "other grid");
+  MeshQueryData data(grid);
+  const MeshQueryData otherData(other);
+  const Sphere sphere{Vec3::Zero(), Real(0.4)};
+  const Transform above{Quat::Identity(), Vec3(Real(3.3), Real(4.6), Real(0.45))};
+  Transform otherPose;
+  otherPose.translation = Vec3(Real(1.5), Real(1.5), Real(0.5));
+  MeshDistanceOptions withData;
+  withData.dataA = &data;
+  withData.dataB = &otherData;
+  MeshContactManifold m;
+  ASSERT_TRUE(contacts(grid, Transform::identity(), sphere, above, Real(0.05), m, &data));
+
+  std::vector<Vec3> moved = grid.vertices();
+  for (Vec3& p : moved) p = Vec3(p.x(), p.y(), Real(0.2) * p.z() + Real(0.1));
+  grid.setVertices(moved);
+  EXPECT_FALSE(data.isCurrentFor(grid));
+  const std::string contactError =
+      invalidInputMessage([&] { contacts(grid, Transform::identity(), sphere, above, Real(0.05), m, &data); });
+  EXPECT_NE(contactError.find("stale"), std::string::npos) << contactError;
+  EXPECT_NE(contactError.find("moving grid"), std::string::npos) << contactError;
+  const std::string distanceError =
+      invalidInputMessage([&] { distance(grid, Transform::identity(), other, otherPose, withData); });
+  EXPECT_NE(distanceError.find("options.dataA"), std::string::npos) << distanceError;
+  EXPECT_NE(distanceError.find("stale"), std::string::npos) << distanceError;
+
+  ASSERT_TRUE(data.refresh(grid));
+  EXPECT_TRUE(data.isCurrentFor(grid));
+  EXPECT_EQ(data.parts(), MeshQueryParts::All);
+  const MeshQueryData fresh(grid);
+  MeshContactManifold a, b, brute;
+  const bool hit = contacts(grid, Transform::identity(), sphere, above, Real(0.05), a, &data);
+  contacts(grid, Transform::identity(), sphere, above, Real(0.05), b, &fresh);
+  contacts(grid, Transform::identity(), sphere, above, Real(0.05), brute, &fresh, QueryPath::BruteForce);
+  ASSERT_TRUE(hit);
+  ASSERT_EQ(a.count, b.count);
+  for (int i = 0; i < a.count; ++i) {
+    EXPECT_EQ(a.points[i].pointA, b.points[i].pointA);
+    EXPECT_EQ(a.points[i].normal, b.points[i].normal);
+    EXPECT_EQ(a.points[i].separation, b.points[i].separation);
+    EXPECT_EQ(a.points[i].triangle, b.points[i].triangle);
+  }
+  EXPECT_EQ(a.points[0].separation, brute.points[0].separation);
+  const MeshMeshDistanceResult d = distance(grid, Transform::identity(), other, otherPose, withData);
+  MeshDistanceOptions bruteOptions;
+  bruteOptions.path = QueryPath::BruteForce;
+  const MeshMeshDistanceResult ref = distance(grid, Transform::identity(), other, otherPose, bruteOptions);
+  ASSERT_TRUE(d.found);
+  EXPECT_EQ(d.distance, ref.distance);
+}
+
+// A const MeshQueryData is read-only: threads sharing one get the answers of a serial run (run
+// under ThreadSanitizer by scripts/test's TSan stage like every test).
+TEST(MeshQueryData, ConstDataSharedByThreadsGivesTheSerialAnswers) {
+  const Mesh grid = wavyGrid(8, "grid");
+  const MeshQueryData data(grid);
+  const Capsule capsule{Vec3(Real(-0.3), 0, 0), Vec3(Real(0.3), 0, 0), Real(0.25)};
+  auto pose = [](int k) { return Transform{Quat::Identity(), Vec3(Real(0.5 + 0.07 * k), Real(1 + 0.05 * k), Real(0.3))}; };
+  constexpr int kPoses = 64;
+  std::vector<Real> serial(kPoses), shared[4];
+  for (int k = 0; k < kPoses; ++k) {
+    MeshContactManifold m;
+    contacts(grid, Transform::identity(), capsule, pose(k), Real(0.05), m, &data);
+    serial[k] = m.count > 0 ? m.points[0].separation : kNoLimit;
+  }
+  std::vector<std::thread> threads;
+  for (auto& out : shared) {
+    out.resize(kPoses);
+    threads.emplace_back([&] {
+      for (int k = 0; k < kPoses; ++k) {
+        MeshContactManifold m;
+        contacts(grid, Transform::identity(), capsule, pose(k), Real(0.05), m, &data);
+        out[k] = m.count > 0 ? m.points[0].separation : kNoLimit;
+      }
+    });
+  }
+  for (std::thread& t : threads) t.join();
+  for (const auto& out : shared) EXPECT_EQ(out, serial);
+}
+
+}  // namespace
+}  // namespace crux
