@@ -436,24 +436,28 @@ FT squaredGap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
 namespace {
 using namespace detail;
 
+/// The one copy of a rounded distance's point pair, normal and relation into an ExactDistance
+/// or ExactContact (which differ in the rest: signed distance vs depth, triangle ids).
+template <class Out>
+Out withPoints(const RoundedDistance& r) {
+  Out out;
+  out.pointA = r.pointA;
+  out.pointB = r.pointB;
+  out.normal = r.normal;
+  out.relation = r.relation;
+  return out;
+}
+
 ExactDistance toDistance(const RoundedDistance& r) {
-  ExactDistance d;
+  ExactDistance d = withPoints<ExactDistance>(r);
   d.distance = r.distance;
-  d.pointA = r.pointA;
-  d.pointB = r.pointB;
-  d.normal = r.normal;
-  d.relation = r.relation;
   return d;
 }
 
 ExactContact toContact(const RoundedDistance& r, std::uint32_t triangle) {
-  ExactContact c;
-  c.pointA = r.pointA;
-  c.pointB = r.pointB;
-  c.normal = r.normal;
+  ExactContact c = withPoints<ExactContact>(r);
   c.depth = -r.distance;
   c.triangle = triangle;
-  c.relation = r.relation;
   return c;
 }
 
