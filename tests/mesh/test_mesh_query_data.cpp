@@ -1,6 +1,6 @@
 // Tests of src/mesh/mesh_query_data.cpp: the caller-held per-mesh data of contact and distance
-// queries: the parts it builds, its key to the mesh's geometry (stale data refused by both kinds
-// of query, refresh() rebuilding it), and const sharing between threads.
+// queries: the parts it builds and its key to the mesh's geometry (stale data refused by both
+// kinds of query, refresh() rebuilding it). Threads sharing one: tests/scene/test_concurrent_queries.cpp.
 
 #include <crux/mesh/mesh_query_data.hpp>
 
@@ -11,7 +11,6 @@
 #include "support/invalid_input.hpp"
 
 #include <string>
-#include <thread>
 #include <vector>
 
 namespace crux {
@@ -111,35 +110,6 @@ TEST(MeshQueryData, StaleDataIsRefusedByContactsAndDistanceUntilRefreshed) {
   const MeshMeshDistanceResult ref = distance(grid, Transform::identity(), other, otherPose, bruteOptions);
   ASSERT_TRUE(d.found);
   EXPECT_EQ(d.distance, ref.distance);
-}
-
-// A const MeshQueryData is read-only: threads sharing one get the answers of a serial run (run
-// under ThreadSanitizer by scripts/test's TSan stage like every test).
-TEST(MeshQueryData, ConstDataSharedByThreadsGivesTheSerialAnswers) {
-  const Mesh grid = wavyGrid(8, "grid");
-  const MeshQueryData data(grid);
-  const Capsule capsule{Vec3(Real(-0.3), 0, 0), Vec3(Real(0.3), 0, 0), Real(0.25)};
-  auto pose = [](int k) { return Transform{Quat::Identity(), Vec3(Real(0.5 + 0.07 * k), Real(1 + 0.05 * k), Real(0.3))}; };
-  constexpr int kPoses = 64;
-  std::vector<Real> serial(kPoses), shared[4];
-  for (int k = 0; k < kPoses; ++k) {
-    MeshContactManifold m;
-    contacts(grid, Transform::identity(), capsule, pose(k), Real(0.05), m, &data);
-    serial[k] = m.count > 0 ? m.points[0].separation : kNoLimit;
-  }
-  std::vector<std::thread> threads;
-  for (auto& out : shared) {
-    out.resize(kPoses);
-    threads.emplace_back([&] {
-      for (int k = 0; k < kPoses; ++k) {
-        MeshContactManifold m;
-        contacts(grid, Transform::identity(), capsule, pose(k), Real(0.05), m, &data);
-        out[k] = m.count > 0 ? m.points[0].separation : kNoLimit;
-      }
-    });
-  }
-  for (std::thread& t : threads) t.join();
-  for (const auto& out : shared) EXPECT_EQ(out, serial);
 }
 
 }  // namespace

@@ -1,11 +1,13 @@
 // Concurrent const queries (run it under ThreadSanitizer: -DCRUX_TSAN=ON, docs/threads.md):
-// 8 std::threads hammer a Mesh (rays closest/any, sphere/box/oriented-box overlaps), placed
+// 8 std::threads hammer a Mesh (rays closest/any, sphere/box/oriented-box overlaps; contacts and
+// mesh–mesh distance sharing one MeshQueryData), placed
 // meshes, a ModelHierarchy right after setLocal (no preparation call: world transforms must
 // already be current, reading must not write) and a Scene with each broad phase (rays, region
 // queries) all at once, each thread in its own order, and every answer must equal the serial
 // one computed beforehand on a copy. Then the batch functions run alongside the threads (on TBB
 // workers, or serially under TSan: see kBatchThreads).
 
+#include <crux/mesh/mesh_query_data.hpp>
 #include <crux/model/hierarchy.hpp>
 #include <crux/scene/dynamic_aabb_tree.hpp>
 #include <crux/scene/scene_batch.hpp>
@@ -109,6 +111,46 @@ TEST(ConcurrentQueries, MeshAndPlacedMeshQueries) {
         if (std::uint8_t(overlaps(placed, obbs[i])) != obbHit[i]) ++failures[t];
       });
     }
+  });
+  for (int t = 0; t < kThreads; ++t) EXPECT_EQ(failures[t], 0) << "thread " << t;
+}
+
+// A const MeshQueryData is read-only (mesh_query_data.hpp): threads sharing one for contacts
+// (internal-edge correction) and mesh–mesh distance (oriented boxes) get the serial answers.
+TEST(ConcurrentQueries, ContactsAndMeshDistanceShareConstQueryData) {
+  std::mt19937_64 rng(0xDA7A);
+  const std::shared_ptr<const Mesh> mesh = bumpySphere(20, 40);
+  const MeshQueryData data(*mesh);
+  std::vector<Transform> poses;
+  for (int i = 0; i < 48; ++i) poses.push_back(randomPose(rng, 1.2));
+  const Capsule capsule{Vec3(Real(-0.1), 0, 0), Vec3(Real(0.1), 0, 0), Real(0.08)};
+  MeshDistanceOptions withData;
+  withData.dataA = withData.dataB = &data;
+  std::vector<Real> contactDepth(poses.size()), gap(poses.size());
+  auto depthAt = [&](std::size_t i) {
+    MeshContactManifold m;
+    contacts(*mesh, Transform::identity(), capsule, poses[i], Real(0.01), m, &data);
+    return m.count > 0 ? m.points[0].separation : kNoLimit;
+  };
+  auto gapAt = [&](std::size_t i) {  // the copy 2.5x farther out: some apart, some crossing
+    const Transform copy{poses[i].rotation, poses[i].translation * Real(2.5)};
+    return distance(*mesh, Transform::identity(), *mesh, copy, withData).distance;
+  };
+  std::size_t touching = 0, apart = 0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    contactDepth[i] = depthAt(i), gap[i] = gapAt(i);
+    touching += contactDepth[i] != kNoLimit;
+    apart += gap[i] > 0;
+  }
+  std::printf("%zu of %zu capsule poses touch, %zu mesh copies apart\n", touching, poses.size(), apart);
+  ASSERT_GT(touching, 0u);
+  ASSERT_GT(apart, 0u);
+  std::vector<int> failures(kThreads, 0);
+  onThreads([&](int t) {
+    rotated(poses.size(), t, [&](std::size_t i) {
+      if (depthAt(i) != contactDepth[i]) ++failures[t];
+      if (gapAt(i) != gap[i]) ++failures[t];
+    });
   });
   for (int t = 0; t < kThreads; ++t) EXPECT_EQ(failures[t], 0) << "thread " << t;
 }
