@@ -804,8 +804,10 @@ MeshMeshDistanceResult distance(const Mesh& a, const Transform& ta, const Mesh& 
                                   tb))
     return {};
   // The one check (MeshQueryData: part held, geometry current) before anything is read.
-  const MeshDistanceAccel* accelA = options.dataA ? &options.dataA->distanceAccelFor(a, "mesh distance options.dataA") : nullptr;
-  const MeshDistanceAccel* accelB = options.dataB ? &options.dataB->distanceAccelFor(b, "mesh distance options.dataB") : nullptr;
+  const MeshDistanceAccel* accelA =
+      options.dataA ? &options.dataA->distanceAccelFor(a, "mesh distance options.dataA") : nullptr;
+  const MeshDistanceAccel* accelB =
+      options.dataB ? &options.dataB->distanceAccelFor(b, "mesh distance options.dataB") : nullptr;
   const Relative rel(ta, tb);
   Best best{options.maxDistance, options.stopDistance, {}, false};
   if (options.path == QueryPath::BruteForce) bruteForce(a, b, rel, best);

@@ -7,8 +7,8 @@
 /// subtree pairs wait in a fixed-capacity min-heap ordered by a lower bound, each popped pair is
 /// followed down its nearest child pair (the larger subtree split into its four lanes), and the
 /// search ends when the smallest pending bound exceeds the best distance. Bounds: b's box as an
-/// OBB in a's frame (Euclidean box gaps);
-/// with the distance part of a MeshQueryData (MeshDistanceAccel) on both sides instead the two oriented boxes (gap on the line of
+/// OBB in a's frame (Euclidean box gaps); with the distance part of a MeshQueryData
+/// (MeshDistanceAccel) on both sides instead the two oriented boxes (gap on the line of
 /// centres, then, for pairs close against their size, Euclidean gaps in either box's frame); at
 /// leaves, the triangles' corners projected on the line of centres. Leaf pairs call
 /// closestPoints(Triangle, Triangle) (triangle_distance.hpp), so the answer is exactly the

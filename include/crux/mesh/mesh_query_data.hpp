@@ -66,7 +66,9 @@ class MeshQueryData {
   /// Mesh::geometryId of the mesh (and vertex positions) the parts were built from.
   std::uint64_t geometryId() const { return geometryId_; }
   /// Whether the parts describe `mesh`'s current geometry (queries accept the data for it).
-  bool isCurrentFor(const Mesh& mesh) const { return parts_ != MeshQueryParts::None && geometryId_ == mesh.geometryId(); }
+  bool isCurrentFor(const Mesh& mesh) const {
+    return parts_ != MeshQueryParts::None && geometryId_ == mesh.geometryId();
+  }
   /// The parts held.
   MeshQueryParts parts() const { return parts_; }
 
