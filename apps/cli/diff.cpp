@@ -1141,6 +1141,48 @@ bool fclGjkStoppedOnEqualNorm(const DiffCase& c, const J& query, const J& got, d
   return false;
 }
 
+/// FCL's `distance` of a mesh operand whose wrong answer comes from *exact's* nearest triangle:
+/// FCL measures a BVHModel against a shape triangle by triangle (shapeTriangleDistance, libccd's
+/// GJK) and keeps the least; when libccd's equal-norm stop (fclGjkStoppedOnEqualNorm) leaves the
+/// triangle that should win at a larger distance, another triangle, measured right, wins instead
+/// and FCL names that one, so the rule on FCL's named triangle finds nothing (seed 98765 cases
+/// 552898 and 828054: a box mesh whose nearest edge's two ends are as far from the hull's corner,
+/// GJK stops on the first end; case 950260: a soup triangle, 6.40 for 2). Shown on the case by
+/// asking FCL that triangle alone (`probePeer`, the same transform; the fcl world measures it as a
+/// one-triangle BVHModel by the same GJK): its answer is above exact's and not below FCL's mesh
+/// answer, and it stopped on an equal-norm support point; and FCL's answer is its own answer on
+/// the triangle it names (asked alone the same way), the least it found.
+bool fclMeshTriangleStoppedOnEqualNorm(const DiffCase& c, const J& query, const J& got, const J& exact, double tau,
+                                       const std::function<Answer(const DiffCase&)>& probePeer) {
+  if (!probePeer || !got.contains("distance")) return false;
+  // FCL's distance of the triangle `names[key]` of the mesh operand `side` alone; null if unknown
+  const auto alone = [&](const char* side, const J& names, const std::string& key, DiffCase* one, J* q) -> Answer {
+    const J triangle = gjkOperand(c, query[side], names, key.c_str());
+    if (triangle.is_null()) return nullptr;
+    *one = c;
+    *q = query;
+    (*q)[side] = triangle;
+    one->query = q->dump();
+    Answer a = probePeer(*one);
+    return hasError(a) || !a.contains("distance") ? Answer(nullptr) : a;
+  };
+  for (const char* side : {"a", "b"}) {
+    const std::string key = std::string("triangle_") + side;
+    if (!query[side].contains("mesh") || !exact.contains(key) || !got.contains(key) || exact[key] == got[key]) continue;
+    DiffCase one, named;
+    J q, qNamed;
+    const Answer atExact = alone(side, exact, key, &one, &q);
+    if (atExact.is_null()) continue;
+    const double d = atExact["distance"].get<double>();
+    if (!(d > narrowNumber(c.op, exact) + tau && d >= narrowNumber(c.op, got) - tau &&
+          fclGjkStoppedOnEqualNorm(one, q, atExact, tau)))
+      continue;
+    const Answer atNamed = alone(side, got, key, &named, &qNamed);
+    if (!atNamed.is_null() && std::fabs(atNamed["distance"].get<double>() - narrowNumber(c.op, got)) <= tau) return true;
+  }
+  return false;
+}
+
 /// FCL's `distance` of penetrating convex shapes answered as a touching contact by libccd's EPA
 /// on a two-point GJK simplex: GJK's first support points, along libccd's first direction
 /// (1, 0, 0) and then along −w0, are w0 and w1 = −λ·w0 (λ > 0, within `tau`), a segment through
@@ -2054,7 +2096,9 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     // separated polytopes whose GJK stopped on a support point as far from the origin as its
     // current closest point (libccd's equal-norm stop)
     if (fcl && c.op == "distance" && narrowNumber(c.op, exact) > tau &&
-        narrowNumber(c.op, got) > narrowNumber(c.op, exact) && fclGjkStoppedOnEqualNorm(c, query, got, numTol))
+        narrowNumber(c.op, got) > narrowNumber(c.op, exact) &&
+        (fclGjkStoppedOnEqualNorm(c, query, got, numTol) ||
+         fclMeshTriangleStoppedOnEqualNorm(c, query, got, exact, numTol, probePeer)))
       return peer("gjk-equal-norm-stop");
     // penetrating polytopes whose GJK ended on a segment through the origin: libccd's EPA takes
     // it for a touching contact (a support point equal to a segment end) and answers depth 0

@@ -723,6 +723,44 @@ TEST(DiffClassify, FclGjkEqualNormStop) {
   EXPECT_EQ(classify(runner, mesh, "fcl", got).cause, "unexplained");
 }
 
+TEST(DiffClassify, FclGjkEqualNormStopOnExactsNearestTriangle) {
+  // seed 98765 case 552898: a closed box mesh (turned a half about z) and a hull whose corner
+  // (0, 3, -1) is nearest the box edge x = -3, y = -3, z in [-2, 0], at its midpoint. Both ends
+  // of the edge are as far from that corner, so libccd's GJK on exact's triangle (4) stops on an
+  // end: 6.78 for 6.71; triangle 0, whose distance 6.78 is right, wins and FCL names it. The
+  // rule on FCL's named triangle finds nothing; asking FCL triangle 4 alone shows the stop
+  DiffRunner runner;
+  DiffCase c = primitive(
+      R"({"op":"distance","a":{"mesh":"m","transform":{"rotation":[0,0,0,1],"translation":[-2,-1,-2]}},"b":{"hull":{"points":[[0,3,-1],[1,5,0],[4,6,2],[3,6,1],[3,5,0]]}}})",
+      true);
+  c.setup = {
+      R"({"op":"mesh","name":"m","vertices":[[1,2,0],[2,2,0],[1,5,0],[2,5,0],[1,2,2],[2,2,2],[1,5,2],[2,5,2]],"triangles":[[0,2,1],[1,2,3],[4,5,6],[5,7,6],[0,1,4],[1,5,4],[2,6,3],[3,6,7],[0,4,2],[2,4,6],[1,3,5],[3,7,5]]})"};
+  const auto answer = [](const J& pa, const J& pb, int triangle) {
+    double d2 = 0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double d = pa[i].get<double>() - pb[i].get<double>();
+      d2 += d * d;
+    }
+    return J{{"op", "distance"}, {"distance", std::sqrt(d2)}, {"point_a", pa}, {"point_b", pb}, {"triangle_a", triangle}};
+  };
+  // FCL's answer: the corner (-3, -3, -2) of triangle 0
+  auto k = classify(runner, c, "fcl", answer(J::array({-3.0, -3.0, -2.0}), J::array({0.0, 3.0, -1.0}), 0));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-equal-norm-stop");
+  // a larger wrong distance, 7.28 on triangle 1: FCL measures triangle 4 at 6.78, below it, so
+  // the stop there does not explain it
+  k = classify(runner, c, "fcl", answer(J::array({-4.0, -3.0, -2.0}), J::array({0.0, 3.0, -1.0}), 1));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "unexplained");
+  // the hull moved by (0, 0, -0.5): its corner (0, 3, -1.5) is no longer equidistant from the
+  // edge's ends and FCL measures triangle 4 right; the same kind of wrong answer (the corner
+  // (-3, -3, -2) of triangle 0, 6.73 for 6.71) gets no cause
+  c.query = R"({"op":"distance","a":{"mesh":"m","transform":{"rotation":[0,0,0,1],"translation":[-2,-1,-2]}},"b":{"hull":{"points":[[0,3,-1],[1,5,0],[4,6,2],[3,6,1],[3,5,0]]},"transform":{"rotation":[1,0,0,0],"translation":[0,0,-0.5]}}})";
+  k = classify(runner, c, "fcl", answer(J::array({-3.0, -3.0, -2.0}), J::array({0.0, 3.0, -1.5}), 0));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "unexplained");
+}
+
 TEST(DiffClassify, FclEpaTouchingOnAGjkSegmentThroughTheOrigin) {
   // seed 98765 case 347347 (huge family): boxes 1e6 deep. libccd's GJK, from (1, 0, 0), finds
   // w0 = (3e6, -2e6, -1e6) and then, along -w0, w1 = -w0: a segment through the origin, an
