@@ -419,11 +419,25 @@ std::optional<long double> crossingBarycentric(const J& query, const std::array<
 
 /// A ray or segment that crosses the plane of a (non-degenerate) triangle outside it, but by at
 /// most Bullet's edge tolerance: every barycentric coordinate of the crossing point >= −1e-4
-/// (crossingBarycentric).
+/// (crossingBarycentric). Called where exact misses: a crossing that long double puts on an edge
+/// or a corner (its least barycentric within 1e-12 of 0) lies outside by less than long double
+/// resolves, when the segment's ends lie strictly on either side of the plane (orient3dExact; so
+/// exact's miss is the crossing's, not an end's) — seed 98765 case 757699: a segment whose start
+/// is 1.4e-45 (the least float) off z = 0, crossing 7e-46 beside a corner.
 bool withinFattenedEdges(const J& query, const std::vector<std::array<V, 3>>& tris) {
+  const auto strictlyAcross = [&](const std::array<V, 3>& t) {
+    if (!query.contains("segment")) return false;
+    const auto real = [](const V& v) {
+      return WVec3(Wide(roundedToReal(v[0])), Wide(roundedToReal(v[1])), Wide(roundedToReal(v[2])));
+    };
+    const int sa = predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(readV(query["segment"]["start"])));
+    const int sb = predicates::orient3dExact(real(t[0]), real(t[1]), real(t[2]), real(readV(query["segment"]["end"])));
+    return sa * sb < 0;
+  };
   for (const auto& t : tris) {
     const auto lowest = crossingBarycentric(query, t);
-    if (lowest && *lowest < 0 && *lowest >= -kBulletRayEdgeTolerance) return true;
+    if (!lowest || *lowest < -kBulletRayEdgeTolerance) continue;
+    if (*lowest < 0 || (*lowest <= 1e-12L && strictlyAcross(t))) return true;
   }
   return false;
 }

@@ -231,6 +231,30 @@ TEST(DiffClassify, BulletFattenedEdges) {
   EXPECT_NE(k.cause, "fattened-edges");
 }
 
+TEST(DiffClassify, BulletFattenedEdgesBesideACornerByLessThanLongDouble) {
+  // seed 98765 case 757699 (near_degenerate family): the segment from (-1, -3, 1.4e-45) (the
+  // least float) to (1, -33, 36) crosses the plane x = 0 at (0, -18, 18 + 7e-46), just beside
+  // the corner (0, -18, 18): exact misses. Long double puts the crossing on the corner
+  // (barycentric 0), so the rule's "outside" test alone found nothing; the ends lie strictly on
+  // either side of the plane, so exact's miss is the crossing's, well within Bullet's 1e-4
+  DiffRunner runner;
+  const auto c = primitive(
+      R"({"op":"segment_triangle","triangle":[[0,-18,18],[0,0,1.5],[0,2,0]],"segment":{"start":[-1,-3,1.401298464324817e-45],"end":[1,-33,36]}})",
+      false);
+  auto k = classify(runner, c, "bullet", answer("segment_triangle", true));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "fattened-edges") << describe(k);
+  // a segment from (-2, 12, -36) ending 1.4e-45 short of the plane at the corner: long double
+  // puts its crossing on the corner too, but both ends lie on one side (Bullet's float dist_a
+  // and dist_b have one sign: it misses too); a hit there is not put on the fattened edges
+  const auto short_ = primitive(
+      R"({"op":"segment_triangle","triangle":[[0,-18,18],[0,0,1.5],[0,2,0]],"segment":{"start":[-2,12,-36],"end":[-1.401298464324817e-45,-18,18]}})",
+      false);
+  k = classify(runner, short_, "bullet", answer("segment_triangle", true));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_NE(k.cause, "fattened-edges") << describe(k);
+}
+
 TEST(DiffClassify, BulletFloatPlaneSide) {
   // found by crux diff (seed 9001, case 3523, transformed family): the segment ends 1.95e-7 short
   // of the triangle's plane (float build; 2.6e-8 in double), aimed at an edge's midpoint; Bullet's
