@@ -1298,7 +1298,7 @@ bool nearestOnASimplex(const std::vector<Vec3d>& w, const Vec3d& v, double tau) 
 /// beyond `tau`: cores that cross go to EPA), by more than `tau`: a converged GJK (REL_ERROR2 =
 /// 1e-6 on |v|²) cannot report that.
 bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, const J& exact, double s, double tau,
-                           const std::function<Answer(const DiffCase&)>& probePeer) {
+                           const std::function<Answer(const DiffCase&)>& probePeer, bool crossingPolytopes = false) {
   if (!c.setup.empty() || !query.contains("a") || !query.contains("b") || !narrowVerdict(c.op, exact)) return false;
   double ra = 0, rb = 0;
   const std::vector<Vec3d> pa = corePoints(query["a"], &ra), pb = corePoints(query["b"], &rb);
@@ -1316,12 +1316,73 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
   const J* deepest = deepestContact(answer);
   const Vec3d n = toVec((*deepest)["normal"]);
   const double r = ra + rb, length = r - (*deepest)["depth"].get<double>();
-  const double trueLength = r - narrowNumber(c.op, exact);
-  if (!(n.norm() > 0) || !(trueLength > tau) || !(length >= 1e-3) || !(length > trueLength + tau)) return false;
+  // crossingPolytopes: radius-0 cores exact finds crossing (true distance 0); a converged GJK
+  // would have gone on to EPA
+  const bool crossing = crossingPolytopes && r == 0 && narrowNumber(c.op, exact) > tau;
+  const double trueLength = crossing ? 0.0 : r - narrowNumber(c.op, exact);
+  if (!(n.norm() > 0) || !(crossing || trueLength > tau) || !(length >= 1e-3) || !(length > trueLength + tau))
+    return false;
   const std::vector<Vec3d> w = differences(pa, pb);
   for (const double sign : {1.0, -1.0})
     if (nearestOnASimplex(w, sign * length * n.normalized(), tau)) return true;
   return false;
+}
+
+/// Bullet's miss of a `mesh_triangle` (no transform) that exact hits: btBvhTriangleMeshShape
+/// against a btTriangleShape runs btConvexConcaveCollisionAlgorithm, i.e. btGjkPairDetector on
+/// the query triangle and each mesh triangle its box overlaps. The mesh triangles the query
+/// touches (those whose box overlaps the query's and which exact's `triangle_triangle` finds
+/// touching the query, at most 8) each cross it (exact's `contacts` depth beyond `tau`), and
+/// Bullet asked the pair as `contacts` reports it apart on a GJK stopped early
+/// (bulletGjkStoppedEarly with crossing polytopes: its gap, with `margin` 4s, is ≥ 1e-3 and the
+/// point nearest the origin of 1–3 points of A − B). Seed 98765 case 711448: a query triangle
+/// crossing bunny00's triangle 57672 (about 0.01 across) 0.0033 deep, Bullet 0.0036 apart;
+/// btGjkPairDetector on the pair (query first) ends with m_lastUsedMethod 1 (GJK's own answer)
+/// and m_degenerateSimplex 3 (btVoronoiSimplexSolver::closest rejected the simplex); scaled by 2
+/// (exact in float) it finds the crossing through EPA, so one of Bullet's absolute thresholds
+/// decides (which one was not traced: oracle/known-peer-disagreements/README.md).
+bool bulletMeshTrianglesApartOnAnEarlyGjkStop(const DiffCase& c, const J& query, const J& exact, double s, double tau,
+                                              const std::function<Answer(const DiffCase&)>& probeExact,
+                                              const std::function<Answer(const DiffCase&)>& probePeer) {
+  if (!probePeer || !probeExact || c.op != "mesh_triangle" || query.contains("transform") ||
+      !query.contains("triangle") || !query["mesh"].is_string() || !exact.value("hit", false))
+    return false;
+  std::vector<std::array<Vec3d, 3>> inline_;
+  const Mesh* mesh = caseMesh(c, query["mesh"].get<std::string>(), inline_);
+  std::vector<std::array<Vec3d, 3>> tris = inline_;
+  if (mesh) {
+    tris.clear();
+    for (std::uint32_t i = 0; i < mesh->triangleCount(); ++i) {
+      const Triangle m = mesh->triangle(i);
+      tris.push_back({m.a.cast<double>(), m.b.cast<double>(), m.c.cast<double>()});
+    }
+  }
+  Vec3d lo = Vec3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const auto& p : query["triangle"]) lo = lo.cwiseMin(toVec(p)), hi = hi.cwiseMax(toVec(p));
+  int crossing = 0;
+  for (const auto& t : tris) {
+    Vec3d tlo = t[0].cwiseMin(t[1]).cwiseMin(t[2]), thi = t[0].cwiseMax(t[1]).cwiseMax(t[2]);
+    if ((tlo.array() > hi.array() + tau).any() || (thi.array() < lo.array() - tau).any()) continue;
+    J triangle = J::array();
+    for (const Vec3d& v : t) triangle.push_back({v.x(), v.y(), v.z()});
+    DiffCase pair = c;
+    pair.setup.clear();
+    pair.sharedSetup = false;
+    pair.op = "triangle_triangle";
+    pair.query = J{{"op", "triangle_triangle"}, {"a", triangle}, {"b", query["triangle"]}}.dump();
+    const Answer touches = probeExact(pair);
+    if (hasError(touches) || !touches.value("hit", false)) continue;
+    if (++crossing > 8) return false;
+    pair.op = "contacts";
+    // the query first, as btConvexConcaveCollisionAlgorithm puts the convex against each triangle
+    const J q{{"op", "contacts"}, {"a", {{"triangle", query["triangle"]}}}, {"b", {{"triangle", triangle}}}};
+    pair.query = q.dump();
+    const Answer exactPair = probeExact(pair), gotPair = probePeer(pair);
+    if (hasError(exactPair) || hasError(gotPair) || !narrowVerdict("contacts", exactPair) ||
+        !bulletGjkStoppedEarly(pair, q, gotPair, exactPair, s, tau, probePeer, true))
+      return false;
+  }
+  return crossing > 0;
 }
 
 /// Bullet's miss of a `triangle_triangle` crossing: btGjkPairDetector hands the crossing pair to
@@ -2203,6 +2264,10 @@ Classification classifyAnswer(const DiffCase& c, std::string_view backend, const
     return peer("gjk-duplicate-stop");
   if (bullet && bulletRightWhenScaledDown(c, query, s, tol, exactTol, probeExact, probePeer))
     return peer("absolute-epsilons");
+  // Bullet's GJK on each mesh triangle the query crosses stopped early (btGjkPairDetector)
+  if (bullet && diff == Difference::Boolean && !got.value("hit", true) &&
+      bulletMeshTrianglesApartOnAnEarlyGjkStop(c, query, exact, s, numTol, probeExact, probePeer))
+    return peer("gjk-early-stop");
   return peer("unexplained");
 }
 

@@ -255,6 +255,33 @@ TEST(DiffClassify, BulletFattenedEdgesBesideACornerByLessThanLongDouble) {
   EXPECT_NE(k.cause, "fattened-edges") << describe(k);
 }
 
+TEST(DiffClassify, BulletMeshTriangleOnAnEarlyGjkStop) {
+  // seed 98765 case 711448 (shrunk): the query triangle crosses bunny00's triangle 29930 (about
+  // 0.01 across) 0.0036 deep, its only crossing triangle; Bullet misses. Bullet's
+  // btGjkPairDetector on the pair (the query first, as btConvexConcaveCollisionAlgorithm puts
+  // it) ends with m_degenerateSimplex 3 (btVoronoiSimplexSolver::closest rejected the simplex)
+  // and reports them 0.0015 apart; asked as `contacts`, Bullet shows a gap on a GJK simplex
+  DiffRunner runner;
+  DiffCase c = primitive(
+      R"({"op":"mesh_triangle","mesh":"bunny00","triangle":[[-0.21875,-0.21875,0.1875],[-0.203125,-0.20928955078125,0.171875],[-0.3125,-0.28125,0.34375]]})",
+      false);
+  c.setup = {R"({"op":"load_mesh","name":"bunny00","path":")" + std::string(CRUX_SOURCE_DIR) +
+             R"(/data/meshes/bunny00.off"})"};
+  auto k = classify(runner, c, "bullet", answer("mesh_triangle", false));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_EQ(k.cause, "gjk-early-stop") << describe(k);
+  // the same pair scaled by 2 (exact in float), the mesh triangle a one-triangle mesh: there
+  // Bullet's GJK goes on to EPA and finds the crossing, so a miss gets no such cause
+  DiffCase scaled = primitive(
+      R"({"op":"mesh_triangle","mesh":"one","triangle":[[-0.4375,-0.4375,0.375],[-0.40625,-0.4185791015625,0.34375],[-0.625,-0.5625,0.6875]]})",
+      false);
+  scaled.setup = {
+      R"({"op":"mesh","name":"one","vertices":[[-0.53519,-0.502226,0.523022],[-0.515188,-0.505438,0.523254],[-0.526036,-0.47883,0.542396]],"triangles":[[0,1,2]]})"};
+  k = classify(runner, scaled, "bullet", answer("mesh_triangle", false));
+  EXPECT_EQ(k.verdict, Verdict::PeerWrong) << describe(k);
+  EXPECT_NE(k.cause, "gjk-early-stop") << describe(k);
+}
+
 TEST(DiffClassify, BulletFloatPlaneSide) {
   // found by crux diff (seed 9001, case 3523, transformed family): the segment ends 1.95e-7 short
   // of the triangle's plane (float build; 2.6e-8 in double), aimed at an edge's midpoint; Bullet's
