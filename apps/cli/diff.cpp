@@ -1328,6 +1328,33 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
   return false;
 }
 
+/// Whether four of the points `w` (a Minkowski difference's vertices) span a tetrahedron that
+/// holds the origin (strictly on the inner side of every face) while its triple product
+/// |(d − a)·((b − a)×(c − a))| is below 1e-4: btVoronoiSimplexSolver::pointOutsideOfPlane (float
+/// Bullet, CATCH_DEGENERATE_TETRAHEDRON) calls such a GJK simplex degenerate (signd² < 1e-4²), an
+/// absolute test on a volume, so closest() fails instead of reporting the origin inside.
+bool flatTetrahedronAroundOrigin(const std::vector<Vec3d>& w) {
+  const std::size_t n = w.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j)
+      for (std::size_t k = j + 1; k < n; ++k)
+        for (std::size_t l = k + 1; l < n; ++l) {
+          const Vec3d v[4] = {w[i], w[j], w[k], w[l]};
+          const double volume = (v[3] - v[0]).dot((v[1] - v[0]).cross(v[2] - v[0]));
+          if (!(std::fabs(volume) < 1e-4) || volume == 0) continue;
+          bool inside = true;
+          for (int f = 0; f < 4 && inside; ++f) {  // face without vertex f: origin on f's side
+            const Vec3d& a = v[(f + 1) % 4];
+            const Vec3d& b = v[(f + 2) % 4];
+            const Vec3d& c = v[(f + 3) % 4];
+            const Vec3d normal = (b - a).cross(c - a);
+            inside = (-a).dot(normal) * (v[f] - a).dot(normal) > 0;
+          }
+          if (inside) return true;
+        }
+  return false;
+}
+
 /// Bullet's miss of a `mesh_triangle` (no transform) that exact hits: btBvhTriangleMeshShape
 /// against a btTriangleShape runs btConvexConcaveCollisionAlgorithm, i.e. btGjkPairDetector on
 /// the query triangle and each mesh triangle its box overlaps. The mesh triangles the query
@@ -1335,12 +1362,13 @@ bool bulletGjkStoppedEarly(const DiffCase& c, const J& query, const J& got, cons
 /// touching the query, at most 8) each cross it (exact's `contacts` depth beyond `tau`), and
 /// Bullet asked the pair as `contacts` reports it apart on a GJK stopped early
 /// (bulletGjkStoppedEarly with crossing polytopes: its gap, with `margin` 4s, is ≥ 1e-3 and the
-/// point nearest the origin of 1–3 points of A − B). Seed 98765 case 711448: a query triangle
-/// crossing bunny00's triangle 57672 (about 0.01 across) 0.0033 deep, Bullet 0.0036 apart;
-/// btGjkPairDetector on the pair (query first) ends with m_lastUsedMethod 1 (GJK's own answer)
-/// and m_degenerateSimplex 3 (btVoronoiSimplexSolver::closest rejected the simplex); scaled by 2
-/// (exact in float) it finds the crossing through EPA, so one of Bullet's absolute thresholds
-/// decides (which one was not traced: oracle/known-peer-disagreements/README.md).
+/// point nearest the origin of 1–3 points of A − B), and A − B has a tetrahedron around the origin
+/// that Bullet's simplex solver calls degenerate (flatTetrahedronAroundOrigin). Seed 98765 case
+/// 711448: a query triangle crossing bunny00's triangle 57672 (about 0.01 across) 0.0033 deep,
+/// Bullet 0.0036 apart; btGjkPairDetector on the pair (query first) reaches a 4-point simplex
+/// around the origin whose triple product is 3.2e-5 (below 1e-4), closest() fails
+/// (m_degenerateSimplex 3) and GJK reports its previous v (m_lastUsedMethod 1); scaled by 2 (exact
+/// in float) the product is 8 times larger and EPA finds the crossing.
 bool bulletMeshTrianglesApartOnAnEarlyGjkStop(const DiffCase& c, const J& query, const J& exact, double s, double tau,
                                               const std::function<Answer(const DiffCase&)>& probeExact,
                                               const std::function<Answer(const DiffCase&)>& probePeer) {
@@ -1381,6 +1409,8 @@ bool bulletMeshTrianglesApartOnAnEarlyGjkStop(const DiffCase& c, const J& query,
     if (hasError(exactPair) || hasError(gotPair) || !narrowVerdict("contacts", exactPair) ||
         !bulletGjkStoppedEarly(pair, q, gotPair, exactPair, s, tau, probePeer, true))
       return false;
+    double ra = 0, rb = 0;
+    if (!flatTetrahedronAroundOrigin(differences(corePoints(q["a"], &ra), corePoints(q["b"], &rb)))) return false;
   }
   return crossing > 0;
 }

@@ -259,8 +259,9 @@ TEST(DiffClassify, BulletMeshTriangleOnAnEarlyGjkStop) {
   // seed 98765 case 711448 (shrunk): the query triangle crosses bunny00's triangle 29930 (about
   // 0.01 across) 0.0036 deep, its only crossing triangle; Bullet misses. Bullet's
   // btGjkPairDetector on the pair (the query first, as btConvexConcaveCollisionAlgorithm puts
-  // it) ends with m_degenerateSimplex 3 (btVoronoiSimplexSolver::closest rejected the simplex)
-  // and reports them 0.0015 apart; asked as `contacts`, Bullet shows a gap on a GJK simplex
+  // it) reaches a 4-point simplex around the origin whose triple product, 4.4e-5, is below
+  // pointOutsideOfPlane's 1e-4: closest() fails (m_degenerateSimplex 3) and it reports them
+  // 0.0015 apart; asked as `contacts`, Bullet shows a gap on a GJK simplex
   DiffRunner runner;
   DiffCase c = primitive(
       R"({"op":"mesh_triangle","mesh":"bunny00","triangle":[[-0.21875,-0.21875,0.1875],[-0.203125,-0.20928955078125,0.171875],[-0.3125,-0.28125,0.34375]]})",
