@@ -22,17 +22,7 @@
 #include <vector>
 #include "support/import_command.hpp"
 #include "support/invalid_input.hpp"
-
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define CRUX_TEST_SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define CRUX_TEST_SANITIZED 1
-#endif
-#endif
-#ifndef CRUX_TEST_SANITIZED
-#define CRUX_TEST_SANITIZED 0
-#endif
+#include "support/sanitized.hpp"
 
 namespace crux {
 namespace {
