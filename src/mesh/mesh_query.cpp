@@ -53,9 +53,10 @@ class TriangleRayTest {
     RayCrossing crossing;
   };
 
-  /// For a far origin the filter's products are taken about the line's point nearest the mesh's
-  /// box centre (RayTriangleFilter's anchored form: far origins leave fewer triangles
-  /// undecided; filterOf). The filter and the ray's length are made at the first triangle: a ray that reaches no leaf
+  /// The filter's products are taken about the line's point nearest the mesh's box centre
+  /// (RayTriangleFilter's anchored form: fewer triangles left undecided, for near origins too:
+  /// without it 0.62 % instead of 0.10 % of the tested triangles took the exact path on
+  /// bench_scaling's 10k torus). The filter and the ray's length are made at the first triangle: a ray that reaches no leaf
   /// (most candidates of a scene ray) never pays for them.
   TriangleRayTest(const Ray& ray, const RayQueryOptions& options, const Mesh& mesh)
       : ray_(ray), options_(options), mesh_(mesh) {}
@@ -112,21 +113,10 @@ class TriangleRayTest {
     Wide length;  // rayLength(dir): a crossing's parameter times it is its world distance
   };
   const Setup& setup() const {
-    if (!setup_) setup_.emplace(Setup{filterOf(ray_, mesh_), geometry_detail::rayLength(ray_.dir)});
+    if (!setup_) setup_.emplace(Setup{mesh_detail::RayTriangleFilter(ray_, mesh_.bounds().center()),
+                                      geometry_detail::rayLength(ray_.dir)});
     return *setup_;
   }
-  /// The filter of the ray's line against the mesh: anchored at the mesh's box centre only for
-  /// an origin farther from it than kFilterAnchorExtents times the box's largest extent, where
-  /// the products about the origin would grow with that distance; about the origin otherwise
-  /// (the anchor's projection costs more than the rest of the set-up).
-  static mesh_detail::RayTriangleFilter filterOf(const Ray& ray, const Mesh& mesh) {
-    const Aabb& b = mesh.bounds();
-    const Vec3 center = b.center();
-    if ((ray.origin - center).cwiseAbs().maxCoeff() > kFilterAnchorExtents * (b.max - b.min).maxCoeff())
-      return mesh_detail::RayTriangleFilter(ray, center);
-    return mesh_detail::RayTriangleFilter(ray);
-  }
-  static constexpr Real kFilterAnchorExtents = 4;
 
   const Ray& ray_;
   const RayQueryOptions& options_;
