@@ -586,7 +586,8 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     if (minSep > best.sep + kRealiseTolerance)
       return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
   }
-  contact_detail::reduceToFour(pts, np, u, [](const Point& p) { return p.b; }, [](const Point& p) { return p.sep; });
+  // No coincidence tolerance here (the clipper merges nothing): 0 keeps every point that adds area.
+  contact_detail::reduceToFour(pts, np, u, 0.0, [](const Point& p) { return p.b; }, [](const Point& p) { return p.sep; });
   out.normal = n.cast<Real>();
   out.count = np;
   for (int q = 0; q < np; ++q) {

@@ -410,7 +410,7 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
     if (np > 0 && !contact_detail::keepsClosest(pts, np, double(dr.distance), tol)) np = 0;  // the pair below
     if (np > 0) {
       contact_detail::reduceToFour(
-          pts, np, u, [](const ContactPoint& p) { return V3(p.pointB.template cast<double>()); },
+          pts, np, u, tol, [](const ContactPoint& p) { return V3(p.pointB.template cast<double>()); },
           [](const ContactPoint& p) { return p.separation; });
       out.normal = n.cast<Real>();
       out.count = np;

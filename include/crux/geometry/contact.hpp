@@ -9,7 +9,9 @@
 /// clipped against the side planes of the reference feature (Sutherland–Hodgman, as in
 /// Gottschalk's and Catto's box–box clipping; Box2D `b2ClipPolygons`, Bullet btBoxBoxDetector),
 /// keeping points whose separation along the normal is <= margin. More than 4 points are
-/// reduced to the deepest one plus the three that maximise the manifold's area.
+/// reduced to the deepest, the farthest from it, the one spanning the largest triangle with them
+/// and the one adding most area outside it (Gregorius, GDC 2015; the same rule as mesh contacts),
+/// stopping early on points coincident or collinear within rounding.
 ///
 /// Ill-conditioned features: a sliver triangle (|(b−a)×(c−a)| small against its longest
 /// edge squared, so its computed plane is off by more than a few ulps) is never the reference

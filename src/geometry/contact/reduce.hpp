@@ -1,6 +1,5 @@
-// The 4-point manifold reductions: reduceToFour for one pair's clipped points (contact.cpp,
-// box_triangle_contact.cpp) and reduceMerged for the merged points of many triangles
-// (mesh_contact.cpp).
+// The 4-point manifold reduction, one rule for every manifold: a pair's clipped points
+// (contact.cpp, box_triangle_contact.cpp) and a mesh's merged points (mesh/contact/contact_stages.hpp).
 #pragma once
 
 #include <crux/geometry/contact.hpp>
@@ -13,111 +12,81 @@
 
 namespace crux::contact_detail {
 
-/// The 4-point manifold reduction of one pair's points (contact.cpp, box_triangle_contact.cpp;
-/// reduceMerged below is the mesh's, over the points of many triangles): of count > 4 points keep the deepest (smallest separation, the first of
-/// equals), the one farthest from it, and the two of largest and smallest signed area about the
-/// axis u with those two; when all lie on one side, the one of largest |area| and then the point
-/// adding most area outside that triangle. `pos(p)` is point p's position (double) and `sep(p)`
-/// its separation. The kept four move to the front, in that order; count becomes 4.
-template <class Point, class Pos, class Sep>
-void reduceToFour(Point* pts, int& count, const Eigen::Vector3d& u, const Pos& pos, const Sep& sep) {
+/// The 4-point manifold reduction (Gregorius, "Robust Contact Creation for Physics Simulations",
+/// GDC 2015: deepest, farthest, largest triangle, largest quadrilateral). Of the n points of
+/// `pts` (indexable, pts[i] for i < n) select, in this order:
+///   1. the deepest: smallest `sep(p)`; ties by the lower `key(p)` (a mesh's triangle index; a
+///      constant for one pair), then the first;
+///   2. the farthest from it, when farther than `tol`;
+///   3. the point of largest |area| with those two about the axis `axis(deepest)` (a unit vector),
+///      when above tol × the first two's distance;
+///   4. the point adding most area outside that triangle's edges, above the same bound.
+/// It stops early when the next point adds nothing: coincident or collinear within `tol` (>= 0;
+/// 0 keeps every point that adds any area). `pos(p)` is the position (Eigen::Vector3d). Among
+/// equals the first wins at every step. Writes the indices to `sel` and returns their count
+/// (0 for n = 0, else 1 to 4).
+template <class Points, class Pos, class Sep, class Key, class Axis>
+int selectFour(const Points& pts, int n, double tol, const Pos& pos, const Sep& sep, const Key& key, const Axis& axis,
+               int sel[4]) {
   using V3 = Eigen::Vector3d;
-  if (count <= ContactManifold::kMaxContactPoints) return;
-  const auto P = [&](int i) -> V3 { return pos(pts[i]); };
-  int sel[4] = {0, -1, -1, -1};
-  for (int i = 1; i < count; ++i)
-    if (sep(pts[i]) < sep(pts[sel[0]])) sel[0] = i;
-  double best = -1;
-  for (int i = 0; i < count; ++i)
-    if (i != sel[0] && (P(i) - P(sel[0])).squaredNorm() > best) {
-      best = (P(i) - P(sel[0])).squaredNorm();
-      sel[1] = i;
-    }
-  const auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
-  int hi = -1, lo = -1;
-  for (int i = 0; i < count; ++i) {
-    if (i == sel[0] || i == sel[1]) continue;
-    if (hi < 0 || area(i) > area(hi)) hi = i;
-    if (lo < 0 || area(i) < area(lo)) lo = i;
-  }
-  sel[2] = hi;
-  sel[3] = lo;
-  if (lo == hi || area(hi) <= 0 || area(lo) >= 0) {  // all on one side: the largest triangle + the best 4th
-    sel[2] = std::abs(area(hi)) >= std::abs(area(lo)) ? hi : lo;
-    sel[3] = -1;
-    double bestGain = -1;
-    for (int i = 0; i < count; ++i) {
-      if (i == sel[0] || i == sel[1] || i == sel[2]) continue;
-      double gain = 0;  // the largest |area| outside one of the triangle's edges
-      for (int e = 0; e < 3; ++e) {
-        const V3 a = P(sel[e]), b = P(sel[(e + 1) % 3]);
-        gain = std::max(gain, std::abs((b - a).cross(P(i) - a).dot(u)));
-      }
-      if (gain > bestGain) {
-        bestGain = gain;
-        sel[3] = i;
-      }
-    }
-  }
-  Point kept[4];
-  for (int k = 0; k < 4; ++k) kept[k] = pts[sel[k]];
-  for (int k = 0; k < 4; ++k) pts[k] = kept[k];
-  count = 4;
-}
-
-/// The 4-point reduction of a mesh manifold (mesh_contact.cpp), over the points of many triangles
-/// that its merge stage has already merged within `tol`: the deepest (smallest separation; ties
-/// by the lower `triangle`), then the farthest from it, then the point of largest |area| with
-/// those two about the deepest point's normal, then the one adding most area outside that
-/// triangle; it stops early when the next point adds nothing (no farther than tol, or no area
-/// beyond tol × the first pair's distance: coincident or collinear within the merge tolerance).
-/// `buf[i]` (i < n) is a Point, which has pointA and normal (vectors), separation and triangle.
-/// The kept points are written to out in that order; returns their count (0 to 4).
-template <class Points, class Point>
-int reduceMerged(const Points& buf, int n, double tol, Point* out) {
-  int count = 0;
-  if (n == 0) return count;
-  int sel[4] = {0, -1, -1, -1};
+  if (n <= 0) return 0;
+  sel[0] = 0;
   for (int i = 1; i < n; ++i)
-    if (buf[i].separation < buf[sel[0]].separation ||
-        (buf[i].separation == buf[sel[0]].separation && buf[i].triangle < buf[sel[0]].triangle))
+    if (sep(pts[i]) < sep(pts[sel[0]]) || (sep(pts[i]) == sep(pts[sel[0]]) && key(pts[i]) < key(pts[sel[0]])))
       sel[0] = i;
-  out[count++] = buf[sel[0]];
-  auto P = [&](int i) { return buf[i].pointA.template cast<double>(); };
-  const Eigen::Vector3d u = buf[sel[0]].normal.template cast<double>();
+  const auto P = [&](int i) -> V3 { return pos(pts[i]); };
+  const V3 p0 = P(sel[0]);
   double best = tol * tol;
+  sel[1] = -1;
   for (int i = 0; i < n; ++i)
-    if ((P(i) - P(sel[0])).squaredNorm() > best) {
-      best = (P(i) - P(sel[0])).squaredNorm();
+    if ((P(i) - p0).squaredNorm() > best) {
+      best = (P(i) - p0).squaredNorm();
       sel[1] = i;
     }
-  if (sel[1] < 0) return count;
-  out[count++] = buf[sel[1]];
-  const double areaTol = tol * (P(sel[1]) - P(sel[0])).norm();
-  auto area = [&](int i) { return (P(sel[1]) - P(sel[0])).cross(P(i) - P(sel[0])).dot(u); };
+  if (sel[1] < 0) return 1;
+  const V3 u = axis(pts[sel[0]]);
+  const V3 e01 = P(sel[1]) - p0;
+  const double areaTol = tol * e01.norm();
+  const auto area = [&](int i) { return e01.cross(P(i) - p0).dot(u); };
   double a2 = areaTol;
+  sel[2] = -1;
   for (int i = 0; i < n; ++i)
     if (std::abs(area(i)) > a2) {
       a2 = std::abs(area(i));
       sel[2] = i;
     }
-  if (sel[2] < 0) return count;
-  out[count++] = buf[sel[2]];
+  if (sel[2] < 0) return 2;
   const double orient = area(sel[2]) > 0 ? 1 : -1;
+  const V3 corner[3] = {p0, P(sel[1]), P(sel[2])};
   double g3 = areaTol;
+  sel[3] = -1;
   for (int i = 0; i < n; ++i) {
-    double gain = 0;  // area outside the triangle's edges
+    double gain = 0;  // the area outside the triangle's edges
     for (int e = 0; e < 3; ++e) {
-      const Eigen::Vector3d a = P(sel[e]), b = P(sel[(e + 1) % 3]);
-      gain = std::max(gain, -orient * (b - a).cross(P(i) - a).dot(u));
+      const V3& a = corner[e];
+      gain = std::max(gain, -orient * (corner[(e + 1) % 3] - a).cross(P(i) - a).dot(u));
     }
     if (gain > g3) {
       g3 = gain;
       sel[3] = i;
     }
   }
-  if (sel[3] >= 0) out[count++] = buf[sel[3]];
-  return count;
+  return sel[3] < 0 ? 3 : 4;
+}
+
+/// A pair's manifold reduced in place (selectFour with one axis `u` and no key): unchanged when it
+/// has at most ContactManifold::kMaxContactPoints points; else the selected points move to the
+/// front, in selectFour's order, and count becomes their number.
+template <class Point, class Pos, class Sep>
+void reduceToFour(Point* pts, int& count, const Eigen::Vector3d& u, double tol, const Pos& pos, const Sep& sep) {
+  if (count <= ContactManifold::kMaxContactPoints) return;
+  int sel[4];
+  const int kept = selectFour(
+      pts, count, tol, pos, sep, [](const Point&) { return 0; }, [&](const Point&) { return u; }, sel);
+  Point keep[4];
+  for (int k = 0; k < kept; ++k) keep[k] = pts[sel[k]];
+  for (int k = 0; k < kept; ++k) pts[k] = keep[k];
+  count = kept;
 }
 
 }  // namespace crux::contact_detail

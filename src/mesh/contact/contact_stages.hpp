@@ -33,7 +33,7 @@ struct CandidateTriangle {
 /// The merge stage: a fixed buffer of kMeshContactBuffer points in which a point within the merge
 /// tolerance of a buffered one with a normal within the feature angle (kContactFaceAngleCos)
 /// replaces it when deeper (ties: the lower triangle) and is dropped otherwise; a full buffer
-/// keeps the deepest points. reduce() then keeps four (contact_detail::reduceMerged).
+/// keeps the deepest points. reduce() then keeps four (contact_detail::selectFour).
 class ContactBuffer {
  public:
   explicit ContactBuffer(Real mergeTol) : mergeTol_(mergeTol), mergeTol2_(mergeTol * mergeTol) {}
@@ -91,9 +91,15 @@ class ContactBuffer {
   }
 
   /// The reduction stage: the buffered points reduced to at most four (contact_detail::
-  /// reduceMerged, within the merge tolerance), written to out.
+  /// selectFour within the merge tolerance, ties by the lower triangle, areas about the deepest
+  /// point's normal), written to out.
   void reduce(MeshContactManifold& out) const {
-    out.count = contact_detail::reduceMerged(buf_, n_, double(mergeTol_), out.points);
+    int sel[4];
+    out.count = contact_detail::selectFour(
+        buf_, n_, double(mergeTol_), [](const MeshContactPoint& p) { return Eigen::Vector3d(p.pointA.template cast<double>()); },
+        [](const MeshContactPoint& p) { return p.separation; }, [](const MeshContactPoint& p) { return p.triangle; },
+        [](const MeshContactPoint& p) { return Eigen::Vector3d(p.normal.template cast<double>()); }, sel);
+    for (int k = 0; k < out.count; ++k) out.points[k] = buf_[sel[k]];
   }
 
  private:
