@@ -20,7 +20,8 @@ namespace py = pybind11;
 
 /// A Python `crux.Mesh`: an immutable crux::Mesh (shared with the scenes it is added to) plus the
 /// per-mesh structures some queries need, built on first use and kept: the solid view
-/// (closedness checked once) and the query data (edge adjacency) of contact queries.
+/// (closedness checked once) and the query data of contacts (edge adjacency) and of mesh–mesh
+/// distance (oriented boxes).
 class PyMesh {
  public:
   explicit PyMesh(std::shared_ptr<const Mesh> mesh) : mesh_(std::move(mesh)) {}
@@ -30,16 +31,16 @@ class PyMesh {
   const MeshVolume& volume() const;
   /// Whether the mesh is closed (crux::isClosed, computed once).
   bool closed() const;
-  /// The query data of contacts() (its contacts part: the edge adjacency), built once; the mesh
-  /// is immutable, so it stays current.
-  const MeshQueryData& queryData() const;
+  /// Query data holding the one part `part` (MeshQueryParts::Contacts or Distance), each built
+  /// on its first use; the mesh is immutable, so it stays current.
+  const MeshQueryData& queryData(MeshQueryParts part) const;
 
  private:
   std::shared_ptr<const Mesh> mesh_;
   mutable std::mutex lock_;
   mutable int closed_ = -1;  // unknown, 0, 1
   mutable std::unique_ptr<MeshVolume> volume_;
-  mutable std::unique_ptr<MeshQueryData> queryData_;
+  mutable std::unique_ptr<MeshQueryData> queryData_[2];  // contacts, distance
 };
 
 /// A Python `crux.Scene`: a crux::Scene behind a reader–writer lock (scene_bindings.cpp).

@@ -39,10 +39,11 @@ bool PyMesh::closed() const {
   return closed_ == 1;
 }
 
-const MeshQueryData& PyMesh::queryData() const {
+const MeshQueryData& PyMesh::queryData(MeshQueryParts part) const {
   std::lock_guard<std::mutex> guard(lock_);
-  if (!queryData_) queryData_ = std::make_unique<MeshQueryData>(*mesh_, MeshQueryParts::Contacts);
-  return *queryData_;
+  std::unique_ptr<MeshQueryData>& data = queryData_[part == MeshQueryParts::Contacts ? 0 : 1];
+  if (!data) data = std::make_unique<MeshQueryData>(*mesh_, part);
+  return *data;
 }
 
 const ResultTypes& resultTypes() {
@@ -486,6 +487,8 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
         MeshMeshDistanceResult r;
         {
           py::gil_scoped_release release;
+          options.dataA = &a.queryData(MeshQueryParts::Distance);
+          options.dataB = &b.queryData(MeshQueryParts::Distance);
           r = distance(a.mesh(), ta, b.mesh(), tb, options);  // validates max_distance
         }
         const Vec3 nan = Vec3::Constant(kNaN);
@@ -505,7 +508,7 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
         const ConvexShape shape = asConvexShape(kind, shapeIn, "shape");
         const Transform tm = asTransform(meshPose, "mesh_pose"), ts = asTransform(shapePose, "shape_pose");
         validateContactMargin(margin);
-        const MeshQueryData& data = mesh.queryData();
+        const MeshQueryData& data = mesh.queryData(MeshQueryParts::Contacts);
         MeshContactManifold manifold;
         {
           py::gil_scoped_release release;

@@ -148,12 +148,14 @@ Real toRealBound(double bound) {
 }
 
 /// Per-mesh structures of the narrow phase and volume mode, built on first use (std::call_once,
-/// so concurrent queries may race to it safely): the query data whose contacts part removes
-/// ghost contacts on internal edges (mesh_query_data.hpp), and the closed-solid view
-/// (mesh_volume.hpp). A world's meshes never move their vertices, so the data stays current.
+/// so concurrent queries may race to it safely): the query data (mesh_query_data.hpp), one
+/// object per part — contacts (the edge adjacency that removes ghost contacts on internal edges)
+/// and distance (the oriented boxes of mesh–mesh distance) — so a world that asks only one kind
+/// builds only its part, and the closed-solid view (mesh_volume.hpp). A world's meshes never
+/// move their vertices, so the data stays current.
 struct NativeMeshExtras {
-  std::once_flag queryDataOnce;
-  std::unique_ptr<MeshQueryData> queryData;
+  std::once_flag queryDataOnce[2];                   ///< contacts, distance
+  std::unique_ptr<MeshQueryData> queryData[2];
   std::once_flag volumeOnce;
   std::unique_ptr<MeshVolume> volume;
 };
@@ -230,7 +232,7 @@ class NativeWorld final : public CollisionWorld {
     // a mesh operand is a (CollisionWorld::contacts swaps a shape-first pair)
     const MeshHandle h = std::get<MeshHandle>(a.shape);
     MeshContactManifold manifold;
-    crux::contacts(mesh(h), a.pose, convexOf(b), b.pose, m, manifold, &queryData(h));
+    crux::contacts(mesh(h), a.pose, convexOf(b), b.pose, m, manifold, &queryData(h, MeshQueryParts::Contacts));
     for (int i = 0; i < manifold.count; ++i) {
       const MeshContactPoint& p = manifold.points[i];
       out.push_back({p.pointA.cast<double>(), p.pointB.cast<double>(), p.normal.cast<double>(),
@@ -295,6 +297,8 @@ class NativeWorld final : public CollisionWorld {
                                               double maxDistance) override {
     MeshDistanceOptions options;
     options.maxDistance = toRealBound(maxDistance);
+    options.dataA = &queryData(a, MeshQueryParts::Distance);
+    options.dataB = &queryData(b, MeshQueryParts::Distance);
     return toWorld(crux::distance(mesh(a), ta, mesh(b), tb, options));
   }
 
@@ -302,6 +306,8 @@ class NativeWorld final : public CollisionWorld {
     const PlacedMesh pa = placed(a, "a"), pb = placed(b, "b");
     MeshDistanceOptions options;
     options.maxDistance = toRealBound(maxDistance);
+    options.dataA = modelDistanceData(a.index, pa.mesh);
+    options.dataB = modelDistanceData(b.index, pb.mesh);
     return toWorld(crux::distance(*pa.mesh, pa.world, *pb.mesh, pb.world, options));
   }
 
@@ -450,12 +456,20 @@ class NativeWorld final : public CollisionWorld {
     return scene_.placed(require(model, field));
   }
   NativeMeshExtras& extras(MeshHandle m) const { return *extras_.at(m.index); }
-  /// The contacts part of the mesh's query data, built on first use.
-  const MeshQueryData& queryData(MeshHandle m) const {
+  /// Query data holding the one part `part` (Contacts or Distance) of the mesh, built on first use.
+  const MeshQueryData& queryData(MeshHandle m, MeshQueryParts part) const {
     NativeMeshExtras& e = extras(m);
-    std::call_once(e.queryDataOnce,
-                   [&] { e.queryData = std::make_unique<MeshQueryData>(mesh(m), MeshQueryParts::Contacts); });
-    return *e.queryData;
+    const int k = part == MeshQueryParts::Contacts ? 0 : 1;
+    std::call_once(e.queryDataOnce[k], [&] { e.queryData[k] = std::make_unique<MeshQueryData>(mesh(m), part); });
+    return *e.queryData[k];
+  }
+  /// The distance query data of a model's mesh while it is still the mesh defined under the
+  /// handle the model was made with; null for a mesh whose name was redefined since (its
+  /// distance then runs without the data: the same answers, slower near contact).
+  const MeshQueryData* modelDistanceData(ModelId id, const Mesh* placedMesh) const {
+    const MeshHandle h = modelMeshes_[id].handle;
+    if (!extras_.count(h.index) || &mesh(h) != placedMesh) return nullptr;
+    return &queryData(h, MeshQueryParts::Distance);
   }
   /// The closed-solid view (the base checked closedness before any volume hook runs).
   const MeshVolume& volume(MeshHandle m) const {
