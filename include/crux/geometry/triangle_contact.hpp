@@ -50,17 +50,6 @@ struct SphereTriangleContact {
   int region = kDegenerate;
   /// Unit face normal (b−a)×(c−a)/|…| (computed in double, rounded to Real) unless kDegenerate.
   Vec3 face = Vec3::UnitZ();
-
-  /// The one copy of this contact's point pair, normal and separation into a contact point of
-  /// another layer with those members in Real (mesh_contact.hpp's MeshContactPoint): the caller
-  /// sets only what this contact does not know (triangle, shape feature).
-  template <class ContactPointType>
-  void copyPointTo(ContactPointType& p) const {
-    p.pointA = pointA;
-    p.pointB = pointB;
-    p.normal = normal;
-    p.separation = separation;
-  }
 };
 
 /// sphereTriangleContacts without the feature ids (featureA's computation is skipped): the

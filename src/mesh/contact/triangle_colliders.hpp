@@ -82,7 +82,10 @@ class SphereCollider : public MeshFrameCollider {
     SphereTriangleContact h;
     if (!sphereTriangleContact(c.tri, ls_.p[0], ls_.radius, margin_, h)) return;
     MeshContactPoint p;
-    h.copyPointTo(p);
+    p.pointA = h.pointA;
+    p.pointB = h.pointB;
+    p.normal = h.normal;
+    p.separation = h.separation;
     p.triangle = c.index;
     p.featureB = featureId(FeatureKind::Vertex, 0);
     out.spherePoint(c, h, p);
