@@ -54,23 +54,11 @@ void setVertex(Feature& f, const V3& v, int index) {
   f.id = f.vid[0];
 }
 
-/// Supporting vertex `s` (index is) or, when one of the edges (s, other[k]) is perpendicular to d
-/// within the feature angle, that edge (contact_detail::supportingEdge).
+/// Supporting vertex `is` or, when one of the edges (is, other[k]) is perpendicular to d within
+/// the feature angle, that edge (contact_detail::vertexOrEdge).
 void vertexOrEdge(const Placed& P, const V3& d, int is, const int* others, int nOthers, std::uint32_t edgeBase,
                   Feature& f) {
-  const V3 vs = P.vertex(is);
-  const int bestK = contact_detail::supportingEdge([&P](int i) { return P.vertex(i); }, d, is, others, nOthers);
-  if (bestK < 0) {
-    setVertex(f, vs, is);
-    return;
-  }
-  f.n = 2;
-  f.v[0] = vs;
-  f.v[1] = P.vertex(others[bestK]);
-  f.vid[0] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(is));
-  f.vid[1] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(others[bestK]));
-  f.id = featureId(FeatureKind::Edge, edgeBase + static_cast<std::uint32_t>(std::min(is, others[bestK]) * 64 +
-                                                                          std::max(is, others[bestK])));
+  contact_detail::vertexOrEdge([&P](int i) { return P.vertex(i); }, d, is, others, nOthers, edgeBase, f);
 }
 
 /// A face whose loop has coincident corners (a box with a zero half extent across it, e.g. the

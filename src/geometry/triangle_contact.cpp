@@ -67,27 +67,11 @@ struct Feature {
 };
 
 std::uint32_t vertexId(int i) { return featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(i)); }
-std::uint32_t edgeId(int i, int j) {
-  return featureId(FeatureKind::Edge, static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
-}
 
 /// Vertex `is` of `p`, or the edge (is, others[k]) perpendicular to d within the feature angle
-/// (contact_detail::supportingEdge).
+/// (contact_detail::vertexOrEdge).
 void vertexOrEdge(const V3* p, const V3& d, int is, const int* others, int nOthers, Feature& f) {
-  const int bestK = contact_detail::supportingEdge([p](int i) { return p[i]; }, d, is, others, nOthers);
-  if (bestK < 0) {
-    f.n = 1;
-    f.v[0] = p[is];
-    f.vid[0] = vertexId(is);
-    f.id = f.vid[0];
-    return;
-  }
-  f.n = 2;
-  f.v[0] = p[is];
-  f.v[1] = p[others[bestK]];
-  f.vid[0] = vertexId(is);
-  f.vid[1] = vertexId(others[bestK]);
-  f.id = edgeId(is, others[bestK]);
+  contact_detail::vertexOrEdge([p](int i) { return p[i]; }, d, is, others, nOthers, 0, f);
 }
 
 

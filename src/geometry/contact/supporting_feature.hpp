@@ -5,7 +5,9 @@
 
 #include <crux/geometry/contact.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -49,6 +51,30 @@ int supportingEdge(const VertexAt& vertex, const Eigen::Vector3d& d, int is, con
     if (nearerPerpendicular(e.dot(d), e.squaredNorm(), bestCos)) bestK = k;
   }
   return bestK;
+}
+
+/// The supporting vertex `is` of a shape, or the edge (is, others[k]) that supportingEdge picks,
+/// written to the feature `f` (a struct with v[], vid[], n and id, as contact.cpp's and
+/// triangle_contact.cpp's): its corners, their vertex ids and the feature's id (an edge
+/// featureId(Edge, edgeBase + min·64 + max) of its two vertex indices). `vertex(i)` gives vertex i.
+template <class VertexAt, class Feature>
+void vertexOrEdge(const VertexAt& vertex, const Eigen::Vector3d& d, int is, const int* others, int nOthers,
+                  std::uint32_t edgeBase, Feature& f) {
+  const int bestK = supportingEdge(vertex, d, is, others, nOthers);
+  const auto vertexId = [](int i) { return featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(i)); };
+  f.v[0] = vertex(is);
+  f.vid[0] = vertexId(is);
+  if (bestK < 0) {
+    f.n = 1;
+    f.id = f.vid[0];
+    return;
+  }
+  const int other = others[bestK];
+  f.n = 2;
+  f.v[1] = vertex(other);
+  f.vid[1] = vertexId(other);
+  f.id = featureId(FeatureKind::Edge,
+                   edgeBase + static_cast<std::uint32_t>(std::min(is, other) * 64 + std::max(is, other)));
 }
 
 /// Whether two edges are parallel within the feature angle (|ea × eb| <= sin·|ea|·|eb|): then they
