@@ -594,8 +594,7 @@ WideBvh buildWideBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions&
   return widenBvh(buildBvh(primBounds, options));
 }
 
-Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id) {
-  if (id != 0) return bvh.nodes[(id - 1) >> 2].laneBounds(int((id - 1) & 3));
+Aabb wideRootBounds(const WideBvh& bvh) {
   Aabb box = Aabb::empty();
   for (int i = 0; i < 4; ++i)
     if (bvh.nodes[0].used(i)) box.grow(bvh.nodes[0].laneBounds(i));

@@ -181,8 +181,14 @@ inline WideSubtree wideSubtree(const WideBvh& bvh, std::uint32_t id) {
   const WideBvhNode& n = bvh.nodes[(id - 1) >> 2];
   return {n.child[(id - 1) & 3], n.count[(id - 1) & 3]};
 }
-/// The box of subtree `id` (the root's: the union of node 0's lanes).
-Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id);
+/// The root's box: the union of node 0's lanes (out of line: wideSubtreeBounds's rare case).
+Aabb wideRootBounds(const WideBvh& bvh);
+/// The box of subtree `id` (the root's: the union of node 0's lanes). Inline: the mesh pair
+/// descents ask it for every pair they bound.
+inline Aabb wideSubtreeBounds(const WideBvh& bvh, std::uint32_t id) {
+  if (id == 0) return wideRootBounds(bvh);
+  return bvh.nodes[(id - 1) >> 2].laneBounds(int((id - 1) & 3));
+}
 
 /// Entries of a wide traversal's fixed stack: the wide tree is at most kBvhMaxDepth + 1 deep
 /// (each level descends at least one binary level), each node pops one entry and pushes at most
