@@ -52,6 +52,7 @@ inline constexpr const char* kCast =
 /// preconditionFailed(query, rule) instead of returning false. The one entry check of every query.
 template <class... Inputs>
 bool entryPreconditions(const char* query, const char* rule, const Inputs&... inputs) {
+  using crux::queryable;  // (detail's own overloads, e.g. ShapesAtPoses's, are found by ADL)
   if ((queryable(inputs) && ...)) return true;
   if (CRUX_CHECK_PRECONDITIONS) preconditionFailed(query, rule);
   return false;

@@ -310,7 +310,8 @@ bool contacts(const ConvexShape& a, const Transform& ta, const ConvexShape& b, c
               ContactManifold& out) {
   out.count = 0;
   validateContactMargin(margin);
-  if (!detail::entryPreconditions("contacts(ConvexShape, ConvexShape)", detail::rule::kShapesAtPoses, a, ta, b, tb))
+  if (!detail::entryPreconditions("contacts(ConvexShape, ConvexShape)", detail::rule::kShapesAtPoses,
+                                  detail::ShapesAtPoses{a, ta, b, tb}))
     return false;
   const Placed A(a, ta), B(b, tb);
   const DistanceResult dr = detail::coreQuery(A, B);

@@ -3,6 +3,8 @@
 
 #include <crux/geometry/convex.hpp>
 
+#include "finite_lanes.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -389,5 +391,41 @@ ConvexHull ConvexHull::build(const std::vector<Vec3>& input, const std::string& 
   finish(used);
   return h;
 }
+
+namespace {
+
+/// The differences x − x of a shape's core points and axes (finite_lanes.hpp).
+geometry_detail::FiniteLanes finiteDifferences(const ConvexShape& shape) {
+  return geometry_detail::finiteDifferences(shape.p) + geometry_detail::finiteDifferences(shape.axes);
+}
+
+/// A shape's rules beyond finiteness: radius and box half extents >= 0, a hull with points.
+bool shapeRules(const ConvexShape& shape) {
+  if (!(shape.radius >= 0)) return false;
+  if (shape.kind == ConvexKind::Box) return shape.p[1].minCoeff() >= 0;
+  if (shape.kind == ConvexKind::Hull) return shape.hull != nullptr && !shape.hull->vertices().empty();
+  return true;
+}
+
+}  // namespace
+
+bool queryable(const ConvexShape& shape) {
+  return geometry_detail::allZero(finiteDifferences(shape)) && std::isfinite(shape.radius) && shapeRules(shape);
+}
+
+namespace detail {
+
+bool queryable(const ShapesAtPoses& q) {
+  const Vec3 &ta = q.ta.translation, &tb = q.tb.translation;
+  const Real scalars[8] = {q.a.radius, q.b.radius, ta.x(), ta.y(), ta.z(), tb.x(), tb.y(), tb.z()};
+  const geometry_detail::FiniteLanes sum = finiteDifferences(q.a) + finiteDifferences(q.b) +
+                                           geometry_detail::finiteDifferences(q.ta.rotation.coeffs()) +
+                                           geometry_detail::finiteDifferences(q.tb.rotation.coeffs()) +
+                                           geometry_detail::finiteDifferences(scalars);
+  return geometry_detail::allZero(sum) && shapeRules(q.a) && shapeRules(q.b) &&
+         geometry_detail::nonZero(q.ta.rotation.coeffs()) && geometry_detail::nonZero(q.tb.rotation.coeffs());
+}
+
+}  // namespace detail
 
 }  // namespace crux

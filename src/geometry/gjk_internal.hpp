@@ -34,6 +34,10 @@ struct Placed {
   /// A point inside the core (the centroid of its defining points).
   V3 center() const;
   int vertexCount() const { return shape->vertexCount(); }
+
+ private:
+  /// The world core from R and t (both constructors).
+  void placeCore(const ConvexShape& s);
 };
 
 /// A simplex vertex: w = a - b with a, b the support points of A and B (and their indices).

@@ -1,6 +1,8 @@
 #include <crux/geometry/shapes.hpp>
 #include <crux/precondition.hpp>
 
+#include "finite_lanes.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -103,9 +105,10 @@ void validate(const Triangle& triangle, const std::string& name) {
 
 bool queryable(const Vec3& point) { return point.allFinite(); }
 bool queryable(const Ray& ray) {
-  return ray.origin.allFinite() && ray.dir.allFinite() && ray.dir.template cast<Wide>().squaredNorm() > 0;
+  // (every mesh and scene ray checks it: its six numbers in two four-lane blocks, finite_lanes.hpp)
+  return geometry_detail::allZero(geometry_detail::finiteDifferences(ray)) && geometry_detail::nonZero(ray.dir);
 }
-bool queryable(const Segment& segment) { return segment.start.allFinite() && segment.end.allFinite(); }
+bool queryable(const Segment& segment) { return geometry_detail::allZero(geometry_detail::finiteDifferences(segment)); }
 bool queryable(const Sphere& sphere) {
   return sphere.center.allFinite() && std::isfinite(sphere.radius) && sphere.radius >= 0;
 }
@@ -117,6 +120,13 @@ bool queryable(const Obb& box) {
 }
 bool queryable(const Plane& plane) {
   return plane.normal.allFinite() && std::isfinite(plane.d) && plane.normal.template cast<Wide>().squaredNorm() > 0;
+}
+bool queryable(const Transform& pose) {
+  // The rotation's four numbers in one block (finite_lanes.hpp), the translation's three alone.
+  const Vec3& t = pose.translation;
+  const Real translation = ((t.x() - t.x()) + (t.y() - t.y())) + (t.z() - t.z());
+  return geometry_detail::allZero(geometry_detail::finiteDifferences(pose.rotation.coeffs())) && translation == 0 &&
+         geometry_detail::nonZero(pose.rotation.coeffs());
 }
 bool queryable(const Triangle& triangle) {
   return triangle.a.allFinite() && triangle.b.allFinite() && triangle.c.allFinite();

@@ -229,5 +229,64 @@ TEST(ConvexShape, SupportMatchesBruteForceForEveryKind) {
   }
 }
 
+// The pair queries' one entry check (detail::queryable(ShapesAtPoses), which tests all 52
+// numbers together) answers exactly as the checks of its four inputs one by one: every number of
+// every input made NaN, +inf or -inf in turn, negative radii and half extents, zero rotations.
+TEST(ConvexShape, PairEntryCheckEqualsTheChecksOfEachInput) {
+  const ConvexHull hull = ConvexHull::build(cubeCorners(1));
+  const std::vector<ConvexShape> shapes = {
+      Sphere{Vec3(1, 2, 3), 0.5f},
+      Capsule{Vec3(0, 0, -1), Vec3(0, 0, 1), 0.25f},
+      Obb{Vec3(1, 0, 0), Vec3(0.5f, 0.25f, 1), Mat3::Identity()},
+      Triangle{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)},
+      ConvexShape(hull),
+  };
+  const Transform pose{Quat(0.5f, 0.5f, -0.5f, 0.5f), Vec3(3, -2, 1)};
+  const Real bad[3] = {std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::infinity(),
+                       -std::numeric_limits<Real>::infinity()};
+  int checked = 0, refused = 0;
+  auto expectSame = [&](const ConvexShape& a, const Transform& ta, const ConvexShape& b, const Transform& tb) {
+    const bool each = queryable(a) && queryable(ta) && queryable(b) && queryable(tb);
+    EXPECT_EQ(detail::queryable(detail::ShapesAtPoses{a, ta, b, tb}), each);
+    ++checked;
+    refused += !each;
+  };
+  for (const ConvexShape& base : shapes) {
+    expectSame(base, pose, shapes[2], pose);
+    // every Real of the shape (radius, core points, axes) and of the pose, on either side
+    for (int k = 0; k < 19; ++k) {
+      for (Real v : bad) {
+        ConvexShape s = base;
+        Real* numbers[19] = {&s.radius};
+        for (int i = 0; i < 9; ++i) numbers[1 + i] = &s.p[i / 3][i % 3], numbers[10 + i] = &s.axes(i % 3, i / 3);
+        *numbers[k] = v;
+        expectSame(s, pose, shapes[1], pose);
+        expectSame(shapes[0], pose, s, pose);
+      }
+    }
+    for (int k = 0; k < 7; ++k) {
+      for (Real v : bad) {
+        Transform t = pose;
+        if (k < 4) t.rotation.coeffs()[k] = v;
+        else t.translation[k - 4] = v;
+        expectSame(base, t, shapes[3], pose);
+        expectSame(base, pose, shapes[3], t);
+      }
+    }
+    ConvexShape negative = base;
+    negative.radius = -0.0625f;
+    expectSame(negative, pose, base, pose);
+    negative = base;
+    negative.p[1].y() = -0.125f;  // a box's half extent (a point elsewhere)
+    expectSame(base, pose, negative, pose);
+    Transform zero = pose;
+    zero.rotation.coeffs().setZero();
+    expectSame(base, zero, base, pose);
+    zero.rotation.coeffs() << 0, 0, std::numeric_limits<Real>::denorm_min(), 0;  // tiny, not zero
+    expectSame(base, zero, base, pose);
+  }
+  EXPECT_GT(refused, checked / 2);
+}
+
 }  // namespace
 }  // namespace crux

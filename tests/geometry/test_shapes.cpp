@@ -162,6 +162,7 @@ TEST(Queryable, RefusesWhatValidateRefusesOnTheCheapRules) {
       EXPECT_EQ(both(Ray{v, Vec3(0, 0, 1)}), std::make_pair(false, true));
       EXPECT_EQ(both(Ray{Vec3::Zero(), v}), std::make_pair(false, true));
       EXPECT_EQ(both(Segment{v, Vec3::Zero()}), std::make_pair(false, true));
+      EXPECT_EQ(both(Segment{Vec3::Zero(), v}), std::make_pair(false, true));
       EXPECT_EQ(both(Sphere{v, 1}), std::make_pair(false, true));
       EXPECT_EQ(both(Aabb{v, Vec3::Constant(9)}), std::make_pair(false, true));
       EXPECT_EQ(both(Obb{v, Vec3::Ones(), Mat3::Identity()}), std::make_pair(false, true));
@@ -184,6 +185,8 @@ TEST(Queryable, RefusesWhatValidateRefusesOnTheCheapRules) {
   EXPECT_EQ(both(Obb{Vec3::Zero(), Vec3::Zero(), Mat3::Identity()}), std::make_pair(true, false));
   EXPECT_EQ(both(Triangle{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()}), std::make_pair(true, false));
   EXPECT_EQ(both(Segment{Vec3::Ones(), Vec3::Ones()}), std::make_pair(true, false));
+  // a direction whose squared norm underflows in Real is not zero (the rule is a norm > 0 in Wide)
+  EXPECT_TRUE(queryable(Ray{Vec3::Zero(), Vec3(0, std::numeric_limits<Real>::denorm_min(), 0)}));
 }
 
 TEST(Precondition, AViolationAbortsNamingTheQueryAndTheRule) {

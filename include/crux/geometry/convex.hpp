@@ -116,20 +116,20 @@ struct ConvexShape {
 
 /// The cheap preconditions of the pair queries on a shape (shapes.hpp's queryable): finite core
 /// points, axes and radius, radius and box half extents >= 0, a hull with points.
-inline bool queryable(const ConvexShape& shape) {
-  // Finite: 0·x is 0 for every finite x and NaN otherwise, so one sum tests all 19 numbers
-  // without a branch per coordinate (the pair queries check every call: bench_contact's box–box
-  // overlap costs ~250 ns).
-  // (Products first, so that huge finite coordinates cannot overflow a sum; summed by component,
-  // three independent chains.)
-  const Vec3 z = shape.p[0] * Real(0) + shape.p[1] * Real(0) + shape.p[2] * Real(0) +
-                 shape.axes.col(0) * Real(0) + shape.axes.col(1) * Real(0) + shape.axes.col(2) * Real(0);
-  const Real zero = (z.x() + z.y()) + (z.z() + shape.radius * Real(0));
-  if (!(zero == 0 && shape.radius >= 0)) return false;
-  if (shape.kind == ConvexKind::Box) return shape.p[1].minCoeff() >= 0;
-  if (shape.kind == ConvexKind::Hull) return shape.hull != nullptr && !shape.hull->vertices().empty();
-  return true;
-}
+bool queryable(const ConvexShape& shape);
+
+namespace detail {
+/// A pair query's two shapes at their poses, as its entry check sees them.
+struct ShapesAtPoses {
+  const ConvexShape& a;
+  const Transform& ta;
+  const ConvexShape& b;
+  const Transform& tb;
+};
+/// queryable(a) && queryable(ta) && queryable(b) && queryable(tb), with the finiteness of all 52
+/// numbers tested together (one comparison: the pair queries check it on every call).
+bool queryable(const ShapesAtPoses& pair);
+}  // namespace detail
 
 /// Support mapping of the core: the core vertex maximising dot(x, dir) in the local frame;
 /// `index` receives its vertex index. dir need not be unit; a zero dir gives some vertex.

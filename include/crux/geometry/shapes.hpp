@@ -136,12 +136,7 @@ bool queryable(const Triangle& triangle);
 bool queryable(const Vec3& point);
 /// A pose: finite translation and rotation, the rotation non-zero (its unit length is
 /// validate(Transform)'s rule, model_query.hpp).
-inline bool queryable(const Transform& pose) {
-  // 0·x is NaN for a non-finite x (one sum, no branch per number); then a non-zero rotation.
-  const Vec3 z = pose.translation * Real(0) + pose.rotation.vec() * Real(0);
-  const Real zero = (z.x() + z.y()) + (z.z() + pose.rotation.w() * Real(0));
-  return zero == 0 && pose.rotation.coeffs().template cast<Wide>().squaredNorm() > 0;
-}
+bool queryable(const Transform& pose);
 
 /// Bounding box of a triangle.
 inline Aabb bounds(const Triangle& t) {

@@ -1,0 +1,49 @@
+#pragma once
+/// @file finite_lanes.hpp  Internal: the entry checks' finiteness test, four Reals at a time.
+///
+/// x − x is 0 for every finite x and NaN for ±inf and NaN, so the sum of those differences over
+/// a block of numbers is 0 exactly when all of them are finite: one comparison for the block, no
+/// branch per number. The numbers are read as the object's bytes (memcpy), four Reals per load,
+/// the last load overlapping the one before; the object must hold only Reals, no padding.
+
+#include <crux/geometry/shapes.hpp>
+
+#include <cstring>
+#include <type_traits>
+
+namespace crux::geometry_detail {
+
+/// Four lanes of Real (the GCC/Clang vector extension crux is built with).
+using FiniteLanes = Real __attribute__((vector_size(4 * sizeof(Real))));
+
+/// The lane sums of x − x over every Real of `obj` (an array of at least four Reals, no
+/// padding): all lanes 0 when every number is finite, a NaN lane otherwise.
+template <class T>
+FiniteLanes finiteDifferences(const T& obj) {
+  static_assert(sizeof(T) % sizeof(Real) == 0 && sizeof(T) >= 4 * sizeof(Real), "an array of at least four Reals");
+  constexpr std::size_t kBlock = sizeof(FiniteLanes), kSize = sizeof(T);
+  const char* bytes = reinterpret_cast<const char*>(&obj);
+  FiniteLanes sum;
+  std::memcpy(&sum, bytes, kBlock);
+  sum -= sum;
+  for (std::size_t at = kBlock; at < kSize; at += kBlock) {
+    FiniteLanes x;
+    std::memcpy(&x, bytes + (at + kBlock <= kSize ? at : kSize - kBlock), kBlock);
+    sum += x - x;
+  }
+  return sum;
+}
+
+/// Whether every lane of a sum of differences is 0 (every number finite).
+inline bool allZero(const FiniteLanes& sum) { return (sum[0] + sum[1]) + (sum[2] + sum[3]) == 0; }
+
+/// The rule of a ray direction and a rotation beyond finiteness: not zero, i.e. a squared norm
+/// > 0 in Wide. When Wide is wider than Real that is "some coefficient is not 0" (the square of
+/// the smallest subnormal float, 2^-298, is a normal double), tested without the conversions.
+template <class V>
+bool nonZero(const V& v) {
+  if constexpr (sizeof(Wide) > sizeof(Real)) return (v.array() != 0).any();
+  else return v.template cast<Wide>().squaredNorm() > 0;
+}
+
+}  // namespace crux::geometry_detail
