@@ -24,7 +24,7 @@ namespace py = pybind11;
 /// distance (oriented boxes).
 class PyMesh {
  public:
-  explicit PyMesh(std::shared_ptr<const Mesh> mesh) : mesh_(std::move(mesh)) {}
+  explicit PyMesh(std::shared_ptr<const Mesh> mesh) : mesh_(std::move(mesh)), queryData_(*mesh_) {}
   const Mesh& mesh() const { return *mesh_; }
   const std::shared_ptr<const Mesh>& shared() const { return mesh_; }
   /// The mesh as a solid; throws InvalidInput (crux's message) when it is not closed.
@@ -33,14 +33,14 @@ class PyMesh {
   bool closed() const;
   /// Query data holding the one part `part` (MeshQueryParts::Contacts or Distance), each built
   /// on its first use; the mesh is immutable, so it stays current.
-  const MeshQueryData& queryData(MeshQueryParts part) const;
+  const MeshQueryData& queryData(MeshQueryParts part) const { return queryData_.get(part); }
 
  private:
   std::shared_ptr<const Mesh> mesh_;
   mutable std::mutex lock_;
   mutable int closed_ = -1;  // unknown, 0, 1
   mutable std::unique_ptr<MeshVolume> volume_;
-  mutable std::unique_ptr<MeshQueryData> queryData_[2];  // contacts, distance
+  MeshQueryDataOnDemand queryData_;
 };
 
 /// A Python `crux.Scene`: a crux::Scene behind a reader–writer lock (scene_bindings.cpp).

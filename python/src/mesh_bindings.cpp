@@ -39,13 +39,6 @@ bool PyMesh::closed() const {
   return closed_ == 1;
 }
 
-const MeshQueryData& PyMesh::queryData(MeshQueryParts part) const {
-  std::lock_guard<std::mutex> guard(lock_);
-  std::unique_ptr<MeshQueryData>& data = queryData_[part == MeshQueryParts::Contacts ? 0 : 1];
-  if (!data) data = std::make_unique<MeshQueryData>(*mesh_, part);
-  return *data;
-}
-
 const ResultTypes& resultTypes() {
   // Never destroyed: Python objects must not be released after the interpreter has finalised.
   static const ResultTypes* types = new ResultTypes{

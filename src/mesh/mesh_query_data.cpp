@@ -42,4 +42,12 @@ std::size_t MeshQueryData::memoryBytes() const {
   return (adjacency_ ? adjacency_->memoryBytes() : 0) + (distance_ ? distance_->memoryBytes() : 0);
 }
 
+const MeshQueryData& MeshQueryDataOnDemand::get(MeshQueryParts part) const {
+  if (part != MeshQueryParts::Contacts && part != MeshQueryParts::Distance)
+    throw InvalidInput("MeshQueryDataOnDemand::get: part must be MeshQueryParts::Contacts or Distance");
+  const int k = part == MeshQueryParts::Contacts ? 0 : 1;
+  std::call_once(once_[k], [&] { data_[k] = std::make_unique<MeshQueryData>(*mesh_, part); });
+  return *data_[k];
+}
+
 }  // namespace crux

@@ -148,14 +148,14 @@ Real toRealBound(double bound) {
 }
 
 /// Per-mesh structures of the narrow phase and volume mode, built on first use (std::call_once,
-/// so concurrent queries may race to it safely): the query data (mesh_query_data.hpp), one
-/// object per part — contacts (the edge adjacency that removes ghost contacts on internal edges)
-/// and distance (the oriented boxes of mesh–mesh distance) — so a world that asks only one kind
-/// builds only its part, and the closed-solid view (mesh_volume.hpp). A world's meshes never
+/// so concurrent queries may race to it safely): the query data (MeshQueryDataOnDemand, one
+/// object per part — contacts: the edge adjacency that removes ghost contacts on internal edges;
+/// distance: the oriented boxes of mesh–mesh distance — so a world that asks only one kind
+/// builds only its part), and the closed-solid view (mesh_volume.hpp). A world's meshes never
 /// move their vertices, so the data stays current.
 struct NativeMeshExtras {
-  std::once_flag queryDataOnce[2];                   ///< contacts, distance
-  std::unique_ptr<MeshQueryData> queryData[2];
+  explicit NativeMeshExtras(const Mesh& mesh) : queryData(mesh) {}
+  MeshQueryDataOnDemand queryData;
   std::once_flag volumeOnce;
   std::unique_ptr<MeshVolume> volume;
 };
@@ -178,7 +178,7 @@ class NativeWorld final : public CollisionWorld {
  protected:
   // The base class keeps the crux::Mesh, which carries its own BVH; the adjacency and volume
   // view are built lazily (NativeMeshExtras).
-  void onMeshAdded(MeshHandle h, const Mesh&) override { extras_[h.index] = std::make_unique<NativeMeshExtras>(); }
+  void onMeshAdded(MeshHandle h, const Mesh& m) override { extras_[h.index] = std::make_unique<NativeMeshExtras>(m); }
   void onMeshRemoved(MeshHandle h) override { extras_.erase(h.index); }
 
   Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return crux::closestPoint(t, p).cast<double>(); }
@@ -457,12 +457,7 @@ class NativeWorld final : public CollisionWorld {
   }
   NativeMeshExtras& extras(MeshHandle m) const { return *extras_.at(m.index); }
   /// Query data holding the one part `part` (Contacts or Distance) of the mesh, built on first use.
-  const MeshQueryData& queryData(MeshHandle m, MeshQueryParts part) const {
-    NativeMeshExtras& e = extras(m);
-    const int k = part == MeshQueryParts::Contacts ? 0 : 1;
-    std::call_once(e.queryDataOnce[k], [&] { e.queryData[k] = std::make_unique<MeshQueryData>(mesh(m), part); });
-    return *e.queryData[k];
-  }
+  const MeshQueryData& queryData(MeshHandle m, MeshQueryParts part) const { return extras(m).queryData.get(part); }
   /// The distance query data of a model's mesh while it is still the mesh defined under the
   /// handle the model was made with; null for a mesh whose name was redefined since (its
   /// distance then runs without the data: the same answers, slower near contact).

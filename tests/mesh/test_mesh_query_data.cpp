@@ -11,6 +11,7 @@
 #include "support/invalid_input.hpp"
 
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace crux {
@@ -53,6 +54,28 @@ TEST(MeshQueryData, BuildsOnlyThePartsAskedForAndCountsTheirBytes) {
   EXPECT_FALSE(empty.refresh(grid));
   EXPECT_EQ(empty.memoryBytes(), 0u);
   EXPECT_THROW(empty.adjacencyFor(grid), InvalidInput);
+}
+
+// MeshQueryDataOnDemand (the native world's and Python's per-mesh data) builds each part once,
+// on its first use, holding only that part; threads that ask for a part at once get the one
+// object; a part set other than Contacts or Distance is refused.
+TEST(MeshQueryData, OnDemandBuildsEachPartOnceOnFirstUse) {
+  const Mesh grid = wavyGrid(8, "grid");
+  const MeshQueryDataOnDemand onDemand(grid);
+  const MeshQueryData* seen[4] = {};
+  std::vector<std::thread> threads;
+  for (int i = 0; i < 4; ++i)
+    threads.emplace_back([&, i] { seen[i] = &onDemand.get(i % 2 ? MeshQueryParts::Distance : MeshQueryParts::Contacts); });
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(seen[0], seen[2]);
+  EXPECT_EQ(seen[1], seen[3]);
+  EXPECT_EQ(seen[0]->parts(), MeshQueryParts::Contacts);
+  EXPECT_EQ(seen[1]->parts(), MeshQueryParts::Distance);
+  EXPECT_TRUE(seen[0]->isCurrentFor(grid));
+  EXPECT_EQ(&onDemand.get(MeshQueryParts::Distance), seen[1]);
+  EXPECT_EQ(seen[1]->memoryBytes(), MeshDistanceAccel(grid).memoryBytes());
+  EXPECT_NE(invalidInputMessage([&] { onDemand.get(MeshQueryParts::All); }).find("Contacts or Distance"), std::string::npos);
+  EXPECT_THROW(onDemand.get(MeshQueryParts::None), InvalidInput);
 }
 
 // The query data of a mesh whose vertices moved (Mesh::setVertices) describes the old surface:

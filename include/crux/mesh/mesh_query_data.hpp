@@ -26,6 +26,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 namespace crux {
@@ -90,6 +92,25 @@ class MeshQueryData {
   std::optional<MeshDistanceAccel> distance_;
   MeshQueryParts parts_ = MeshQueryParts::None;
   std::uint64_t geometryId_ = 0;
+};
+
+/// The query data of one mesh whose vertices never move, one MeshQueryData per part, each built
+/// on its first use: a holder that only asks for contacts builds no distance boxes, and the
+/// other way round. Safe for concurrent first uses (std::call_once: one build, every caller
+/// waits for it). For holders that own an immutable mesh, such as the native world's meshes
+/// and Python's `crux.Mesh`; after Mesh::setVertices its data would be refused as stale.
+class MeshQueryDataOnDemand {
+ public:
+  /// `mesh` must outlive this object and keep its vertices.
+  explicit MeshQueryDataOnDemand(const Mesh& mesh) : mesh_(&mesh) {}
+  /// The data holding the one part `part`: MeshQueryParts::Contacts or Distance (anything else
+  /// throws InvalidInput).
+  const MeshQueryData& get(MeshQueryParts part) const;
+
+ private:
+  const Mesh* mesh_;
+  mutable std::once_flag once_[2];                  // contacts, distance
+  mutable std::unique_ptr<MeshQueryData> data_[2];  // contacts, distance
 };
 
 }  // namespace crux
