@@ -425,6 +425,56 @@ TEST(WideBvh, CollapsesTheBinaryTreeLaneForLane) {
   for (std::size_t k = 0; k < prims.size(); ++k) ASSERT_EQ(v.seen[k], 1) << k;
 }
 
+TEST(WideBvh, OrderedTraversalVisitsEnteredLanesByKeyThenLaneDepthFirst) {
+  // traverseWideBvhOrdered against a recursive reference: at each node the entered lanes are
+  // visited nearest key first, equal keys in lane order, each lane's subtree before the next,
+  // and a lane whose key the visitor no longer keeps is skipped when its turn comes. Keys are
+  // coarse (many ties) and lanes are entered by a hash, so nodes enter 1 to 4 lanes.
+  std::mt19937_64 rng(0x0DE5);
+  for (std::size_t n : {1u, 7u, 300u, 20000u}) {
+    SCOPED_TRACE(n);
+    const WideBvh wide = buildWideBvh(randomBoxes(n, rng), {});
+    for (std::uint64_t salt = 0; salt < 20; ++salt) {
+      const Real limit = salt % 2 ? Real(3) : std::numeric_limits<Real>::infinity();
+      auto entered = [&](const WideBvhNode& node, int i) {
+        return node.used(i) && ((node.child[i] * 2654435761u + std::uint32_t(i) * 40503u + salt * 977u) >> 7) % 5 != 0;
+      };
+      auto key = [&](const WideBvhNode& node, int i) { return std::floor(node.minX[i] + Real(salt)) / 4; };
+      struct Ordered {
+        decltype(entered)& in;
+        decltype(key)& k;
+        Real limit;
+        std::vector<std::uint32_t> leaves;
+        unsigned enter(const WideBvhNode& node, Real (&keys)[4]) {
+          unsigned mask = 0;
+          for (int i = 0; i < 4; ++i)
+            if (in(node, i)) mask |= 1u << i, keys[i] = k(node, i);
+          return mask;
+        }
+        bool keep(Real key) const { return key <= limit; }
+        bool leaf(std::uint32_t first, std::uint32_t, Real) { return leaves.push_back(first), true; }
+      } ov{entered, key, limit, {}};
+      traverseWideBvhOrdered(wide, ov);
+      std::vector<std::uint32_t> expected;
+      const std::function<void(std::uint32_t)> visit = [&](std::uint32_t node) {
+        const WideBvhNode& w = wide.nodes[node];
+        int lanes[4], m = 0;
+        for (int i = 0; i < 4; ++i)
+          if (entered(w, i)) lanes[m++] = i;
+        std::stable_sort(lanes, lanes + m, [&](int a, int b) { return key(w, a) < key(w, b); });
+        for (int j = 0; j < m; ++j) {
+          if (!(key(w, lanes[j]) <= limit)) continue;
+          if (w.count[lanes[j]] > 0) expected.push_back(w.child[lanes[j]]);
+          else visit(w.child[lanes[j]]);
+        }
+      };
+      visit(0);
+      ASSERT_EQ(ov.leaves, expected) << "salt " << salt;
+      if (n >= 300) EXPECT_GT(expected.size(), 3u);
+    }
+  }
+}
+
 TEST(WideBvh, VisitsTheSameSlotsInTheSameOrderAsTheBinaryTraversal) {
   // an overlap query box against random boxes: the binary traversal (left child first, equal
   // keys) and the wide one visit the same slots in the same order; also after a refit of the

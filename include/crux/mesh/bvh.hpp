@@ -318,6 +318,14 @@ bool traverseWideBvhOrdered(const WideBvh& bvh, Visitor& visitor) {
             e = {node.child[i], node.count[i], keys[i]};
             continue;
           }
+          const int i1 = __builtin_ctz(hits);
+          if ((hits & (hits - 1)) == 0) {  // two lanes (the next most common): the nearer goes on
+            const bool secondFirst = keys[i1] < keys[i];  // (equal keys: lane order)
+            const int nearLane = secondFirst ? i1 : i, farLane = secondFirst ? i : i1;
+            stack[top++] = {node.child[farLane], node.count[farLane], keys[farLane]};
+            e = {node.child[nearLane], node.count[nearLane], keys[nearLane]};
+            continue;
+          }
           // Entered lanes sorted by key (insertion sort of at most four, stable: equal keys keep
           // lane order); all but the nearest pushed farthest first.
           int order[4] = {i, 0, 0, 0}, n = 1;
