@@ -278,16 +278,14 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   const WideBvh& bb = b.bvh();
   const Real scale = std::max(a.scale(), b.scale() + rel.t.cwiseAbs().maxCoeff());
   const Real pad = mesh_detail::kNodeBoxPad * scale;
-  // With both accelerators, both subtrees of a pair are split when neither is this many times
-  // the other's size (up to 16 pairs, bounded four at a time), else the larger one: on bunny00
-  // 1.25 kept the binary tree's speed at every gap, where splitting one side only was 15%
-  // slower at 0.1R and splitting both within 1.5 or 2 was slower at the other gaps. Without
-  // accelerators one side is split (splitting both was 5–30% slower there).
-  constexpr Real kSplitBothRatio = Real(1.25);
-  constexpr int kMaxChildPairs = 16;
+  // The larger subtree of a pair is split into its node's lanes, so an expansion has at most
+  // four child pairs, bounded together. (Splitting both subtrees when their sizes were within
+  // 1.25x, up to 16 pairs, cost 3–8 % more instructions on bunny00 at every gap with both
+  // accelerators and 2–7 % more time; without accelerators it was 5–30 % slower.)
+  constexpr int kMaxChildPairs = 4;
   // With both accelerators, the Euclidean box gaps refine a pair's line-of-centres gap only
   // when the boxes' summed radii on that line exceed this fraction of the centre distance
-  // (tuned on bunny00 after the session-6 SIMD step: 0.3 / 0.4 / 0.55 / 0.7 / 0.85 / 1 give
+  // (tuned on bunny00 once the bounds were taken in SIMD lanes: 0.3 / 0.4 / 0.55 / 0.7 / 0.85 / 1 give
   // 0.1R 149 / 144 / 140 / 137 / 133 / 133 µs but 0.01R 111 / 111 / 112 / 114 / 128 / 141 µs;
   // 0.7 is also the fastest on armadillo at every gap).
   constexpr Real kBoxGapRadiusRatio = Real(0.7);
@@ -503,7 +501,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   };
   // The child pairs of a subtree pair within the limit, with their bounds, the nearest first
   // (returns how many, at most kMaxChildPairs; pairs beyond the limit are dropped): the larger
-  // subtree is split into its node's lanes, or both (kSplitBothRatio; RTCD 6.3.2); with both
+  // subtree is split into its node's lanes (RTCD 6.3.2); with both
   // accelerators their first bounds are taken four pairs at a time in SIMD lanes.
   auto children = [&](const Pair& p, Pair* out) -> int {
     bool leafA, leafB;
@@ -522,13 +520,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       const Aabb boxA = wideSubtreeBounds(ba, p.a), boxB = wideSubtreeBounds(bb, p.b);
       sa = (boxA.max - boxA.min).sum(), sb = (boxB.max - boxB.min).sum();
     }
-    bool splitA, splitB;
-    if (both && !leafA && !leafB && sa < kSplitBothRatio * sb && sb < kSplitBothRatio * sa) {
-      splitA = splitB = true;
-    } else {
-      splitA = !leafA && (leafB || sa >= sb);
-      splitB = !splitA;
-    }
+    const bool splitA = !leafA && (leafB || sa >= sb), splitB = !splitA;
     std::uint32_t idsA[4] = {p.a}, idsB[4] = {p.b};
     int nA = 1, nB = 1;
     if (splitA) {
