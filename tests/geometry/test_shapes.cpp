@@ -185,8 +185,11 @@ TEST(Queryable, RefusesWhatValidateRefusesOnTheCheapRules) {
   EXPECT_EQ(both(Obb{Vec3::Zero(), Vec3::Zero(), Mat3::Identity()}), std::make_pair(true, false));
   EXPECT_EQ(both(Triangle{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()}), std::make_pair(true, false));
   EXPECT_EQ(both(Segment{Vec3::Ones(), Vec3::Ones()}), std::make_pair(true, false));
-  // a direction whose squared norm underflows in Real is not zero (the rule is a norm > 0 in Wide)
-  EXPECT_TRUE(queryable(Ray{Vec3::Zero(), Vec3(0, std::numeric_limits<Real>::denorm_min(), 0)}));
+  // The rule is a squared norm > 0 in Wide: a subnormal direction passes when Wide is wider than
+  // Real (float builds: its square is a normal double) and is refused when they are the same
+  // (double builds: its square underflows to 0).
+  EXPECT_EQ(queryable(Ray{Vec3::Zero(), Vec3(0, std::numeric_limits<Real>::denorm_min(), 0)}),
+            sizeof(Wide) > sizeof(Real));
 }
 
 TEST(Precondition, AViolationAbortsNamingTheQueryAndTheRule) {
