@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace crux {
@@ -395,13 +396,13 @@ ConvexHull ConvexHull::build(const std::vector<Vec3>& input, const std::string& 
 namespace {
 
 /// The differences x − x of a shape's core points and axes (finite_lanes.hpp).
-geometry_detail::FiniteLanes finiteDifferences(const ConvexShape& shape) {
+geometry_detail::FiniteLanes shapeDifferences(const ConvexShape& shape) {
   return geometry_detail::finiteDifferences(shape.p) + geometry_detail::finiteDifferences(shape.axes);
 }
 
-/// A shape's rules beyond finiteness: radius and box half extents >= 0, a hull with points.
+/// A shape's other rules: a finite radius >= 0, box half extents >= 0, a hull with points.
 bool shapeRules(const ConvexShape& shape) {
-  if (!(shape.radius >= 0)) return false;
+  if (!(shape.radius >= 0 && shape.radius <= std::numeric_limits<Real>::max())) return false;
   if (shape.kind == ConvexKind::Box) return shape.p[1].minCoeff() >= 0;
   if (shape.kind == ConvexKind::Hull) return shape.hull != nullptr && !shape.hull->vertices().empty();
   return true;
@@ -410,18 +411,16 @@ bool shapeRules(const ConvexShape& shape) {
 }  // namespace
 
 bool queryable(const ConvexShape& shape) {
-  return geometry_detail::allZero(finiteDifferences(shape)) && std::isfinite(shape.radius) && shapeRules(shape);
+  return geometry_detail::allZero(shapeDifferences(shape)) && shapeRules(shape);
 }
 
 namespace detail {
 
 bool queryable(const ShapesAtPoses& q) {
-  const Vec3 &ta = q.ta.translation, &tb = q.tb.translation;
-  const Real scalars[8] = {q.a.radius, q.b.radius, ta.x(), ta.y(), ta.z(), tb.x(), tb.y(), tb.z()};
-  const geometry_detail::FiniteLanes sum = finiteDifferences(q.a) + finiteDifferences(q.b) +
-                                           geometry_detail::finiteDifferences(q.ta.rotation.coeffs()) +
-                                           geometry_detail::finiteDifferences(q.tb.rotation.coeffs()) +
-                                           geometry_detail::finiteDifferences(scalars);
+  // queryable(a), (ta), (b), (tb) with one comparison for the finiteness of all of them
+  const geometry_detail::FiniteLanes sum = shapeDifferences(q.a) + shapeDifferences(q.b) +
+                                           geometry_detail::poseDifferences(q.ta) +
+                                           geometry_detail::poseDifferences(q.tb);
   return geometry_detail::allZero(sum) && shapeRules(q.a) && shapeRules(q.b) &&
          geometry_detail::nonZero(q.ta.rotation.coeffs()) && geometry_detail::nonZero(q.tb.rotation.coeffs());
 }

@@ -34,6 +34,15 @@ FiniteLanes finiteDifferences(const T& obj) {
   return sum;
 }
 
+/// The differences of a pose's seven numbers (the rotation's four in one block, the
+/// translation's three and a zero in another): the one finiteness rule of queryable(Transform) and
+/// of the pair queries' entry check.
+inline FiniteLanes poseDifferences(const Transform& pose) {
+  const Vec3& t = pose.translation;
+  const FiniteLanes translation = {t.x(), t.y(), t.z(), 0};
+  return finiteDifferences(pose.rotation.coeffs()) + (translation - translation);
+}
+
 /// Whether every lane of a sum of differences is 0 (every number finite).
 inline bool allZero(const FiniteLanes& sum) { return (sum[0] + sum[1]) + (sum[2] + sum[3]) == 0; }
 

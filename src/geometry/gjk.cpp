@@ -32,9 +32,8 @@ M3 poseRotation(const Quat& q) {
 
 }  // namespace
 
-// (Both constructors initialise R and t in place and share placeCore: delegating one to the
-// other copied the rotation matrix once more per query, ~30 instructions of a ~1,200-instruction
-// capsule–box overlap.)
+// Both constructors initialise R and t in place and share placeCore (delegating one to the other
+// copied the rotation matrix once more per query).
 Placed::Placed(const ConvexShape& s, const Transform& pose)
     : shape(&s), R(poseRotation(pose.rotation)), t(pose.translation.cast<double>()), radius(double(s.radius)) {
   placeCore(s);

@@ -119,14 +119,10 @@ bool queryable(const Obb& box) {
   return box.center.allFinite() && box.half.allFinite() && box.axes.allFinite() && (box.half.array() >= 0).all();
 }
 bool queryable(const Plane& plane) {
-  return plane.normal.allFinite() && std::isfinite(plane.d) && plane.normal.template cast<Wide>().squaredNorm() > 0;
+  return plane.normal.allFinite() && std::isfinite(plane.d) && geometry_detail::nonZero(plane.normal);
 }
 bool queryable(const Transform& pose) {
-  // The rotation's four numbers in one block (finite_lanes.hpp), the translation's three alone.
-  const Vec3& t = pose.translation;
-  const Real translation = ((t.x() - t.x()) + (t.y() - t.y())) + (t.z() - t.z());
-  return geometry_detail::allZero(geometry_detail::finiteDifferences(pose.rotation.coeffs())) && translation == 0 &&
-         geometry_detail::nonZero(pose.rotation.coeffs());
+  return geometry_detail::allZero(geometry_detail::poseDifferences(pose)) && geometry_detail::nonZero(pose.rotation.coeffs());
 }
 bool queryable(const Triangle& triangle) {
   return triangle.a.allFinite() && triangle.b.allFinite() && triangle.c.allFinite();
