@@ -125,6 +125,66 @@ TEST(Predicates, Orient3dOfADenormalOffPlaneIsExact) {
   EXPECT_EQ(s.q, WVec3(18, 0, 0));
 }
 
+/// Whether the cross product (b − a) × (c − a) is exactly zero, in expansions.
+bool exactlyCollinear(const WVec3& a, const WVec3& b, const WVec3& c) {
+  crux::robust::ExactJudge judge;
+  using V = crux::robust::V3<Expansion>;
+  const V A = crux::robust::lift<Expansion>(a);
+  return crux::predicates::crossIsZero(judge, crux::robust::lift<Expansion>(b) - A, crux::robust::lift<Expansion>(c) - A);
+}
+
+TEST(Predicates, StaticCollinearityFilterCertifiesOnlyProperTriangles) {
+  // Corners in Real at wild magnitudes: exactly collinear ones (c = a + k·(b − a) with k and
+  // the coordinates small integers times one power of two, so every coordinate is exact),
+  // coincident ones, collinear ones moved by one ulp, and random ones. The static filter may
+  // say "proper" only when the exact cross product is non-zero, and must decide most random
+  // triangles (else classify gains nothing).
+  std::mt19937_64 rng(17);
+  std::uniform_int_distribution<int> small(-64, 64), scaleExp(-60, 60), family(0, 3);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  int claimed = 0, random = 0, randomClaimed = 0, collinear = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const int f = family(rng);
+    const double s = std::ldexp(1.0, scaleExp(rng));
+    Vec3 a, b, c;
+    for (int k = 0; k < 3; ++k) {
+      a[k] = Real(small(rng) * s);
+      b[k] = Real(small(rng) * s);
+    }
+    if (f == 0) {  // collinear on the grid: c = a + k (b − a), k in [-2, 2] in quarters
+      const double t = small(rng) / 16.0;
+      for (int k = 0; k < 3; ++k) c[k] = Real(double(a[k]) + t * (double(b[k]) - double(a[k])));
+    } else if (f == 1) {  // coincident corners
+      c = (rng() & 1) ? a : b;
+      if (rng() & 1) b = a;
+    } else if (f == 2) {  // a grid-collinear corner moved by one ulp
+      const double t = small(rng) / 16.0;
+      for (int k = 0; k < 3; ++k) c[k] = Real(double(a[k]) + t * (double(b[k]) - double(a[k])));
+      const int k = int(rng() % 3);
+      c[k] = std::nextafter(c[k], (rng() & 1) ? std::numeric_limits<Real>::max() : -std::numeric_limits<Real>::max());
+    } else {  // random corners
+      for (int k = 0; k < 3; ++k) c[k] = Real(unit(rng) * 64 * s);
+    }
+    const WVec3 A = crux::wide(a), B = crux::wide(b), C = crux::wide(c);
+    const bool exact = exactlyCollinear(A, B, C);
+    collinear += exact;
+    const bool proper = crux::predicates::certainlyNotCollinear(A, B, C);
+    if (proper) {
+      ++claimed;
+      ASSERT_FALSE(exact) << std::setprecision(17) << crux::wide(a).transpose() << " | " << B.transpose() << " | "
+                          << C.transpose();
+    }
+    ASSERT_EQ(crux::predicates::classify(A, B, C).kind == crux::predicates::TriangleKind::Triangle, !exact);
+    if (f == 3) {
+      ++random;
+      randomClaimed += proper;
+    }
+  }
+  EXPECT_GT(collinear, 50000);
+  EXPECT_GT(randomClaimed, random * 99 / 100);
+  EXPECT_GT(claimed, randomClaimed);  // also some one-ulp slivers
+}
+
 // ---- near-degenerate families against the exact oracle ------------------------------------
 
 std::string num(double x) {
