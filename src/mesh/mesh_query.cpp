@@ -131,8 +131,7 @@ bool before(Real t, std::uint32_t tri, Real bestT, std::uint32_t bestTri) {
 }
 
 mesh_detail::RayBoxTest rayBoxTest(const Mesh& mesh, const Ray& ray) {
-  const Real scale = std::max(mesh.scale(), ray.origin.cwiseAbs().maxCoeff());
-  return mesh_detail::RayBoxTest(ray.origin, ray.dir, scale);
+  return mesh_detail::meshRayBoxTest(mesh.scale(), ray.origin, ray.dir);
 }
 
 /// Visitor for closest / any hit: keeps the best (t, index), prunes beyond it. kCounted: it

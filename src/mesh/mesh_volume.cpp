@@ -10,6 +10,7 @@
 #include <crux/mesh/mesh_query.hpp>
 
 #include "mesh_walk.hpp"
+#include "node_tests.hpp"
 #include "relative_frame.hpp"
 
 #include <algorithm>
@@ -293,9 +294,18 @@ bool MeshVolume::contains(const Vec3& p) const {
   struct Visitor {
     const Mesh& mesh;
     WVec3 p, d;
+    // The mesh rays' padded slab test (node_tests.hpp) on four lanes, when d is exact in Real
+    // (direction(k) for k < ~400; the first direction nearly always decides): it never misses a
+    // box the ray meets, like rayMayHitBox, which serves the other directions.
+    std::optional<mesh_detail::RayBoxTest> lanes;
     std::size_t crossings = 0;
     bool degenerate = false;
     bool touches(const Aabb& box) const { return rayMayHitBox(box, p, d); }
+    unsigned touches4(const WideBvhNode& n) const {
+      if (!lanes) return mesh_detail::eachLane(n, [&](const Aabb& b) { return rayMayHitBox(b, p, d); });
+      Real keys[4];
+      return lanes->enter4(n, std::numeric_limits<Real>::infinity(), keys);
+    }
     bool slot(std::uint32_t k) {
       const RayEvent e = rayEvent(relative(mesh.slotTriangle(k), p), d);
       if (e == RayEvent::Degenerate) {
@@ -312,7 +322,9 @@ bool MeshVolume::contains(const Vec3& p) const {
   const WVec3 wp = wide(p);
   std::size_t crossings = 0;
   for (std::uint64_t k = 0; k < maxTries; ++k) {
-    Visitor v{*mesh_, wp, direction(k)};
+    Visitor v{*mesh_, wp, direction(k), std::nullopt};
+    const Vec3 dr = v.d.cast<Real>();
+    if (dr.cast<Wide>() == v.d) v.lanes = mesh_detail::meshRayBoxTest(mesh_->scale(), p, dr);
     mesh_detail::walkSlots(*mesh_, v);
     crossings = v.crossings;
     if (!v.degenerate) break;

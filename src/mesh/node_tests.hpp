@@ -172,6 +172,13 @@ class RayBoxTest {
   Real absSlack_ = 0;
 };
 
+/// The slab test of a ray from `origin` along `dir` against the boxes of a mesh of scale
+/// `meshScale` (Mesh::scale()): its pads scale with the larger of the mesh's and the origin's
+/// largest |coordinate|. Mesh rays and the point-in-volume parity ray take it.
+inline RayBoxTest meshRayBoxTest(Real meshScale, const Vec3& origin, const Vec3& dir) {
+  return RayBoxTest(origin, dir, std::max(meshScale, origin.cwiseAbs().maxCoeff()));
+}
+
 /// A node test on one box applied to each used lane of a wide node: bit i set when lane i's box
 /// passes `test` (for the node tests that have no four-lane form).
 template <class BoxTest>

@@ -10,9 +10,11 @@
 ///  1. Surface: if the point lies on a triangle (exact test) it is inside (closed set).
 ///  2. Otherwise a ray is cast from the point along d(k) = c0 + k·c1 + k²·c2 (k = 0, 1, ...;
 ///     c0, c1, c2 fixed, linearly independent integer vectors) and its proper crossings of
-///     triangle interiors are counted through the BVH; odd = inside. Every crossing decision is
-///     a sign of a triple product d·(A×B) or A·(B×C) of vertex positions relative to the point,
-///     evaluated exactly (static filter, then a floating-point expansion: Shewchuk 1997).
+///     triangle interiors are counted through the BVH (its nodes pruned four lanes at a time by
+///     the mesh rays' padded slab test, which never drops a box the ray meets); odd = inside.
+///     Every crossing decision is a sign of a triple product d·(A×B) or A·(B×C) of vertex
+///     positions relative to the point, evaluated exactly (static filter, then a floating-point
+///     expansion: Shewchuk 1997).
 ///  3. If the ray touches a triangle's edge or vertex, or runs inside a triangle's plane, the
 ///     direction is abandoned and k advances. Each such event confines d(k) to a fixed plane or
 ///     line through the origin, which a quadratic curve meets at most twice, so a direction
