@@ -42,27 +42,46 @@ struct Relative {
   Triangle map(const Triangle& tr) const { return frame.map(tr); }
 };
 
-/// Lower bound on the distance between box a (in a's frame) and box b (in b's frame, placed by
-/// rel), the larger of two bounds, minus `pad` (rounding):
+/// Lower bounds on the distance between box a[l] (in a's frame) and box b[l] (in b's frame,
+/// placed by rel), four pairs l at a time in Real lanes (one pair: the same boxes in every lane),
+/// each the larger of two bounds, minus `pad` (rounding):
 ///  - Euclidean box gaps: in a's frame b's box lies inside the axis-aligned box of half extents
-///    |R|·h_b about its mapped centre (RTCD 4.2.6); the distance between two axis-aligned boxes
-///    is the norm of their per-axis gaps; the same in b's frame with |R|ᵀ·h_a;
+///    |R|·h_b about its mapped centre R·c_b + t (RTCD 4.2.6); the distance between two
+///    axis-aligned boxes is the norm of their per-axis gaps; the same in b's frame with |R|ᵀ·h_a;
 ///  - the separating-axis gap along the line of centres u: |d| − Σ h_a,i|u_i| − Σ h_b,j|(Rᵀu)_j|
 ///    (any unit axis gives a lower bound), which for small boxes far apart is within
 ///    O(size²/distance) of the true distance where the box gaps are within O(size).
-Real boxBoxLowerBound(const Aabb& a, const Aabb& b, const Relative& rel, Real pad) {
-  const Vec3 ha = a.half(), hb = b.half();
-  const Vec3 d = rel.map(b.center()) - a.center();
-  const Vec3 db = rel.R.transpose() * d;
-  const Vec3 gapA = (d.cwiseAbs() - ha - rel.absR * hb).cwiseMax(Vec3::Zero());
-  const Vec3 gapB = (db.cwiseAbs() - hb - rel.absR.transpose() * ha).cwiseMax(Vec3::Zero());
-  Real bound = std::sqrt(std::max(gapA.squaredNorm(), gapB.squaredNorm()));
-  const Real len = d.norm();
-  if (len > 0) {
-    const Real axis = len - (ha.dot(d.cwiseAbs()) + hb.dot(db.cwiseAbs())) / len;
-    bound = std::max(bound, axis);
+void boxBoxLowerBounds(const Aabb (&a)[4], const Aabb (&b)[4], const Relative& rel, Real pad, Real (&out)[4]) {
+  using mesh_detail::Lanes;
+  Lanes ca[3], ha[3], cb[3], hb[3];
+  for (int c = 0; c < 3; ++c) {
+    const Lanes loA{a[0].min[c], a[1].min[c], a[2].min[c], a[3].min[c]};
+    const Lanes hiA{a[0].max[c], a[1].max[c], a[2].max[c], a[3].max[c]};
+    const Lanes loB{b[0].min[c], b[1].min[c], b[2].min[c], b[3].min[c]};
+    const Lanes hiB{b[0].max[c], b[1].max[c], b[2].max[c], b[3].max[c]};
+    ca[c] = (loA + hiA) * Real(0.5), ha[c] = (hiA - loA) * Real(0.5);  // Aabb::center(), half()
+    cb[c] = (loB + hiB) * Real(0.5), hb[c] = (hiB - loB) * Real(0.5);
   }
-  return bound - pad;
+  const Mat3& R = rel.R;
+  const Mat3& absR = rel.absR;
+  Lanes d[3], db[3];
+  for (int r = 0; r < 3; ++r) d[r] = (((R(r, 0) * cb[0] + R(r, 1) * cb[1]) + R(r, 2) * cb[2]) + rel.t[r]) - ca[r];
+  for (int c = 0; c < 3; ++c) db[c] = (R(0, c) * d[0] + R(1, c) * d[1]) + R(2, c) * d[2];
+  const Lanes zero{};
+  Lanes gapA2{}, gapB2{}, extent{};
+  for (int i = 0; i < 3; ++i) {
+    const Lanes ad = mesh_detail::lanesAbs(d[i]), adb = mesh_detail::lanesAbs(db[i]);
+    const Lanes gA = mesh_detail::lanesMax(ad - ha[i] - ((absR(i, 0) * hb[0] + absR(i, 1) * hb[1]) + absR(i, 2) * hb[2]), zero);
+    const Lanes gB = mesh_detail::lanesMax(adb - hb[i] - ((absR(0, i) * ha[0] + absR(1, i) * ha[1]) + absR(2, i) * ha[2]), zero);
+    gapA2 = gapA2 + gA * gA, gapB2 = gapB2 + gB * gB;
+    extent = extent + (ha[i] * ad + hb[i] * adb);
+  }
+  const Lanes len2 = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+  const Lanes len = mesh_detail::lanesSqrt(len2);
+  Lanes bound = mesh_detail::lanesSqrt(mesh_detail::lanesMax(gapA2, gapB2));
+  // (len2 > 0 only: 0/0 in a lane whose centres coincide is never selected)
+  bound = mesh_detail::lanesSelect(len2 > 0, mesh_detail::lanesMax(len - extent / len, bound), bound) - pad;
+  std::memcpy(out, &bound, sizeof out);
 }
 
 /// Separating-axis lower bound on the distance between two triangles (same frame): the largest
@@ -392,14 +411,11 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       return std::max(bound, (loB + u.dot(rel.t) - hiA) / lenU - pad);
     }
   };
-  auto nodeBound = [&](std::uint32_t ia, std::uint32_t ib) {
-    Real bound = -kNoLimit;
+  // The refinements of a pair's axis-aligned bound `bound` (boxBoxLowerBounds, taken for up to
+  // four pairs at once), for pairs within the limit.
+  auto refineNodeBound = [&](std::uint32_t ia, std::uint32_t ib, const Aabb& boxA, const Aabb& boxB, Real bound) {
+    if (bound > best.limit) return bound;  // refine only survivors
     const WideSubtree na = wideSubtree(ba, ia), nb = wideSubtree(bb, ib);
-    const Aabb boxA = wideSubtreeBounds(ba, ia), boxB = wideSubtreeBounds(bb, ib);
-    {
-      bound = boxBoxLowerBound(boxA, boxB, rel, pad);
-      if (bound > best.limit) return bound;  // refine only survivors
-    }
     if (obbA || obbB) {
       // One side's oriented box (MeshDistanceAccel) and the other's axis-aligned box projected
       // on the line of their centres.
@@ -560,8 +576,18 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         }
       }
     } else {
+      // One side is split (n <= 4): the four pairs' box bounds in lanes (a short group repeats
+      // its first pair), then the refinements for the survivors.
+      Aabb boxA[4], boxB[4];
+      for (int l = 0; l < 4; ++l) {
+        const int q = l < n ? l : 0;
+        boxA[l] = (l == 0 || splitA) && l < n ? wideSubtreeBounds(ba, idsA[q / nB]) : boxA[0];
+        boxB[l] = (l == 0 || splitB) && l < n ? wideSubtreeBounds(bb, idsB[q % nB]) : boxB[0];
+      }
+      Real bounds[4];
+      boxBoxLowerBounds(boxA, boxB, rel, pad, bounds);
       for (int q = 0; q < n; ++q) {
-        out[kept] = {idsA[q / nB], idsB[q % nB], nodeBound(idsA[q / nB], idsB[q % nB])};
+        out[kept] = {idsA[q / nB], idsB[q % nB], refineNodeBound(idsA[q / nB], idsB[q % nB], boxA[q], boxB[q], bounds[q])};
         kept += out[kept].bound <= best.limit;
       }
     }
@@ -686,7 +712,11 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
     root.bound = obbBound(0, 0, o, 0);
   } else {
-    root.bound = nodeBound(0, 0);
+    const Aabb boxA = wideSubtreeBounds(ba, 0), boxB = wideSubtreeBounds(bb, 0);
+    const Aabb boxesA[4] = {boxA, boxA, boxA, boxA}, boxesB[4] = {boxB, boxB, boxB, boxB};
+    Real bounds[4];
+    boxBoxLowerBounds(boxesA, boxesB, rel, pad, bounds);
+    root.bound = refineNodeBound(0, 0, boxA, boxB, bounds[0]);
   }
   if (root.bound > best.limit) return;
   push(root);
