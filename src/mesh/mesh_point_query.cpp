@@ -5,8 +5,8 @@
 
 #include <crux/geometry/closest_point.hpp>
 
-#include "lanes.hpp"
 #include "mesh_walk.hpp"
+#include "node_tests.hpp"
 
 #include <cmath>
 #include <cstring>
@@ -30,18 +30,12 @@ struct ClosestPointVisitor {
     key = squaredDistance(box, p);
     return within(key);
   }
-  // The same key on four lanes, in Real: each per-axis gap max(min − p, p − max, 0) and the sum
-  // of their squares are within a few ulps of squaredDistance's (formed in Wide), far inside
-  // kMeshPointPruneSlack. Unused lanes (empty boxes, min > max) are never entered.
+  // The same key on four lanes, in Real (mesh_detail::boxSquaredDistances4): within a few ulps
+  // of squaredDistance's (formed in Wide), far inside kMeshPointPruneSlack. Unused lanes (empty
+  // boxes, min > max) are never entered, even without a distance limit.
   unsigned entry4(const WideBvhNode& n, Real (&keys)[4]) const {
     using namespace mesh_detail;
-    const Lanes zero{};
-    auto gap = [&](const Real* lo, const Real* hi, Real x) {
-      const Lanes l = lanesLoad(lo), h = lanesLoad(hi), px = Lanes{x, x, x, x};
-      return lanesMax(lanesMax(l - px, px - h), zero);
-    };
-    const Lanes gx = gap(n.minX, n.maxX, p.x()), gy = gap(n.minY, n.maxY, p.y()), gz = gap(n.minZ, n.maxZ, p.z());
-    const Lanes key = gx * gx + gy * gy + gz * gz;
+    const Lanes key = boxSquaredDistances4(n, p);
     std::memcpy(keys, &key, sizeof keys);
     const Real limit = best2 + best2 * kMeshPointPruneSlack;
     return laneMask((key <= limit) & (lanesLoad(n.minX) <= lanesLoad(n.maxX)));

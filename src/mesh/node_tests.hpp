@@ -189,6 +189,25 @@ unsigned eachLane(const WideBvhNode& node, const BoxTest& test) {
   return bits;
 }
 
+/// The squared distance from p to a box, in Real: the per-axis gaps max(min − p, p − max, 0),
+/// squared and summed in axis order (RTCD 5.1.3). boxSquaredDistances4 computes the same operations on
+/// a wide node's four lane boxes, so its lane i equals this for lane i's box bit for bit (an
+/// unused lane's empty box gives +inf).
+inline Real boxSquaredDistance(const Aabb& b, const Vec3& p) {
+  Real g[3];
+  for (int i = 0; i < 3; ++i) g[i] = std::max(std::max(b.min[i] - p[i], p[i] - b.max[i]), Real(0));
+  return (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
+}
+inline Lanes boxSquaredDistances4(const WideBvhNode& n, const Vec3& p) {
+  const Lanes zero{};
+  auto gap = [&](const Real* lo, const Real* hi, Real x) {
+    const Lanes px{x, x, x, x};
+    return lanesMax(lanesMax(lanesLoad(lo) - px, px - lanesLoad(hi)), zero);
+  };
+  const Lanes gx = gap(n.minX, n.maxX, p.x()), gy = gap(n.minY, n.maxY, p.y()), gz = gap(n.minZ, n.maxZ, p.z());
+  return (gx * gx + gy * gy) + gz * gz;
+}
+
 /// Sphere vs box grown by pad: squared distance from the centre <= (r + pad)², with a relative
 /// pad on the rounded sum of squares.
 inline bool sphereTouchesBox(const Vec3& c, Real r, const Aabb& b, Real pad) {

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 
 namespace crux::mesh_detail {
@@ -134,6 +136,55 @@ TEST(ObbBoxTest, NeverSaysNoForBoxesThatMeet) {
     const ObbBoxTest test(axes, pad);
     ASSERT_TRUE(test.touches(test.place(center, half), b)) << "case " << i;
   }
+}
+
+TEST(BoxSquaredDistance, FourLaneFormIsTheOneBoxFormBitForBit) {
+  // boxSquaredDistances4 on a wide node's lanes (some empty) equals boxSquaredDistance of each
+  // lane's box bit for bit (the closest-point walk's keys and the sphere collider's node test
+  // rest on it), for points inside, on and outside the boxes; an empty lane gives +inf.
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<Real> u(-2, 2);
+  std::uniform_int_distribution<int> grid(-3, 3), used(1, 4);
+  int inside = 0, outside = 0;
+  for (int i = 0; i < 50000; ++i) {
+    const bool onGrid = i % 2 == 1;
+    auto pick = [&] { return onGrid ? Real(grid(rng)) : u(rng); };
+    const Vec3 p(pick(), pick(), pick());
+    WideBvhNode node;
+    const int n = used(rng);
+    Aabb boxes[4];
+    for (int l = 0; l < 4; ++l) {
+      Aabb& b = boxes[l];
+      if (l < n) {
+        for (int k = 0; k < 3; ++k) {
+          const Real a = pick(), c = pick();
+          b.min[k] = std::min(a, c);
+          b.max[k] = std::max(a, c);
+        }
+      } else {
+        b = Aabb::empty();
+      }
+      node.minX[l] = b.min.x(), node.minY[l] = b.min.y(), node.minZ[l] = b.min.z();
+      node.maxX[l] = b.max.x(), node.maxY[l] = b.max.y(), node.maxZ[l] = b.max.z();
+      node.child[l] = l < n ? 0u : WideBvhNode::kEmpty;
+      node.count[l] = l < n ? 1u : 0u;
+    }
+    const Lanes d = boxSquaredDistances4(node, p);
+    for (int l = 0; l < 4; ++l) {
+      if (l >= n) {
+        ASSERT_EQ(d[l], std::numeric_limits<Real>::infinity()) << "case " << i << " lane " << l;
+        continue;
+      }
+      const Real want = boxSquaredDistance(boxes[l], p);
+      ASSERT_EQ(std::memcmp(&d[l], &want, sizeof want), 0) << "case " << i << " lane " << l << ": " << d[l] << " vs " << want;
+      (want == 0 ? inside : outside) += 1;
+      // and it is the squared distance to the box's closest point, up to rounding
+      const Real ref = (p.cwiseMax(boxes[l].min).cwiseMin(boxes[l].max) - p).squaredNorm();
+      ASSERT_NEAR(want, ref, 8 * std::numeric_limits<Real>::epsilon() * (ref + 1));
+    }
+  }
+  EXPECT_GT(inside, 5000);
+  EXPECT_GT(outside, 50000);
 }
 
 TEST(Lanes, MaskHasOneBitPerLaneInOrder) {

@@ -71,10 +71,9 @@ class SphereCollider : public MeshFrameCollider {
  public:
   using MeshFrameCollider::MeshFrameCollider;
 
-  bool touches(const Aabb& bounds) const {
-    const Vec3& centre = ls_.p[0];
-    const Vec3 d = (bounds.min - centre).cwiseMax(centre - bounds.max).cwiseMax(Vec3::Zero());
-    return d.squaredNorm() <= reach_.reach2;
+  bool touches(const Aabb& bounds) const { return mesh_detail::boxSquaredDistance(bounds, ls_.p[0]) <= reach_.reach2; }
+  unsigned touches4(const WideBvhNode& node) const {
+    return mesh_detail::laneMask(mesh_detail::boxSquaredDistances4(node, ls_.p[0]) <= reach_.reach2);
   }
   bool leafTouches(const Triangle& tri) const { return touches(bounds(tri)); }
 
