@@ -198,6 +198,9 @@ inline Real boxSquaredDistance(const Aabb& b, const Vec3& p) {
   for (int i = 0; i < 3; ++i) g[i] = std::max(std::max(b.min[i] - p[i], p[i] - b.max[i]), Real(0));
   return (g[0] * g[0] + g[1] * g[1]) + g[2] * g[2];
 }
+/// Lanes of a wide node that hold a box (an unused lane's empty box has min > max): callers whose
+/// limit may be +inf must mask with it, since an empty box's key is +inf too.
+inline LaneBits usedLanes(const WideBvhNode& n) { return lanesLoad(n.minX) <= lanesLoad(n.maxX); }
 inline Lanes boxSquaredDistances4(const WideBvhNode& n, const Vec3& p) {
   const Lanes zero{};
   auto gap = [&](const Real* lo, const Real* hi, Real x) {

@@ -343,6 +343,27 @@ TEST(MeshContact, RotatedBoxAndCapsuleOnFlatGridHaveOnlyVerticalNormals) {
   }
 }
 
+TEST(MeshContact, SphereWhoseSquaredReachOverflowsSkipsUnusedLanes) {
+  // A finite sphere so large that its squared reach is +inf: every used lane passes the node
+  // test, and the unused lanes of the tree (empty boxes, whose keys are +inf too) must still be
+  // skipped (entering one reads past the node array: ASan, or a crash). 3 x 1 cells: 6
+  // triangles, a root with unused lanes. The BVH answer equals the brute-force one.
+  const Mesh grid = gridMesh(3, 1, 1, [](int, int) { return Real(0); });
+  bool unused = false;
+  for (const WideBvhNode& n : grid.bvh().nodes)
+    for (int l = 0; l < 4; ++l) unused |= !n.used(l);
+  ASSERT_TRUE(unused);
+  const Real r = 2 * std::sqrt(std::numeric_limits<Real>::max());
+  ASSERT_TRUE(std::isfinite(r));
+  const Transform pose{Quat::Identity(), Vec3(1, Real(0.5), r / 2)};
+  MeshContactManifold a, b;
+  contacts(grid, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, Real(0.01), a);
+  contacts(grid, Transform::identity(), Sphere{Vec3::Zero(), r}, pose, Real(0.01), b, nullptr, QueryPath::BruteForce);
+  ASSERT_EQ(a.count, b.count);
+  EXPECT_GT(a.count, 0);
+  if (a.count > 0) EXPECT_EQ(minSeparation(a), minSeparation(b));
+}
+
 TEST(MeshContact, ConvexEdgeKeepsItsNormal) {
   // A roof: two triangles meeting at a convex ridge along y at x = 0.
   std::vector<Vec3> v = {{-1, -1, -1}, {0, -1, 0}, {0, 1, 0}, {-1, 1, -1}, {1, -1, -1}, {1, 1, -1}};

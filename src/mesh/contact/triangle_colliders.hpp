@@ -73,7 +73,9 @@ class SphereCollider : public MeshFrameCollider {
 
   bool touches(const Aabb& bounds) const { return mesh_detail::boxSquaredDistance(bounds, ls_.p[0]) <= reach_.reach2; }
   unsigned touches4(const WideBvhNode& node) const {
-    return mesh_detail::laneMask(mesh_detail::boxSquaredDistances4(node, ls_.p[0]) <= reach_.reach2);
+    // (reach2 may be +inf for a huge sphere: unused lanes, whose keys are +inf too, are masked)
+    return mesh_detail::laneMask((mesh_detail::boxSquaredDistances4(node, ls_.p[0]) <= reach_.reach2) &
+                                 mesh_detail::usedLanes(node));
   }
   bool leafTouches(const Triangle& tri) const { return touches(bounds(tri)); }
 
