@@ -319,8 +319,9 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   //    (half extents |C|·h_B, C = b's axes in a's box frame; RTCD 4.2.6) and the same in B's,
   //    only for pairs separated on that line with radii > kBoxGapRadiusRatio × their distance.
   //    This replaces the axis-aligned bound: the boxes hold every corner of their nodes;
-  //  - otherwise the axis-aligned box gaps (boxBoxLowerBound), then, with one accelerator, its
-  //    oriented box and the other node's box projected on the line of their centres;
+  //  - otherwise the axis-aligned box gaps (boxBoxLowerBounds, four pairs at once), then, with
+  //    one accelerator, its oriented box and the other node's box projected on the line of their
+  //    centres;
   //  - when either node is a leaf, the gap of the two nodes' projections on the line of their
   //    box centres u (oriented boxes' with both accelerators, else axis-aligned), where a leaf
   //    projects its actual corners (b's in b's frame on Rᵀu, offset by u·t: nothing is mapped)

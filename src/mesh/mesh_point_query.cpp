@@ -17,7 +17,11 @@ namespace {
 /// Keeps the best (squared distance, triangle) and prunes boxes farther than it: the lanes of a
 /// wide node four at a time (entry4), and a leaf's triangles by their own boxes before the
 /// closest point on each is formed (bunny00, points uniform in its bounds: a third of a leaf's
-/// triangles are skipped so).
+/// triangles are skipped so). Every box key is mesh_detail::boxSquaredDistance in Real: a
+/// triangle's rounded closest point lies in its box and in every enclosing node's, and rounding
+/// is monotone, so a key never exceeds the triangle's computed squared distance by more than the
+/// summation order's ulp, far inside kMeshPointPruneSlack: the walk skips only triangles that
+/// the brute-force loop would not keep.
 struct ClosestPointVisitor {
   const Mesh& mesh;
   const Vec3& p;
@@ -27,24 +31,23 @@ struct ClosestPointVisitor {
   bool within(Real key) const { return key <= best2 + best2 * kMeshPointPruneSlack; }
   // (the walk's visitor: mesh_detail::walkOrdered, nearest box first)
   bool entry(const Aabb& box, Real& key) const {
-    key = squaredDistance(box, p);
+    key = mesh_detail::boxSquaredDistance(box, p);
     return within(key);
   }
-  // The same key on four lanes, in Real (mesh_detail::boxSquaredDistances4): within a few ulps
-  // of squaredDistance's (formed in Wide), far inside kMeshPointPruneSlack. Unused lanes (empty
-  // boxes, min > max) are never entered, even without a distance limit.
+  // The same keys on four lanes; unused lanes (empty boxes) are never entered, even without a
+  // distance limit.
   unsigned entry4(const WideBvhNode& n, Real (&keys)[4]) const {
     using namespace mesh_detail;
     const Lanes key = boxSquaredDistances4(n, p);
     std::memcpy(keys, &key, sizeof keys);
     const Real limit = best2 + best2 * kMeshPointPruneSlack;
-    return laneMask((key <= limit) & (lanesLoad(n.minX) <= lanesLoad(n.maxX)));
+    return laneMask((key <= limit) & usedLanes(n));
   }
   bool keep(Real key) const { return within(key); }
   bool leaf(std::uint32_t first, std::uint32_t count) {
     for (std::uint32_t k = first; k < first + count; ++k) {
       const Triangle t = mesh.slotTriangle(k);
-      if (within(squaredDistance(bounds(t), p))) visit(t, mesh.bvh().primIndices[k]);
+      if (within(mesh_detail::boxSquaredDistance(bounds(t), p))) visit(t, mesh.bvh().primIndices[k]);
     }
     return true;
   }
