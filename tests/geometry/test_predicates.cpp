@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iomanip>
@@ -151,7 +152,7 @@ TEST(Predicates, StaticCollinearityFilterCertifiesOnlyProperTriangles) {
       a[k] = Real(small(rng) * s);
       b[k] = Real(small(rng) * s);
     }
-    if (f == 0) {  // collinear on the grid: c = a + k (b − a), k in [-2, 2] in quarters
+    if (f == 0) {  // collinear on the grid: c = a + t (b − a), t in [-4, 4] in sixteenths
       const double t = small(rng) / 16.0;
       for (int k = 0; k < 3; ++k) c[k] = Real(double(a[k]) + t * (double(b[k]) - double(a[k])));
     } else if (f == 1) {  // coincident corners
@@ -183,6 +184,36 @@ TEST(Predicates, StaticCollinearityFilterCertifiesOnlyProperTriangles) {
   EXPECT_GT(collinear, 50000);
   EXPECT_GT(randomClaimed, random * 99 / 100);
   EXPECT_GT(claimed, randomClaimed);  // also some one-ulp slivers
+}
+
+TEST(Predicates, StaticCollinearityFilterIsNotFooledByRoundedDifferences) {
+  // Exactly collinear corners whose differences and products round in double: two far points
+  // ±A·(1, 3) (A = 2^k, k in [30, 120]) and one near the origin, x·(1, 3) with x a float of 21
+  // significant bits (so 3x is exact), in a random plane z, axes permuted and corners shuffled.
+  // The rounded cross product is often non-zero; the filter must still never call them proper.
+  std::mt19937_64 rng(29);
+  std::uniform_int_distribution<int> expo(30, 120), frac(1, (1 << 20) - 1), small(-40, 40);
+  int roundedNonZero = 0;
+  const int cases = 100000;
+  for (int i = 0; i < cases; ++i) {
+    const double A = std::ldexp(1.0, expo(rng));
+    const double x = std::ldexp(1.0 + std::ldexp(double(frac(rng)), -20), small(rng));
+    const double z = std::ldexp(double(frac(rng)), small(rng));
+    double pts[3][3] = {{A, 3 * A, z}, {-A, -3 * A, z}, {x, 3 * x, z}};
+    int axes[3] = {0, 1, 2};
+    std::shuffle(axes, axes + 3, rng);
+    std::shuffle(pts, pts + 3, rng);
+    WVec3 v[3];
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) v[k][axes[c]] = Wide(Real(pts[k][c]));  // every value exact in Real
+    ASSERT_TRUE(exactlyCollinear(v[0], v[1], v[2]));
+    roundedNonZero += ((v[1] - v[0]).cross(v[2] - v[0]).array() != 0).any();
+    ASSERT_FALSE(crux::predicates::certainlyNotCollinear(v[0], v[1], v[2]))
+        << std::setprecision(17) << v[0].transpose() << " | " << v[1].transpose() << " | " << v[2].transpose();
+    ASSERT_NE(crux::predicates::classify(v[0], v[1], v[2]).kind, crux::predicates::TriangleKind::Triangle);
+  }
+  // a filter that trusted the rounded cross product (no error bound) would fail here
+  EXPECT_GT(roundedNonZero, cases / 20);
 }
 
 // ---- near-degenerate families against the exact oracle ------------------------------------

@@ -42,6 +42,30 @@ Mat3 randomSignedPermutation(std::mt19937_64& rng) {
   return m;
 }
 
+/// A wide node whose first n lanes hold boxes with corners from coordinate() (each axis's two
+/// draws sorted) and whose other lanes are unused (empty boxes); the boxes are also written out.
+template <class Coordinate>
+WideBvhNode randomNode(int n, Coordinate coordinate, Aabb (&boxes)[4]) {
+  WideBvhNode node;
+  for (int l = 0; l < 4; ++l) {
+    Aabb& b = boxes[l];
+    if (l < n) {
+      for (int k = 0; k < 3; ++k) {
+        const Real a = coordinate(), c = coordinate();
+        b.min[k] = std::min(a, c);
+        b.max[k] = std::max(a, c);
+      }
+    } else {
+      b = Aabb::empty();
+    }
+    node.minX[l] = b.min.x(), node.minY[l] = b.min.y(), node.minZ[l] = b.min.z();
+    node.maxX[l] = b.max.x(), node.maxY[l] = b.max.y(), node.maxZ[l] = b.max.z();
+    node.child[l] = l < n ? 0u : WideBvhNode::kEmpty;
+    node.count[l] = l < n ? 1u : 0u;
+  }
+  return node;
+}
+
 TEST(ObbBoxTest, SameAnswersAsTheScalarTest) {
   std::mt19937_64 rng(15);
   std::uniform_real_distribution<Real> u(-2, 2), size(0, 1.5);
@@ -86,25 +110,9 @@ TEST(ObbBoxTest, FourLaneTestGivesEachBoxTheOneBoxAnswer) {
                              : Vec3(size(rng), size(rng), size(rng));
     const ObbBoxTest test(axes, pad);
     const ObbBoxTest::Placed placed = test.place(center, half);
-    WideBvhNode node;
     const int n = used(rng);
     Aabb boxes[4];
-    for (int l = 0; l < 4; ++l) {
-      Aabb& b = boxes[l];
-      if (l < n) {
-        for (int k = 0; k < 3; ++k) {
-          const Real a = onGrid ? Real(grid(rng)) : u(rng), c = onGrid ? Real(grid(rng)) : u(rng);
-          b.min[k] = std::min(a, c);
-          b.max[k] = std::max(a, c);
-        }
-      } else {
-        b = Aabb::empty();
-      }
-      node.minX[l] = b.min.x(), node.minY[l] = b.min.y(), node.minZ[l] = b.min.z();
-      node.maxX[l] = b.max.x(), node.maxY[l] = b.max.y(), node.maxZ[l] = b.max.z();
-      node.child[l] = l < n ? 0u : WideBvhNode::kEmpty;
-      node.count[l] = l < n ? 1u : 0u;
-    }
+    const WideBvhNode node = randomNode(n, [&] { return onGrid ? Real(grid(rng)) : u(rng); }, boxes);
     const unsigned mask = test.touches4(placed, node);
     for (int l = 0; l < 4; ++l) {
       const bool want = l < n && test.touches(placed, boxes[l]);
@@ -150,25 +158,9 @@ TEST(BoxSquaredDistance, FourLaneFormIsTheOneBoxFormBitForBit) {
     const bool onGrid = i % 2 == 1;
     auto pick = [&] { return onGrid ? Real(grid(rng)) : u(rng); };
     const Vec3 p(pick(), pick(), pick());
-    WideBvhNode node;
     const int n = used(rng);
     Aabb boxes[4];
-    for (int l = 0; l < 4; ++l) {
-      Aabb& b = boxes[l];
-      if (l < n) {
-        for (int k = 0; k < 3; ++k) {
-          const Real a = pick(), c = pick();
-          b.min[k] = std::min(a, c);
-          b.max[k] = std::max(a, c);
-        }
-      } else {
-        b = Aabb::empty();
-      }
-      node.minX[l] = b.min.x(), node.minY[l] = b.min.y(), node.minZ[l] = b.min.z();
-      node.maxX[l] = b.max.x(), node.maxY[l] = b.max.y(), node.maxZ[l] = b.max.z();
-      node.child[l] = l < n ? 0u : WideBvhNode::kEmpty;
-      node.count[l] = l < n ? 1u : 0u;
-    }
+    const WideBvhNode node = randomNode(n, pick, boxes);
     const Lanes d = boxSquaredDistances4(node, p);
     for (int l = 0; l < 4; ++l) {
       if (l >= n) {
