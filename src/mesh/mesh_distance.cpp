@@ -138,6 +138,17 @@ inline void loadTransposed(const MeshDistanceAccel::Node* const (&n)[4], int k, 
 }
 #undef CRUX_LANE_SHUFFLE
 
+/// The 16 Reals of four nodes, one node per lane (f[i] holds Real i of every node). A node in all
+/// four lanes (the unsplit side of an expansion) is broadcast instead of transposed four times.
+inline void loadNodes(const MeshDistanceAccel::Node* const (&n)[4], Lanes (&f)[16]) {
+  if (n[1] == n[0] && n[2] == n[0] && n[3] == n[0]) {
+    const Real* r = reinterpret_cast<const Real*>(n[0]);
+    for (int i = 0; i < 16; ++i) f[i] = Lanes{r[i], r[i], r[i], r[i]};
+    return;
+  }
+  for (int k = 0; k < 4; ++k) loadTransposed(n, k, f + 4 * k);
+}
+
 }  // namespace
 
 void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDistanceAccel::Node* const (&b)[4],
@@ -145,7 +156,8 @@ void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDist
   // Each node is 16 Reals: axes(r, c) at 3c + r, center at 9, half at 12 (static_assert above);
   // fa[i] / fb[i] hold Real i of the four boxes a / b.
   Lanes fa[16], fb[16];
-  for (int k = 0; k < 4; ++k) loadTransposed(a, k, fa + 4 * k), loadTransposed(b, k, fb + 4 * k);
+  loadNodes(a, fa);
+  loadNodes(b, fb);
   const Lanes* cA = fa + 9;
   const Lanes* cB = fb + 9;
   // d = (R·cB + t) − cA: b's centre in a's frame minus a's; e = cB + Rᵀ·(t − cA): the same

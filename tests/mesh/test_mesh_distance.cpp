@@ -580,8 +580,8 @@ void referenceOffsets(const MeshDistanceAccel::Node& A, const MeshDistanceAccel:
 TEST(MeshDistance, BatchedNodePairOffsetsAreBitIdenticalToAScalarEvaluation) {
   // The SIMD routine behind the accelerated query's first node-pair bound, against the
   // documented formula evaluated one pair at a time: random node quadruples of a real mesh's
-  // accelerator (inner nodes and leaves, repeated lanes, a node against itself at the identity:
-  // d = 0), random rotations (and quarter turns), translations and limits, including limits
+  // accelerator (inner nodes and leaves, repeated lanes, one side's node in all four lanes, a node
+  // against itself at the identity: d = 0), random rotations (and quarter turns), translations and limits, including limits
   // that prune some lanes and none.
   const Mesh blob = loadMesh(std::string(CRUX_SOURCE_DIR) + "/data/meshes/blob.off");
   const MeshDistanceAccel acc(blob);
@@ -602,6 +602,9 @@ TEST(MeshDistance, BatchedNodePairOffsetsAreBitIdenticalToAScalarEvaluation) {
     const MeshDistanceAccel::Node* b[4];
     for (int l = 0; l < 4; ++l) a[l] = &nodes[pick(rng)], b[l] = &nodes[pick(rng)];
     if (c % 7 == 0) a[2] = a[0], b[3] = b[1];  // repeated lanes, as a 2-pair expansion has
+    // one side a single node in every lane (the unsplit side of an expansion: broadcast)
+    if (c % 3 == 1) b[1] = b[2] = b[3] = b[0];
+    if (c % 3 == 2) a[1] = a[2] = a[3] = a[0];
     Transform tr;
     if (c % 11 == 0) {
       tr.rotation = Quat(Eigen::AngleAxis<Real>(Real(M_PI / 2), Vec3::UnitZ()));
