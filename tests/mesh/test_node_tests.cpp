@@ -167,8 +167,8 @@ TEST(BoxSquaredDistance, FourLaneFormIsTheOneBoxFormBitForBit) {
         ASSERT_EQ(d[l], std::numeric_limits<Real>::infinity()) << "case " << i << " lane " << l;
         continue;
       }
-      const Real want = boxSquaredDistance(boxes[l], p);
-      ASSERT_EQ(std::memcmp(&d[l], &want, sizeof want), 0) << "case " << i << " lane " << l << ": " << d[l] << " vs " << want;
+      const Real want = boxSquaredDistance(boxes[l], p), got = d[l];
+      ASSERT_EQ(std::memcmp(&got, &want, sizeof want), 0) << "case " << i << " lane " << l << ": " << got << " vs " << want;
       (want == 0 ? inside : outside) += 1;
       // and it is the squared distance to the box's closest point, up to rounding
       const Real ref = (p.cwiseMax(boxes[l].min).cwiseMin(boxes[l].max) - p).squaredNorm();
