@@ -591,11 +591,11 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
     } else {
       // One side is split (n <= 4): the four pairs' box bounds in lanes (a short group repeats
       // its first pair), then the refinements for the survivors.
+      const Aabb firstA = wideSubtreeBounds(ba, idsA[0]), firstB = wideSubtreeBounds(bb, idsB[0]);
       Aabb boxA[4], boxB[4];
       for (int l = 0; l < 4; ++l) {
-        const int q = l < n ? l : 0;
-        boxA[l] = (l == 0 || splitA) && l < n ? wideSubtreeBounds(ba, idsA[q / nB]) : boxA[0];
-        boxB[l] = (l == 0 || splitB) && l < n ? wideSubtreeBounds(bb, idsB[q % nB]) : boxB[0];
+        boxA[l] = splitA && l > 0 && l < n ? wideSubtreeBounds(ba, idsA[l]) : firstA;
+        boxB[l] = splitB && l > 0 && l < n ? wideSubtreeBounds(bb, idsB[l]) : firstB;
       }
       Real bounds[4];
       boxBoxLowerBounds(boxA, boxB, rel, pad, bounds);
