@@ -7,8 +7,8 @@ The rays (bench_rays.py's: from a sphere of 3 bounding radii towards random poin
 bounds) are made in this process and scattered over the workers before timing, as data already on
 the cluster (da.from_zarr etc.) would be; the mesh is given by path, loaded once per worker during
 a warm-up. Two computations are timed (median and best of --runs):
-  - answers: dask.compute(*hits), all four answers gathered into this process (the packed blocks
-    cost 64 bytes per ray of transfer);
+  - answers: dask.compute(*hits), all four answers gathered into this process (36 bytes per ray
+    of transfer: t, triangle as int64, point, normal);
   - hit count: the number of hits, reduced on the workers (the rays' work alone).
 The control: the same rays in this process on crux's own 1 and 2 threads. On a machine shared
 with other work, the workers' speedup cannot exceed that one; the load average is printed too.

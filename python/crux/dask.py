@@ -14,7 +14,7 @@ Every block runs crux with ``threads=1``: a Dask worker process runs one task pe
 so parallelism comes from the worker processes (``LocalCluster(n_workers=N,
 threads_per_worker=1)`` or ``dask-worker --nthreads 1``). Blocks are recomputed when a worker
 dies, so the result is complete and identical. Several answers of one call (t, triangle, point,
-normal) come from one packed block each: compute them together, ``dask.compute(*hits)``.
+normal) come from one task per block: compute them together, ``dask.compute(*hits)``.
 """
 
 import functools
@@ -61,30 +61,39 @@ def _rows(array, width, name):
     return a.rechunk({a.ndim - 1: width})
 
 
-# Packed blocks: every answer of a row as float64 (exact for crux's Real and for triangle indices).
-def _pack_closest(block, source, max_distance, cull_back_faces):
-    h = _mesh(source).ray_closest(block, max_distance=max_distance, cull_back_faces=cull_back_faces, threads=1)
-    return np.concatenate(
-        [h.t[..., None], h.triangle[..., None].astype(np.float64), h.point, h.normal], axis=-1, dtype=np.float64
-    )
-
-
-def _pack_closest_point(block, source, max_distance):
-    c = _mesh(source).closest_point(block, max_distance=max_distance, threads=1)
-    return np.concatenate(
-        [c.point, c.distance[..., None], c.triangle[..., None].astype(np.float64)], axis=-1, dtype=np.float64
-    )
-
-
 def _apply(block, source, method, kwargs):
     return getattr(_mesh(source), method)(block, threads=1, **kwargs)
 
 
-def _packed(rows, source, func, width, *args):
-    chunks = rows.chunks[:-1] + ((width,),)
-    # meta given: dask must not call func on an empty block with the delayed mesh to find it
-    meta = np.empty((0,) * rows.ndim, np.float64)
-    return da.map_blocks(func, rows, source, *args, dtype=np.float64, chunks=chunks, meta=meta)
+# Calls with several answers (t, triangle, point, normal): one task per block answers the call and
+# keeps the answers as they are, a tuple of arrays; each answer array is then taken out of it by a
+# small task of its own on the same worker, so each crosses to the client in its own dtype and no
+# packed copy is made.
+def _answers(block, source, method, kwargs):
+    return tuple(_apply(block, source, method, kwargs))
+
+
+def _field(answers, i):
+    return answers[i]
+
+
+def _split(rows, source, method, fields, **kwargs):
+    """The answers of ``method`` over ``rows``, one lazy array per (dtype, trailing width) of fields
+    (width None: the rows' leading shape; an int: one more axis of that length)."""
+    lead = rows.ndim - 1
+    # meta given: dask must not call the function on an empty block with the delayed mesh to find it
+    blocks = da.map_blocks(
+        _answers, rows, source, method, kwargs, dtype=object, drop_axis=lead, meta=np.empty((0,) * lead, object)
+    )
+    out = []
+    for i, (dtype, width) in enumerate(fields):
+        if width is None:
+            out.append(blocks.map_blocks(_field, i, dtype=dtype, meta=np.empty((0,) * lead, dtype)))
+        else:
+            chunks = blocks.chunks + ((width,),)
+            meta = np.empty((0,) * (lead + 1), dtype)
+            out.append(blocks.map_blocks(_field, i, dtype=dtype, new_axis=lead, chunks=chunks, meta=meta))
+    return out
 
 
 def _reduced(rows, source, method, dtype, **kwargs):
@@ -95,9 +104,9 @@ def _reduced(rows, source, method, dtype, **kwargs):
 def ray_closest(mesh, rays, max_distance=np.inf, cull_back_faces=False):
     """Mesh.ray_closest over a dask array of rays (..., 6): crux.RayHits of lazy dask arrays."""
     rows = _rows(rays, 6, "rays")
-    p = _packed(rows, _source(mesh), _pack_closest, 8, max_distance, cull_back_faces)
+    fields = [(_crux.REAL, None), (np.int64, None), (_crux.REAL, 3), (_crux.REAL, 3)]
     return _crux.RayHits(
-        p[..., 0].astype(_crux.REAL), p[..., 1].astype(np.int64), p[..., 2:5].astype(_crux.REAL), p[..., 5:8].astype(_crux.REAL)
+        *_split(rows, _source(mesh), "ray_closest", fields, max_distance=max_distance, cull_back_faces=cull_back_faces)
     )
 
 
@@ -110,8 +119,8 @@ def ray_any(mesh, rays, max_distance=np.inf, cull_back_faces=False):
 def closest_point(mesh, points, max_distance=np.inf):
     """Mesh.closest_point over a dask array of points (..., 3): crux.ClosestPoints of lazy arrays."""
     rows = _rows(points, 3, "points")
-    p = _packed(rows, _source(mesh), _pack_closest_point, 5, max_distance)
-    return _crux.ClosestPoints(p[..., 0:3].astype(_crux.REAL), p[..., 3].astype(_crux.REAL), p[..., 4].astype(np.int64))
+    fields = [(_crux.REAL, 3), (_crux.REAL, None), (np.int64, None)]
+    return _crux.ClosestPoints(*_split(rows, _source(mesh), "closest_point", fields, max_distance=max_distance))
 
 
 def contains(mesh, points):
