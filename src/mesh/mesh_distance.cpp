@@ -196,9 +196,6 @@ void obbPairOffsets(const MeshDistanceAccel::Node* const (&a)[4], const MeshDist
 
 namespace {
 
-inline Lanes lanesMin(const Lanes& x, const Lanes& y) { return lanesSelect(x < y, x, y); }
-inline Lanes lanesMax(const Lanes& x, const Lanes& y) { return lanesSelect(x > y, x, y); }
-
 /// Up to four triangles of mesh b (mapped into a's frame) in lanes, with their boxes, normals
 /// (b − a) × (c − a) and corner sums, for the leaf-pair filter (fewer than four: the last
 /// triangle repeats).
