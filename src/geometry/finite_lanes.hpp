@@ -11,6 +11,11 @@
 #include <cstring>
 #include <type_traits>
 
+// Four doubles are 32 bytes, passed differently with and without AVX; these functions are inline
+// and every file is built with the same flags, so GCC's ABI note does not apply (as in
+// src/mesh/lanes.hpp; it is reported at the end of a translation unit, so it is not popped).
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace crux::geometry_detail {
 
 /// Four lanes of Real (the GCC/Clang vector extension crux is built with).
