@@ -307,7 +307,14 @@ bool Octree::raycast(const Ray& ray, RayProxyCollector& collector) const {
       if (child != kNone && rayBoxEntry(slabs, looseBounds(nodes_[child]), collector.maxT, t))
         children[count++] = {child, t};
     }
-    std::sort(children, children + count, [](const Item& a, const Item& b) { return a.t > b.t; });
+    // (Insertion sort, stable: at most eight items. std::sort's code for longer ranges made GCC
+    // warn of an out-of-bounds index it never reaches.)
+    for (int i = 1; i < count; ++i) {
+      const Item x = children[i];
+      int j = i;
+      for (; j > 0 && children[j - 1].t < x.t; --j) children[j] = children[j - 1];
+      children[j] = x;
+    }
     for (int i = 0; i < count; ++i) stack[top++] = children[i];
   }
   return true;
