@@ -471,7 +471,8 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
         const V& p = t[is];
         const double sep = s * p[k] - h[k];
         const int a1 = kNextMod3[k], a2 = kNextMod3[k + 1];
-        const bool inside = !((p[a1] + h[a1] < 0) | (h[a1] - p[a1] < 0) | (p[a2] + h[a2] < 0) | (h[a2] - p[a2] < 0));
+        const bool inside =
+            !(int(p[a1] + h[a1] < 0) | int(h[a1] - p[a1] < 0) | int(p[a2] + h[a2] < 0) | int(h[a2] - p[a2] < 0));
         if (!inside || !(sep <= m) || (best.sep > 0 && sep > best.sep + kRealiseTolerance))
           return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
         out.normal = n.cast<Real>();
