@@ -167,8 +167,8 @@ class BoxCollider {
     // the triangle beyond a face of the box by more than the margin
     const Eigen::Vector3d lo = a.cwiseMin(b).cwiseMin(cc), hi = a.cwiseMax(b).cwiseMax(cc);
     // one branch on the six comparisons (as six, each was mispredicted now and then)
-    const bool beyond = (lo.x() > reach_.x()) | (lo.y() > reach_.y()) | (lo.z() > reach_.z()) |
-                        (hi.x() < -reach_.x()) | (hi.y() < -reach_.y()) | (hi.z() < -reach_.z());
+    const bool beyond = int(lo.x() > reach_.x()) | int(lo.y() > reach_.y()) | int(lo.z() > reach_.z()) |
+                        int(hi.x() < -reach_.x()) | int(hi.y() < -reach_.y()) | int(hi.z() < -reach_.z());
     if (beyond) return;
     // (no plane reject here: the routine's SAT tests the triangle's normal itself; that
     // prefilter rejected ~1% of the triangles the face axes leave on bunny00 and cost more)
