@@ -586,13 +586,14 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
         }
       }
     } else {
-      // One side is split (n <= 4): the four pairs' box bounds in lanes (a short group repeats
-      // its first pair), then the refinements for the survivors.
-      const Aabb firstA = wideSubtreeBounds(ba, idsA[0]), firstB = wideSubtreeBounds(bb, idsB[0]);
+      // One side is split (n <= 4): the four pairs' box bounds in lanes (the unsplit side's box
+      // in every lane; a short group repeats its first pair), then the refinements for the
+      // survivors.
+      const Aabb pairBoxA = wideSubtreeBounds(ba, idsA[0]), pairBoxB = wideSubtreeBounds(bb, idsB[0]);
       Aabb boxA[4], boxB[4];
       for (int l = 0; l < 4; ++l) {
-        boxA[l] = splitA && l > 0 && l < n ? wideSubtreeBounds(ba, idsA[l]) : firstA;
-        boxB[l] = splitB && l > 0 && l < n ? wideSubtreeBounds(bb, idsB[l]) : firstB;
+        boxA[l] = splitA && l > 0 && l < n ? wideSubtreeBounds(ba, idsA[l]) : pairBoxA;
+        boxB[l] = splitB && l > 0 && l < n ? wideSubtreeBounds(bb, idsB[l]) : pairBoxB;
       }
       Real bounds[4];
       boxBoxLowerBounds(boxA, boxB, rel, pad, bounds);
