@@ -11,14 +11,22 @@
 #include <cstring>
 #include <type_traits>
 
-// Four doubles are 32 bytes, passed differently with and without AVX; these functions are inline
-// and every file is built with the same flags, so GCC's ABI note does not apply (as in
-// src/mesh/lanes.hpp; it is reported at the end of a translation unit, so it is not popped).
+// crux is built with GCC or Clang (README: requirements), so there is no scalar copy of the
+// lane arithmetic to keep in step.
+#if !defined(__GNUC__)
+#error "crux needs GCC or Clang: src/geometry/finite_lanes.hpp uses their vector extension"
+#endif
+
+// Four doubles are 32 bytes, passed differently with and without AVX: the functions taking them
+// are internal (inline, or in an anonymous namespace of the including file) and every file is
+// built with the same flags, so GCC's ABI note does not apply. It is reported at the end of a
+// translation unit, so it stays off for the rest of the including file (not popped).
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace crux::geometry_detail {
 
-/// Four lanes of Real (the GCC/Clang vector extension crux is built with).
+/// Four lanes of Real (the GCC/Clang vector extension): the one four-lane type of the entry
+/// checks here and of the mesh layer's node tests (src/mesh/lanes.hpp).
 using FiniteLanes = Real __attribute__((vector_size(4 * sizeof(Real))));
 
 /// The lane sums of x − x over every Real of `obj` (an array of at least four Reals, no

@@ -5,6 +5,8 @@
 
 #include <crux/geometry/shapes.hpp>
 
+#include "geometry/finite_lanes.hpp"  // the four-lane type (and GCC's AVX ABI note turned off)
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -15,22 +17,10 @@
 #include <limits>
 #include <type_traits>
 
-// crux is built with GCC or Clang (README: requirements), so there is no scalar copy of the
-// lane arithmetic to keep in step.
-#if !defined(__GNUC__)
-#error "crux needs GCC or Clang: src/mesh/lanes.hpp uses their vector extension"
-#endif
-
-// Four doubles are 32 bytes, passed differently with and without AVX: the functions taking them
-// are internal (inline here, or in an anonymous namespace of the including file), so GCC's ABI
-// note does not apply. It is reported at the end of a translation unit, so it stays off for the
-// rest of the including file (not popped).
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace crux::mesh_detail {
 
-/// Four lanes of Real.
-using Lanes = Real __attribute__((vector_size(4 * sizeof(Real))));
+/// Four lanes of Real (the geometry layer's type).
+using Lanes = geometry_detail::FiniteLanes;
 using LaneInt = std::conditional_t<sizeof(Real) == 4, std::int32_t, std::int64_t>;
 /// Four lanes of integers as wide as Real (comparison results: all ones or all zeros).
 using LaneBits = LaneInt __attribute__((vector_size(4 * sizeof(Real))));
