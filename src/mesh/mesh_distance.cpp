@@ -8,6 +8,7 @@
 #include <crux/precondition.hpp>
 
 #include "geometry/bits.hpp"
+#include "geometry/small_sort.hpp"
 #include "lanes.hpp"
 #include "node_tests.hpp"
 #include "relative_frame.hpp"
@@ -476,8 +477,7 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   constexpr int kMaxCandidates = 64;
   Candidate candidates[kMaxCandidates];
   auto offerCandidates = [&](int n, std::uint32_t j0) {
-    for (int x = 1; x < n; ++x)
-      for (int y = x; y > 0 && candidates[y].bound < candidates[y - 1].bound; --y) std::swap(candidates[y], candidates[y - 1]);
+    detail::insertionSort(candidates, n, [](const Candidate& x, const Candidate& y) { return x.bound < y.bound; });
     for (int x = 0; x < n && candidates[x].bound <= best.limit; ++x) {
       const Candidate& c = candidates[x];
       best.offer(triA(c.i), mapped[c.k], ba.primIndices[c.i], bb.primIndices[j0 + c.k]);

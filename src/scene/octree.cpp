@@ -1,6 +1,7 @@
 #include <crux/scene/octree.hpp>
 
 #include "box_tests.hpp"
+#include "geometry/small_sort.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -307,14 +308,7 @@ bool Octree::raycast(const Ray& ray, RayProxyCollector& collector) const {
       if (child != kNone && rayBoxEntry(slabs, looseBounds(nodes_[child]), collector.maxT, t))
         children[count++] = {child, t};
     }
-    // (Insertion sort, stable: at most eight items. std::sort's code for longer ranges made GCC
-    // warn of an out-of-bounds index it never reaches.)
-    for (int i = 1; i < count; ++i) {
-      const Item x = children[i];
-      int j = i;
-      for (; j > 0 && children[j - 1].t < x.t; --j) children[j] = children[j - 1];
-      children[j] = x;
-    }
+    detail::insertionSort(children, count, [](const Item& a, const Item& b) { return a.t > b.t; });
     for (int i = 0; i < count; ++i) stack[top++] = children[i];
   }
   return true;
