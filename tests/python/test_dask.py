@@ -44,6 +44,8 @@ def test_rays_by_pickled_mesh_equal_in_process(client):
     rays = random_rays(mesh, 20000, seed=3).reshape(100, 200, 6)
     hits = cd.ray_closest(mesh, da.from_array(rays, chunks=(25, 200, 6)))
     equal(dask.compute(*hits), mesh.ray_closest(rays))
+    one = rays[0, 0]  # a single ray, shape (6,): 0-d answers, (3,) points and normals
+    equal(dask.compute(*cd.ray_closest(mesh, da.from_array(one, chunks=(6,)))), mesh.ray_closest(one))
     equal([cd.ray_any(mesh, da.from_array(rays, chunks=(10, 100, 6))).compute()], [mesh.ray_any(rays)])
 
 
@@ -52,6 +54,7 @@ def test_points_and_shapes_by_path_equal_in_process(client, bunny):
     points = random_points(bunny, 6000, seed=8)
     dpoints = da.from_array(points, chunks=(1000, 3))
     equal(dask.compute(*cd.closest_point(path, dpoints)), bunny.closest_point(points))
+    equal(dask.compute(*cd.closest_point(path, da.from_array(points[0], chunks=(3,)))), bunny.closest_point(points[0]))
     spheres = np.c_[points, np.full(len(points), 0.01, dtype=crux.REAL)]
     equal([cd.overlaps_spheres(path, da.from_array(spheres, chunks=(1500, 4))).compute()],
           [bunny.overlaps_spheres(spheres)])
