@@ -547,17 +547,23 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
       sa = (boxA.max - boxA.min).sum(), sb = (boxB.max - boxB.min).sum();
     }
     const bool splitA = !leafA && (leafB || sa >= sb), splitB = !splitA;
+    // Whether lane l of wide node `node` is used: with both accelerators from the lane's own
+    // box (kUnused for an unused lane), whose cache line the bound reads next anyway, so the
+    // descent never touches the BVH's nodes; otherwise from the BVH node.
+    auto used = [&](const WideBvh& bvh, const Node* obb, std::uint32_t node, int l) {
+      return both ? obb[wideLaneId(node, l)].child != MeshDistanceAccel::kUnused : bvh.nodes[node].used(l);
+    };
     std::uint32_t idsA[4] = {p.a}, idsB[4] = {p.b};
     int nA = 1, nB = 1;
     if (splitA) {
       nA = 0;
       for (int l = 0; l < 4; ++l)
-        if (ba.nodes[firstA].used(l)) idsA[nA++] = wideLaneId(firstA, l);
+        if (used(ba, obbA, firstA, l)) idsA[nA++] = wideLaneId(firstA, l);
     }
     if (splitB) {
       nB = 0;
       for (int l = 0; l < 4; ++l)
-        if (bb.nodes[firstB].used(l)) idsB[nB++] = wideLaneId(firstB, l);
+        if (used(bb, obbB, firstB, l)) idsB[nB++] = wideLaneId(firstB, l);
     }
     const int n = nA * nB;
     int kept = 0;
