@@ -1546,13 +1546,17 @@ DiffOptions campaignOptions() {
 TEST(DiffCampaign, MergedShardsEqualTheSerialRun) {
   const std::string root = testing::TempDir() + "/diff_campaign";
   std::filesystem::remove_all(root);
+  // seed 2's first 60 cases hold findings in two shards (cases 3 and 43) and an error answer in a
+  // third (case 24, FCL distance), in a few seconds even under the sanitizers
   DiffOptions serial = campaignOptions();
-  serial.cases = 190;  // the first error answer of seed 1 is case 186's (Bullet, closest_point_triangle)
+  serial.seed = 2;
+  serial.cases = 60;
   std::ostringstream out, err;
   const J whole = runDiff(serial, err).toJson();
   std::vector<std::string> dirs;
-  for (const auto& [first, count] : {std::pair{0, 57}, std::pair{57, 90}, std::pair{147, 43}}) {
+  for (const auto& [first, count] : {std::pair{0, 20}, std::pair{20, 25}, std::pair{45, 15}}) {
     DiffOptions shard = campaignOptions();
+    shard.seed = 2;
     shard.firstCase = std::uint64_t(first);
     shard.cases = std::uint64_t(count);
     shard.shardDir = root + "/shard-" + std::to_string(first);
@@ -1564,9 +1568,9 @@ TEST(DiffCampaign, MergedShardsEqualTheSerialRun) {
   const MergedCampaign merged = mergeShards(dirs);
   EXPECT_TRUE(merged.complete());
   EXPECT_EQ(comparable(merged.toJson()), comparable(whole));
-  EXPECT_EQ(merged.summary.cases, 190u);
+  EXPECT_EQ(merged.summary.cases, 60u);
   // not a trivial equality: the run has findings and error examples to join
-  EXPECT_FALSE(merged.summary.findings.empty());
+  EXPECT_GE(merged.summary.findings.size(), 2u);
   EXPECT_FALSE(merged.summary.exampleErrors.empty());
   // a shard given twice is merged once
   dirs.push_back(dirs.front());
