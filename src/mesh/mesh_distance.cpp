@@ -530,71 +530,59 @@ void descend(const Mesh& a, const Mesh& b, const Relative& rel, const MeshDistan
   // subtree is split into its node's lanes (RTCD 6.3.2); with both
   // accelerators their first bounds are taken four pairs at a time in SIMD lanes.
   auto children = [&](const Pair& p, Pair* out) -> int {
-    bool leafA, leafB;
-    std::uint32_t firstA, firstB;
-    Real sa, sb;
-    if (both) {
-      const Node& na = obbA[p.a];
-      const Node& nb = obbB[p.b];
-      leafA = na.child == MeshDistanceAccel::kLeaf, leafB = nb.child == MeshDistanceAccel::kLeaf;
-      firstA = na.child, firstB = nb.child;
-      sa = 2 * na.half.sum(), sb = 2 * nb.half.sum();
-    } else {
-      const WideSubtree na = wideSubtree(ba, p.a), nb = wideSubtree(bb, p.b);
-      leafA = na.isLeaf(), leafB = nb.isLeaf();
-      firstA = na.first, firstB = nb.first;
-      const Aabb boxA = wideSubtreeBounds(ba, p.a), boxB = wideSubtreeBounds(bb, p.b);
-      sa = (boxA.max - boxA.min).sum(), sb = (boxB.max - boxB.min).sum();
-    }
-    const bool splitA = !leafA && (leafB || sa >= sb), splitB = !splitA;
-    // Whether lane l of wide node `node` is used: with both accelerators from the lane's own
-    // box (kUnused for an unused lane), whose cache line the bound reads next anyway, so the
-    // descent never touches the BVH's nodes; otherwise from the BVH node.
-    auto used = [&](const WideBvh& bvh, const Node* obb, std::uint32_t node, int l) {
-      return both ? obb[wideLaneId(node, l)].child != MeshDistanceAccel::kUnused : bvh.nodes[node].used(l);
-    };
-    std::uint32_t idsA[4] = {p.a}, idsB[4] = {p.b};
-    int nA = 1, nB = 1;
-    if (splitA) {
-      nA = 0;
-      for (int l = 0; l < 4; ++l)
-        if (used(ba, obbA, firstA, l)) idsA[nA++] = wideLaneId(firstA, l);
-    }
-    if (splitB) {
-      nB = 0;
-      for (int l = 0; l < 4; ++l)
-        if (used(bb, obbB, firstB, l)) idsB[nB++] = wideLaneId(firstB, l);
-    }
-    const int n = nA * nB;
     int kept = 0;
     if (both) {
-      // Four pairs' centre offsets at a time (a short group repeats its first pair, masked
-      // out), then the rest of the bound only for pairs not already beyond the limit, taken by
-      // a mask rather than by one unpredictable branch per pair.
-      for (int g = 0; g < n; g += 4) {
-        const Node* laneA[4];
-        const Node* laneB[4];
-        std::uint32_t as[4], bs[4];
-        for (int l = 0; l < 4; ++l) {
-          const int q = g + l < n ? g + l : g;
-          as[l] = idsA[q / nB], bs[l] = idsB[q % nB];
-          laneA[l] = obbA + as[l], laneB[l] = obbB + bs[l];
-        }
-        mesh_detail::ObbPairOffsets o;
-        mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
-        unsigned live = 0;
-        for (int l = 0; l < 4; ++l) live |= unsigned(o.bound[l] != kNoLimit && g + l < n) << l;
-        while (live) {
-          const int l = lowestBit(live);
-          live &= live - 1;
-          out[kept] = {as[l], bs[l], obbBound(as[l], bs[l], o, l)};
-          kept += out[kept].bound <= best.limit;
-        }
+      // Lane l of the split node is pair l: the unsplit node sits in every lane, and an unused
+      // lane (kUnused, a zero box) is bounded with the others and masked out, so there is no
+      // gathering of used lanes and no pair count (fewer instructions than gathering, and
+      // one group of four pairs). Only the pairs not already beyond the limit take the rest of
+      // the bound, by a mask rather than one unpredictable branch per pair.
+      const Node& na = obbA[p.a];
+      const Node& nb = obbB[p.b];
+      const bool splitA = (na.child != MeshDistanceAccel::kLeaf) &
+                          ((nb.child == MeshDistanceAccel::kLeaf) | (na.half.sum() >= nb.half.sum()));
+      const Node* split = splitA ? obbA : obbB;
+      const std::uint32_t first = splitA ? na.child : nb.child;
+      const Node* laneA[4];
+      const Node* laneB[4];
+      std::uint32_t as[4], bs[4];
+      unsigned used = 0;
+      for (int l = 0; l < 4; ++l) {
+        const std::uint32_t id = wideLaneId(first, l);
+        as[l] = splitA ? id : p.a, bs[l] = splitA ? p.b : id;
+        laneA[l] = obbA + as[l], laneB[l] = obbB + bs[l];
+        used |= unsigned(split[id].child != MeshDistanceAccel::kUnused) << l;
+      }
+      mesh_detail::ObbPairOffsets o;
+      mesh_detail::obbPairOffsets(laneA, laneB, rel.R, rel.t, best.limit + pad, pad, o);
+      unsigned live = used;
+      for (int l = 0; l < 4; ++l) live &= ~(unsigned(o.bound[l] == kNoLimit) << l);
+      while (live) {
+        const int l = lowestBit(live);
+        live &= live - 1;
+        out[kept] = {as[l], bs[l], obbBound(as[l], bs[l], o, l)};
+        kept += out[kept].bound <= best.limit;
       }
     } else {
       // One side is split (n <= 4): the four pairs' box bounds in lanes (the unsplit side's box
       // in every lane; a short group repeats its first pair), then the refinements for the
       // survivors.
+      const WideSubtree na = wideSubtree(ba, p.a), nb = wideSubtree(bb, p.b);
+      const Aabb boxPA = wideSubtreeBounds(ba, p.a), boxPB = wideSubtreeBounds(bb, p.b);
+      const Real sa = (boxPA.max - boxPA.min).sum(), sb = (boxPB.max - boxPB.min).sum();
+      const bool splitA = !na.isLeaf() && (nb.isLeaf() || sa >= sb), splitB = !splitA;
+      std::uint32_t idsA[4] = {p.a}, idsB[4] = {p.b};
+      int nA = 1, nB = 1;
+      if (splitA) {
+        nA = 0;
+        for (int l = 0; l < 4; ++l)
+          if (ba.nodes[na.first].used(l)) idsA[nA++] = wideLaneId(na.first, l);
+      } else {
+        nB = 0;
+        for (int l = 0; l < 4; ++l)
+          if (bb.nodes[nb.first].used(l)) idsB[nB++] = wideLaneId(nb.first, l);
+      }
+      const int n = nA * nB;
       const Aabb pairBoxA = wideSubtreeBounds(ba, idsA[0]), pairBoxB = wideSubtreeBounds(bb, idsB[0]);
       Aabb boxA[4], boxB[4];
       for (int l = 0; l < 4; ++l) {

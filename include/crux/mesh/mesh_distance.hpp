@@ -43,9 +43,9 @@ class MeshDistanceAccel {
  public:
   /// One subtree's box: centre, unit axes (columns), half extents along them; `child` is the
   /// wide node whose lanes are the subtree's children (subtrees wideLaneId(child, 0..3)), or
-  /// kLeaf, or kUnused for an unused lane (a zero placeholder, by which the query with both
-  /// meshes' data tells the used lanes without reading the BVH's node). One cache line per box
-  /// in float builds, so a pair's bound reads one line per side.
+  /// kLeaf, or kUnused for an unused lane (a zero placeholder: the query with both meshes' data
+  /// bounds it with the node's other lanes and masks it out, never reading the BVH's node). One
+  /// cache line per box in float builds, so a pair's bound reads one line per side.
   struct alignas(64) Node {
     Mat3 axes = Mat3::Identity();
     Vec3 center = Vec3::Zero();
