@@ -21,7 +21,9 @@
 /// program (LoadMeshOptions::importCommand, e.g. `crux import-mesh`) started by posix_spawn, so
 /// the library never forks a copy of a possibly threaded host. A signal, a non-zero exit or the
 /// time limit (10 s + 2 s per MB by default) become an InvalidInput naming the file. The memory
-/// estimate (estimateMeshMemory) is checked before any mesh-sized array is allocated.
+/// estimate (estimateMeshMemory) is checked before crux allocates any mesh-sized array: for OFF
+/// from the header, for assimp from the imported scene's counts. assimp's own allocation while
+/// it imports is bounded only in the child (its address-space limit), not in this process.
 ///
 /// Both paths then merge vertices with identical positions and drop unreferenced vertices, so
 /// the mesh's edges (and MeshStats' manifoldness) do not depend on how the file split vertices
@@ -374,7 +376,11 @@ bool isOffFile(const std::string& path) {
 // ---- assimp ---------------------------------------------------------------------------------
 
 #if defined(CRUX_HAVE_ASSIMP)
-RawMesh readWithAssimp(const std::string& path) {
+/// The triangles of the file by assimp. The memory estimate (requireMeshMemory, against
+/// memoryLimitBytes) is checked on the imported scene's vertex and face counts before crux
+/// copies them; assimp's own allocation during the import is bounded only in the child of the
+/// Subprocess isolation (RLIMIT_AS).
+RawMesh readWithAssimp(const std::string& path, std::size_t memoryLimitBytes) {
   Assimp::Importer importer;
   // Positions are all crux needs; without the other attributes JoinIdenticalVertices merges
   // by position alone.
@@ -395,6 +401,11 @@ RawMesh readWithAssimp(const std::string& path) {
   }
   if (!scene) fail(path, std::string("assimp could not import the file: ") + importer.GetErrorString());
   if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail(path, "assimp imported an incomplete scene (no meshes)");
+
+  std::size_t vertices = 0, faces = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    if (const aiMesh* mesh = scene->mMeshes[m]) vertices += mesh->mNumVertices, faces += mesh->mNumFaces;
+  requireMeshMemory(vertices, faces, memoryLimitBytes, path);
 
   RawMesh raw;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
@@ -476,7 +487,7 @@ int writeImportAnswer(const std::string& path, int fd, std::size_t memoryLimitBy
   std::string message;
   RawMesh raw;
   try {
-    raw = readWithAssimp(path);
+    raw = readWithAssimp(path, memoryLimitBytes);
     header.ok = 1;
   } catch (const InvalidInput& e) {
     message = e.what();
@@ -730,7 +741,7 @@ Mesh loadMesh(const std::string& path, const LoadMeshOptions& options) {
       raw = readWithAssimpInChild(path, options);
     else
 #endif
-      raw = readWithAssimp(path);
+      raw = readWithAssimp(path, options.memoryLimitBytes);
 #else
     fail(path, "crux was built without assimp, so only OFF files can be loaded");
 #endif
