@@ -366,7 +366,10 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
                        (e2x * e2x + e2y * e2y) + e2z * e2z};  // |E_j|²
   const double longest = std::max({L[0], L[1], L[2]});
   const double normalLen = std::sqrt((nx * nx + ny * ny) + nz * nz);
-  const bool hasFace = !classifyTriangle(normalLen, longest).degenerate && normalLen > 0;
+  const TriangleClass shape = classifyTriangle(normalLen, longest);
+  const bool hasFace = !shape.degenerate && normalLen > 0;
+  const bool referenceFace = hasFace && shape.referenceFace;  // (triangle_class.hpp)
+  const double featureLen = referenceFace ? normalLen : 0.0;  // the fallback's feature: no thin face
 
   Axis face;  // best box face: the first of the largest separations (NaN never wins)
   {
@@ -444,6 +447,22 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
   // contact.cpp turns a normal within 2° of a face into that face's normal: a face contact (2–4
   // points) rather than one edge–edge point, at most 2° off the minimum-penetration direction.
   if (best.kind == AxisKind::Edge && best.n.dot(face.n) >= kFeatureCos) best = face;
+  // A thin triangle is never the reference face (classifyTriangle's referenceFace, the rule of
+  // contacts() and the capsule path): when its face is the best axis, the box face within the
+  // feature angle of its normal becomes the axis and the reference, the triangle clipped against
+  // it (as contacts() clips a sliver against the other shape's face); with no such box face, the
+  // fallback's single closest or deepest pair.
+  if (best.kind == AxisKind::TriangleFace && !referenceFace) {
+    int k = 0;
+    best.n.cwiseAbs().maxCoeff(&k);
+    if (!(std::abs(best.n[k]) >= kFeatureCos)) return fallback(half, tri, m, t, h, normal, featureLen, unscale, out);
+    const double s = best.n[k] > 0 ? 1.0 : -1.0;
+    const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
+    best.kind = AxisKind::BoxFace;
+    best.i = k;
+    best.n = V::Unit(k) * s;
+    best.sep = s > 0 ? lo - h[k] : -h[k] - hi;
+  }
   out.normal = best.n.cast<Real>();
 
   // ---- points ----
@@ -474,7 +493,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
         const bool inside =
             !(int(p[a1] + h[a1] < 0) | int(h[a1] - p[a1] < 0) | int(p[a2] + h[a2] < 0) | int(h[a2] - p[a2] < 0));
         if (!inside || !(sep <= m) || (best.sep > 0 && sep > best.sep + kRealiseTolerance))
-          return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+          return fallback(half, tri, m, t, h, normal, featureLen, unscale, out);
         out.normal = n.cast<Real>();
         out.count = 1;
         ContactPoint& c = out.points[0];
@@ -582,10 +601,10 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
       c.fb = edgeId(idx, idx2);
     }
   }
-  if (np == 0) return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+  if (np == 0) return fallback(half, tri, m, t, h, normal, featureLen, unscale, out);
   if (best.sep > 0) {  // separated: the SAT bound is the distance only if a point realises it
     if (minSep > best.sep + kRealiseTolerance)
-      return fallback(half, tri, m, t, h, normal, hasFace ? normalLen : 0.0, unscale, out);
+      return fallback(half, tri, m, t, h, normal, featureLen, unscale, out);
   }
   // No coincidence tolerance here (the clipper merges nothing): 0 keeps every point that adds area.
   contact_detail::reduceToFour(pts, np, u, 0.0, [](const Point& p) { return p.b; }, [](const Point& p) { return p.sep; });

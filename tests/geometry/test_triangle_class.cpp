@@ -4,6 +4,7 @@
 // to the sphere and capsule paths and triangle distance but a segment to the box path).
 
 #include <crux/geometry/box_triangle_contact.hpp>
+#include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/geometry/triangle_distance.hpp>
@@ -62,6 +63,38 @@ TEST(TriangleClass, ANeedleIsTheSameToTheSphereBoxAndDistancePaths) {
     const TriangleDistanceResult d = closestPoints(t, above);
     EXPECT_NEAR(double(d.distance), 1, 1e-6);
     if (degenerate) EXPECT_FALSE(isFace(d.featureA)) << d.featureA;
+  }
+}
+
+TEST(TriangleClass, AThinTriangleIsNeverTheReferenceFaceOfABoxContact) {
+  // Relative height between the degenerate and the reference-face lines, in either precision: a
+  // triangle with a face and a normal axis, too thin to be a manifold's reference face. Pressed
+  // 0.01 into the bottom face of a box (half 1, at the origin), parallel to it, so the triangle's
+  // normal and the box face tie as the axis: the box face is the reference in the box routine,
+  // as in contacts() (before, the box routine clipped the box against the thin triangle).
+  const double h = std::sqrt(kTriangleDegenerateRelative * kTriangleFaceRelative);
+  const TriangleClass shape = classifyTriangle(h, 1);
+  ASSERT_FALSE(shape.degenerate);
+  ASSERT_FALSE(shape.referenceFace);
+  Triangle below = needle(h);
+  for (Vec3* p : {&below.a, &below.b, &below.c}) *p += Vec3(-4, 0, Real(-0.99));
+  const std::uint32_t bottomFace = featureId(FeatureKind::Face, 4);  // the box's −z face
+  ContactManifold box, generic;
+  ASSERT_TRUE(boxTriangleContacts(Vec3(1, 1, 1), below, 0, box));
+  ASSERT_TRUE(contacts(ConvexShape(below), Transform{}, ConvexShape(Obb{Vec3::Zero(), Vec3(1, 1, 1), Mat3::Identity()}),
+                       Transform{}, 0, generic));
+  for (const ContactManifold* m : {&box, &generic}) {
+    SCOPED_TRACE(m == &box ? "boxTriangleContacts" : "contacts");
+    EXPECT_EQ(m->normal, Vec3(0, 0, -1));
+    ASSERT_GE(m->count, 2);
+    for (int i = 0; i < m->count; ++i) {
+      const ContactPoint& c = m->points[i];
+      EXPECT_EQ(c.featureB, bottomFace) << i;
+      EXPECT_EQ(c.pointB.z(), -1) << i;                                     // on the box face
+      EXPECT_LE(std::abs(double(c.pointA.x())), 1) << i;                    // within it
+      EXPECT_NEAR(double(c.separation), -(double(c.pointA.z()) + 1), 1e-12) << i;  // exactly its depth below it
+      EXPECT_NEAR(double(c.separation), -(double(Real(-0.99)) + 1), 1e-6) << i;
+    }
   }
 }
 

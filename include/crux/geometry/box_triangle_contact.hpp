@@ -32,7 +32,12 @@ inline constexpr double kBoxTriangleFaceBias = 1e-6;
 inline constexpr double kBoxTriangleParallelSin = 1e-9;
 
 // A degenerate triangle (kTriangleDegenerateRelative, triangle_class.hpp) is the segment or
-// point it spans: its normal axis drops out (its edges remain).
+// point it spans: its normal axis drops out (its edges remain). A thin triangle (not a
+// reference face, kTriangleFaceRelative) keeps its normal axis for the verdict but is never the
+// reference face, as in contacts() and the capsule routine: when its normal is the chosen axis,
+// the box face within the feature angle of that normal becomes the axis and the reference (the
+// triangle is clipped against it); with no such face the answer is the single GJK/EPA pair, in
+// which the triangle's feature is an edge or a corner.
 
 /// Contact manifold of a triangle (A) against a box (B) given in the box's frame: the box is
 /// centred at the origin, axis-aligned, with half extents `half` (>= 0; a zero half extent is a
