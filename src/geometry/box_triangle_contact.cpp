@@ -23,6 +23,7 @@ using V = Eigen::Vector3d;
 /// cos and sin of contact.hpp's feature angle (2°).
 constexpr double kFeatureCos = double(kContactFaceAngleCos);
 using contact_detail::kContactFaceAngleSin;
+using contact_detail::faceSupports;
 using contact_detail::nearerPerpendicular;
 
 /// The SAT answer is accepted when it realises the axis' separation: an edge–edge pair whose
@@ -48,9 +49,7 @@ struct ClipVertex {
 };
 
 std::uint32_t vertexId(int i) { return featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(i)); }
-std::uint32_t edgeId(int i, int j) {
-  return featureId(FeatureKind::Edge, static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
-}
+std::uint32_t edgeId(int i, int j) { return contact_detail::edgeFeatureId(i, j); }
 bool isVertex(std::uint32_t id) { return (id >> 24) == static_cast<std::uint32_t>(FeatureKind::Vertex); }
 
 /// Id of a point cut out of the segment between two clip vertices: the edge when both are
@@ -93,26 +92,20 @@ V boxVertex(const V& h, int i) {
 int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
   int k = 0;
   d.cwiseAbs().maxCoeff(&k);
-  if (std::abs(d[k]) >= kFeatureCos) {
+  if (faceSupports(d[k], 1)) {
     const bool pos = d[k] > 0;
-    const int u = (k + 1) % 3, v = (k + 2) % 3;
-    const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
-    for (int q = 0; q < 4; ++q) {
-      const int qq = pos ? q : 3 - q;
-      const int idx = (pos ? 1 << k : 0) | (su[qq] << u) | (sv[qq] << v);
-      f[q] = {boxVertex(h, idx), 0, vertexId(idx)};
-    }
+    int idx[4];
+    contact_detail::boxFaceLoop(k, pos, idx);
+    for (int q = 0; q < 4; ++q) f[q] = {boxVertex(h, idx[q]), 0, vertexId(idx[q])};
     id = featureId(FeatureKind::Face, static_cast<std::uint32_t>(2 * k + (pos ? 1 : 0)));
     return 4;
   }
   const int is = (d.x() >= 0 ? 1 : 0) | (d.y() >= 0 ? 2 : 0) | (d.z() >= 0 ? 4 : 0);
+  // the edge test of the rule on the unit axes (|e·d|/|e| = |d_i| exactly), flat axes excluded
   int bestAxis = -1;
   double bestCos = kContactFaceAngleSin;
   for (int i = 0; i < 3; ++i)
-    if (h[i] > 0 && std::abs(d[i]) <= bestCos) {
-      bestCos = std::abs(d[i]);
-      bestAxis = i;
-    }
+    if (h[i] > 0 && nearerPerpendicular(d[i], 1, bestCos)) bestAxis = i;
   f[0] = {boxVertex(h, is), 0, vertexId(is)};
   if (bestAxis < 0) {
     id = f[0].id;
@@ -127,7 +120,7 @@ int boxFeature(const V& h, const V& d, ClipVertex* f, std::uint32_t& id) {
 /// The triangle's supporting feature along unit d (contact.hpp's rule), as a clip polygon;
 /// `m` is its normal (b−a)×(c−a) and mLen its length, 0 when degenerate.
 int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex* f, std::uint32_t& id) {
-  if (mLen > 0 && std::abs(m.dot(d)) >= kFeatureCos * mLen) {
+  if (mLen > 0 && faceSupports(m.dot(d), mLen)) {
     for (int i = 0; i < 3; ++i) f[i] = {t[i], 0, vertexId(i)};
     id = featureId(FeatureKind::Face, m.dot(d) > 0 ? 0u : 1u);
     return 3;
@@ -139,13 +132,9 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
       best = t[i].dot(d);
       is = i;
     }
-  int bestK = -1;
-  double bestCos = kContactFaceAngleSin;
-  for (int k = 1; k <= 2; ++k) {
-    const int o = (is + k) % 3;
-    const V e = t[o] - t[is];
-    if (nearerPerpendicular(e.dot(d), e.squaredNorm(), bestCos)) bestK = o;
-  }
+  const int others[2] = {(is + 1) % 3, (is + 2) % 3};
+  const int k = contact_detail::supportingEdge([t](int i) { return t[i]; }, d, is, others, 2);
+  const int bestK = k < 0 ? -1 : others[k];
   f[0] = {t[is], 0, vertexId(is)};
   if (bestK < 0) {
     id = f[0].id;
@@ -162,7 +151,7 @@ int triangleFeature(const V* t, const V& m, double mLen, const V& d, ClipVertex*
 /// m·d > 0), 2 (the edge is–other) or 1 (the corner is).
 int triangleFeatureAlongAxis(const V* t, const double* L, const V& m, double mLen, int k, double dk,
                              int& is, int& other, bool& front) {
-  if (mLen > 0 && std::abs(m[k]) >= kFeatureCos * mLen) {
+  if (mLen > 0 && faceSupports(m[k], mLen)) {
     front = m[k] * dk > 0;
     return 3;
   }

@@ -86,8 +86,7 @@ void collapseFace(Feature& f) {
     f.id = f.vid[0];
     return;
   }
-  const std::uint32_t i0 = f.vid[0] & 0xFFFFFFu, i1 = f.vid[1] & 0xFFFFFFu;
-  f.id = featureId(FeatureKind::Edge, std::min(i0, i1) * 64 + std::max(i0, i1));
+  f.id = contact_detail::edgeFeatureId(int(f.vid[0] & 0xFFFFFFu), int(f.vid[1] & 0xFFFFFFu));
 }
 
 /// The feature of P's core that supports direction d (unit, world). With allowFace false a
@@ -110,7 +109,7 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
       const double len = m.norm();
       const double longest2 = std::max({(P.p[1] - P.p[0]).squaredNorm(), (P.p[2] - P.p[1]).squaredNorm(),
                                         (P.p[0] - P.p[2]).squaredNorm()});
-      if (allowFace && len > 0 && std::abs(m.dot(d)) >= cosTol * len) {
+      if (allowFace && len > 0 && contact_detail::faceSupports(m.dot(d), len)) {
         f.sliver = !classifyTriangle(len, longest2).referenceFace;
         m /= len;
         const bool front = m.dot(d) > 0;
@@ -133,16 +132,14 @@ void supportingFeature(const Placed& P, const V3& d, Feature& f, bool allowFace 
       const V3 l = P.axes.transpose() * d;
       int k = 0;
       l.cwiseAbs().maxCoeff(&k);
-      if (std::abs(l[k]) >= cosTol) {
+      if (contact_detail::faceSupports(l[k], 1)) {
         const bool pos = l[k] > 0;
-        const int u = (k + 1) % 3, v = (k + 2) % 3;
-        const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+        int idx[4];
+        contact_detail::boxFaceLoop(k, pos, idx);
         f.n = 4;
         for (int q = 0; q < 4; ++q) {
-          const int qq = pos ? q : 3 - q;
-          const int idx = (pos ? 1 << k : 0) | (su[qq] << u) | (sv[qq] << v);
-          f.v[q] = P.vertex(idx);
-          f.vid[q] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(idx));
+          f.v[q] = P.vertex(idx[q]);
+          f.vid[q] = featureId(FeatureKind::Vertex, static_cast<std::uint32_t>(idx[q]));
         }
         f.normal = pos ? V3(P.axes.col(k)) : V3(-P.axes.col(k));
         f.align = std::abs(l[k]);

@@ -84,7 +84,7 @@ void triangleFeature(const TriD& t, const V3& d, Feature& f) {
                                     (t.p[0] - t.p[2]).squaredNorm()});
   const bool sliver = !classifyTriangle(t.len, longest2).referenceFace;  // contact.cpp's rule
   // (a degenerate triangle has no face: its computed normal is rounding noise)
-  if (!t.degenerate && !sliver && std::abs(t.m.dot(d)) >= double(kContactFaceAngleCos) * t.len) {
+  if (!t.degenerate && !sliver && contact_detail::faceSupports(t.m.dot(d), t.len)) {
     const V3 m = t.m / t.len;
     const bool front = m.dot(d) > 0;
     const int order[3] = {0, front ? 1 : 2, front ? 2 : 1};

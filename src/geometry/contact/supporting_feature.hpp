@@ -21,6 +21,27 @@ namespace crux::contact_detail {
 inline const double kContactFaceAngleSin =
     std::sqrt(1 - double(kContactFaceAngleCos) * double(kContactFaceAngleCos));
 
+/// The supporting-feature rule's face test: a face of normal m (any length |m| = mLen > 0)
+/// supports the unit direction d when m·d = md is within the feature angle of ±|m|.
+inline bool faceSupports(double md, double mLen) { return std::abs(md) >= double(kContactFaceAngleCos) * mLen; }
+
+/// The feature id of the edge between vertices i and j (either order): featureId(Edge,
+/// base + min·64 + max).
+inline std::uint32_t edgeFeatureId(int i, int j, std::uint32_t base = 0) {
+  return featureId(FeatureKind::Edge, base + static_cast<std::uint32_t>(std::min(i, j) * 64 + std::max(i, j)));
+}
+
+/// The four vertices of box face 2k + pos (pos: the face on the +axis k side), as a loop
+/// counter-clockwise seen from outside the box: vertex index bit i set = the +half side on axis i.
+inline void boxFaceLoop(int k, bool pos, int (&idx)[4]) {
+  const int u = (k + 1) % 3, v = (k + 2) % 3;
+  const int su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+  for (int q = 0; q < 4; ++q) {
+    const int qq = pos ? q : 3 - q;
+    idx[q] = (pos ? 1 << k : 0) | (su[qq] << u) | (sv[qq] << v);
+  }
+}
+
 /// The supporting-feature rule's edge test, written once for contact.cpp, triangle_contact.cpp
 /// and box_triangle_contact.cpp: whether an edge e with e·d = ed and |e|² = e2 (d unit) is
 /// within the feature angle of perpendicular to d and at least as near to it as bestCos (|cos|
@@ -73,8 +94,7 @@ void vertexOrEdge(const VertexAt& vertex, const Eigen::Vector3d& d, int is, cons
   f.n = 2;
   f.v[1] = vertex(other);
   f.vid[1] = vertexId(other);
-  f.id = featureId(FeatureKind::Edge,
-                   edgeBase + static_cast<std::uint32_t>(std::min(is, other) * 64 + std::max(is, other)));
+  f.id = edgeFeatureId(is, other, edgeBase);
 }
 
 /// Whether two edges are parallel within the feature angle (|ea × eb| <= sin·|ea|·|eb|): then they
