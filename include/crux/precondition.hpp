@@ -4,7 +4,8 @@
 /// Every public query states its preconditions (finite inputs, a non-zero ray direction and
 /// rotation, a non-negative radius: queryable(...) in geometry/shapes.hpp and convex.hpp). At the
 /// entry points of the mesh and scene queries, the convex pair queries (distance, overlaps,
-/// contacts), shape–mesh contacts and distance, mesh–mesh overlap and distance, and the mesh casts,
+/// contacts, casts), shape–mesh contacts and distance, mesh–mesh overlap and distance, and the
+/// mesh and scene casts,
 /// an input that fails them is answered with nothing (no hit, no overlap, no contact, an empty
 /// list, `found == false`; a convex pair's distance is NaN), never undefined behaviour. In builds with CRUX_CHECK_PRECONDITIONS (on by default when
 /// crux itself is compiled without NDEBUG, i.e. debug builds) the entry point aborts instead, with

@@ -2,6 +2,7 @@
 // motion (linear or rigid) that places A at time t and bounds its approach speed along a normal.
 
 #include <crux/geometry/cast.hpp>
+#include <crux/precondition.hpp>
 
 #include <cmath>
 
@@ -146,11 +147,15 @@ Transform poseAt(const RigidMotion& motion, Real t) {
 
 CastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
                 const Transform& tb, const CastOptions& options) {
+  if (!detail::entryPreconditions("cast(ConvexShape, ConvexShape)", detail::rule::kCast, a, ta, motion, b, tb))
+    return CastResult{};  // no hit (precondition.hpp)
   return advance(LinearMover(a, ta, motion), b, tb, options);
 }
 
 CastResult cast(const ConvexShape& a, const RigidMotion& motion, const ConvexShape& b, const Transform& tb,
                 const CastOptions& options) {
+  if (!detail::entryPreconditions("cast(ConvexShape, RigidMotion, ConvexShape)", detail::rule::kCast, a, motion, b, tb))
+    return CastResult{};
   return advance(RigidMover(a, motion), b, tb, options);
 }
 

@@ -8,6 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <crux/geometry/cast.hpp>
+#include <crux/precondition.hpp>
+
+#include "support/bad_inputs.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -403,6 +406,36 @@ TEST(CastProperty, PoseAtKeepsTheEndsExactAndTurnsAtConstantRate) {
   const Transform half = poseAt(m, Real(0.5));
   EXPECT_NEAR(double(half.rotation.angularDistance(m.start.rotation)), 0.6, 1e-5);
   EXPECT_NEAR(double((half.translation - Vec3(-1, 2, 5)).norm()), 0, 1e-5);
+}
+
+// Non-queryable shapes, poses or motions (precondition.hpp): no hit. An infinite motion or pose
+// used to report a hit at t = 0.
+TEST(CastPreconditions, NonQueryableInputsGetNoHit) {
+  if (CRUX_CHECK_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const ConvexShape box = Obb{Vec3::Zero(), Vec3::Constant(Real(0.5)), Mat3::Identity()};
+  const Transform target{Quat::Identity(), Vec3(3, 0, 0)};
+  const Vec3 motion(5, 0, 0);
+  int cases = 0;
+  for (const Transform& pose : test_support::badPoses()) {
+    EXPECT_FALSE(cast(box, pose, motion, box, target).hit);
+    EXPECT_FALSE(cast(box, Transform{}, motion, box, pose).hit);
+    EXPECT_FALSE(castAny(box, pose, motion, box, target));
+    EXPECT_FALSE(cast(box, RigidMotion{Transform{}, pose}, box, target).hit);
+    EXPECT_FALSE(castAny(box, RigidMotion{pose, Transform{}}, box, target));
+    ++cases;
+  }
+  for (const ConvexShape& shape : test_support::badShapes()) {
+    EXPECT_FALSE(cast(shape, Transform{}, motion, box, target).hit);
+    EXPECT_FALSE(castAny(box, Transform{}, motion, shape, target));
+    ++cases;
+  }
+  for (const Real bad : test_support::nonFiniteValues()) {
+    EXPECT_FALSE(cast(box, Transform{}, Vec3(bad, 0, 0), box, target).hit);
+    EXPECT_FALSE(castAny(box, Transform{}, Vec3(0, 0, bad), box, target));
+    ++cases;
+  }
+  EXPECT_GT(cases, 30);
+  EXPECT_TRUE(cast(box, Transform{}, motion, box, target).hit);  // the good cast hits
 }
 
 }  // namespace

@@ -100,6 +100,9 @@ struct CastOptions {
 };
 
 /// Linear cast: A at pose ta translated by s·motion for s in [0, 1], against B at pose tb.
+/// Preconditions (every cast here): finite shapes (radius and half extents >= 0), finite poses
+/// with non-zero rotations, a finite motion (validate(ConvexShape), validate(Transform),
+/// validateMotion). Otherwise no hit (a debug build aborts naming the query, precondition.hpp).
 CastResult cast(const ConvexShape& a, const Transform& ta, const Vec3& motion, const ConvexShape& b,
                 const Transform& tb, const CastOptions& options = {});
 /// Rigid cast: A moved by `motion` (linear translation, slerp rotation), against B at pose tb.
