@@ -11,7 +11,8 @@
 /// crux itself is compiled without NDEBUG, i.e. debug builds) the entry point aborts instead, with
 /// a message naming the query and the rule, so that a bad input is found where it was made.
 /// Release callers who want an error rather than an empty answer call validate(...) first: it
-/// throws InvalidInput naming the field.
+/// throws InvalidInput naming the field. The primitive layer (one shape against another or a
+/// point) runs unchecked unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS is 1 (debugPreconditions).
 
 #include <crux/geometry/shapes.hpp>  // queryable(...): its Vec3 overload must be visible here (no ADL for Eigen)
 
@@ -21,6 +22,15 @@
 #else
 #define CRUX_CHECK_PRECONDITIONS 1
 #endif
+#endif
+
+/// The primitive layer's debug check (debugPreconditions) is opt-in: 1 turns it on. Off by
+/// default, also in debug builds, because crux's own mesh and scene queries call that layer in
+/// their inner loops with values computed from inputs they have checked, and at the coordinate
+/// limits (docs/limits.md) such a value may overflow to infinity, which the layer answers
+/// without undefined behaviour.
+#ifndef CRUX_CHECK_PRIMITIVE_PRECONDITIONS
+#define CRUX_CHECK_PRIMITIVE_PRECONDITIONS 0
 #endif
 
 namespace crux::detail {
@@ -46,6 +56,9 @@ inline constexpr const char* kShapesAtPoses =
     "validate(Transform))";
 inline constexpr const char* kCast =
     "a finite shape at finite poses, a finite motion (validate(ConvexShape), validate(Transform), validateMotion)";
+inline constexpr const char* kPrimitive =
+    "finite shapes and points (a ray's direction non-zero, radii >= 0, an AABB's min <= max, an OBB's half extents "
+    ">= 0, a plane's normal non-zero): validate(...)";
 }  // namespace rule
 
 /// Whether every input (a shape, a point, a pose, a motion) meets the query's cheap preconditions
@@ -57,6 +70,21 @@ bool entryPreconditions(const char* query, const char* rule, const Inputs&... in
   if ((queryable(inputs) && ...)) return true;
   if (CRUX_CHECK_PRECONDITIONS) preconditionFailed(query, rule);
   return false;
+}
+
+/// The check of the primitive layer (one shape against another or a point: raycast, intersects,
+/// overlaps, withinDistance, closestPoint, squaredDistance, triangle–triangle closest points and
+/// the triangle contact routines): with CRUX_CHECK_PRIMITIVE_PRECONDITIONS it aborts like
+/// entryPreconditions; otherwise it is nothing. These queries run unchecked, as they are the
+/// inner loop of the mesh and scene queries, which check their own inputs once at entry: a
+/// non-queryable input gets an unspecified answer, never undefined behaviour (tested per family,
+/// also under ASan + UBSan).
+template <class... Inputs>
+void debugPreconditions([[maybe_unused]] const char* query, [[maybe_unused]] const Inputs&... inputs) {
+  if constexpr (CRUX_CHECK_PRIMITIVE_PRECONDITIONS != 0) {
+    using crux::queryable;
+    if (!(queryable(inputs) && ...)) preconditionFailed(query, rule::kPrimitive);
+  }
 }
 
 }  // namespace crux::detail

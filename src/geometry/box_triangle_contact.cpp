@@ -2,6 +2,7 @@
 // and edge–edge closest points. Fixed-size buffers only; falls back to contacts() (GJK/EPA) when
 // the SAT axis does not realise the distance.
 
+#include <crux/precondition.hpp>
 #include <crux/geometry/box_triangle_contact.hpp>
 
 #include <algorithm>
@@ -613,11 +614,13 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
 }  // namespace
 
 bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+  detail::debugPreconditions("boxTriangleContacts(point, Triangle)", half, tri);
   return boxTriangleContactsImpl<true>(half, tri, margin, out);
 }
 
 namespace detail {
 bool boxTriangleContactsFullSat(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
+  detail::debugPreconditions("boxTriangleContactsFullSat(point, Triangle)", half, tri);
   return boxTriangleContactsImpl<false>(half, tri, margin, out);
 }
 }  // namespace detail

@@ -5,6 +5,7 @@
 /// by the best-conditioned formula for the region found (projection onto an edge's line or the
 /// triangle's plane), never by a division that can be 0/0.
 
+#include <crux/precondition.hpp>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -91,28 +92,44 @@ WVec3 closestOnObb(const Obb& b, const WVec3& p) {
 
 }  // namespace
 
-Vec3 closestPoint(const Triangle& t, const Vec3& p) { return narrow(closestOnTriangle(t, wide(p))); }
+Vec3 closestPoint(const Triangle& t, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Triangle, point)", t, p);
+  return narrow(closestOnTriangle(t, wide(p)));
+}
 
 Vec3 closestPoint(const Segment& s, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Segment, point)", s, p);
   return narrow(closestOnSegment(wide(s.start), wide(s.end), wide(p)));
 }
 
-Vec3 closestPoint(const Ray& r, const Vec3& p) { return narrow(closestOnRay(r, wide(p))); }
+Vec3 closestPoint(const Ray& r, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Ray, point)", r, p);
+  return narrow(closestOnRay(r, wide(p)));
+}
 
-Vec3 closestPoint(const Sphere& s, const Vec3& p) { return narrow(closestOnSphere(s, wide(p))); }
+Vec3 closestPoint(const Sphere& s, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Sphere, point)", s, p);
+  return narrow(closestOnSphere(s, wide(p)));
+}
 
 Vec3 closestPoint(const Aabb& b, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Aabb, point)", b, p);
   return p.cwiseMax(b.min).cwiseMin(b.max);  // per axis, each axis against its own bounds
 }
 
-Vec3 closestPoint(const Obb& b, const Vec3& p) { return narrow(closestOnObb(b, wide(p))); }
+Vec3 closestPoint(const Obb& b, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Obb, point)", b, p);
+  return narrow(closestOnObb(b, wide(p)));
+}
 
 Vec3 closestPoint(const Plane& pl, const Vec3& p) {
+  detail::debugPreconditions("closestPoint(Plane, point)", pl, p);
   const WVec3 n = wide(pl.normal), x = wide(p);
   return narrow(x - n * ((n.dot(x) - Wide(pl.d)) / n.squaredNorm()));
 }
 
 bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
+  detail::debugPreconditions("beyondAnEdgeLine(Triangle, point)", t, p);
   const Eigen::Vector3d v[3] = {t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()};
   const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]);
   const Eigen::Vector3d q = p.cast<double>();
@@ -126,31 +143,37 @@ bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
 }
 
 Real squaredDistance(const Triangle& t, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Triangle, point)", t, p);
   const WVec3 x = wide(p);
   return Real((closestOnTriangle(t, x) - x).squaredNorm());
 }
 
 Real squaredDistance(const Segment& s, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Segment, point)", s, p);
   const WVec3 x = wide(p);
   return Real((closestOnSegment(wide(s.start), wide(s.end), x) - x).squaredNorm());
 }
 
 Real squaredDistance(const Ray& r, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Ray, point)", r, p);
   const WVec3 x = wide(p);
   return Real((closestOnRay(r, x) - x).squaredNorm());
 }
 
 Real squaredDistance(const Sphere& s, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Sphere, point)", s, p);
   const Wide gap = (wide(p) - wide(s.center)).norm() - Wide(s.radius);
   return gap > 0 ? Real(gap * gap) : Real(0);
 }
 
 Real squaredDistance(const Aabb& b, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Aabb, point)", b, p);
   const WVec3 x = wide(p);
   return Real((closestOnAabb(b, x) - x).squaredNorm());
 }
 
 Real squaredDistance(const Obb& b, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Obb, point)", b, p);
   // Σ of the squared per-axis excesses (the axes are orthonormal).
   const WVec3 d = wide(p) - wide(b.center);
   Wide d2 = 0;
@@ -162,6 +185,7 @@ Real squaredDistance(const Obb& b, const Vec3& p) {
 }
 
 Real squaredDistance(const Plane& pl, const Vec3& p) {
+  detail::debugPreconditions("squaredDistance(Plane, point)", pl, p);
   const WVec3 n = wide(pl.normal);
   const Wide s = n.dot(wide(p)) - Wide(pl.d);
   return Real(s * s / n.squaredNorm());

@@ -2,6 +2,7 @@
 // per-triangle fast path), with contact.hpp's feature selection and clipping rules. Double
 // precision, fixed-size data, no exceptions.
 
+#include <crux/precondition.hpp>
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
@@ -252,6 +253,7 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
 }  // namespace
 
 bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
+  detail::debugPreconditions("sphereTriangleContacts(Triangle, point)", tri, centre, Sphere{centre, radius});
   out.count = 0;
   const V3 p = centre.cast<double>();
   const double r = double(radius);
@@ -266,6 +268,7 @@ bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius
 
 bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
                            SphereTriangleContact& out) {
+  detail::debugPreconditions("sphereTriangleContact(Triangle, point)", tri, centre, Sphere{centre, radius});
   const V3 p = centre.cast<double>();
   const double r = double(radius);
   TriD t;
@@ -283,6 +286,7 @@ bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius,
 
 bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
                              ContactManifold& out) {
+  detail::debugPreconditions("capsuleTriangleContacts(Triangle, point, point)", tri, p0In, p1In, Sphere{p0In, radius});
   out.count = 0;
   const V3 s[2] = {p0In.cast<double>(), p1In.cast<double>()};
   const double r = double(radius), mg = double(margin);

@@ -3,6 +3,7 @@
 // whose common point comes from the one point–triangle closest point (closest_point_internal.hpp).
 // All arithmetic in double; see triangle_distance.hpp.
 
+#include <crux/precondition.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
 #include <crux/geometry/triangle_class.hpp>
@@ -150,6 +151,7 @@ bool straddles(const Tri& from, const Tri& to, double scale) {
 }  // namespace
 
 TriangleDistanceResult closestPoints(const Triangle& a, const Triangle& b) {
+  detail::debugPreconditions("closestPoints(Triangle, Triangle)", a, b);
   const Tri A(a), B(b);
   Candidate best;
   for (int i = 0; i < 3; ++i)

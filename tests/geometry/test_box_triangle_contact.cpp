@@ -6,6 +6,8 @@
 // routine's shortcuts against its full SAT bit for bit, no heap allocation, and a
 // microbenchmark (printed, not asserted).
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -727,6 +729,28 @@ TEST(BoxTriangleContact, MicrobenchmarkAgainstTheGenericRoutine) {
                 bestMine, bestGeneric, bestGeneric / bestMine);
   }
   EXPECT_GT(sink, 0);
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Triangle tri{Vec3(-2, -2, Real(0.9)), Vec3(2, -2, Real(0.9)), Vec3(0, 2, Real(0.9))};
+  int calls = 0;
+  ContactManifold m;
+  for (const Triangle& t : bad.triangles) {
+    (void)boxTriangleContacts(Vec3::Ones(), t, 0, m), (void)detail::boxTriangleContactsFullSat(Vec3::Ones(), t, 0, m);
+    calls += 2;
+  }
+  for (const Vec3& half : bad.points) {
+    (void)boxTriangleContacts(half, tri, 0, m), (void)detail::boxTriangleContactsFullSat(half, tri, 0, m);
+    calls += 2;
+  }
+  EXPECT_GT(calls, 30);
+  EXPECT_TRUE(boxTriangleContacts(Vec3::Ones(), tri, 0, m));
 }
 
 }  // namespace

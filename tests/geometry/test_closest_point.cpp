@@ -2,6 +2,8 @@
 // seeded property tests of the triangle against CGAL's exact closest point, and optimality
 // checks (the variational inequality of a projection onto a convex set) for the other shapes.
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -663,6 +665,42 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)));
   EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), nan));
   EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Vec3 p(Real(0.2), Real(0.3), 2);
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const Segment seg{Vec3::Zero(), Vec3(1, 0, 0)};
+  const Ray ray{Vec3::Zero(), Vec3(1, 0, 0)};
+  const Sphere sphere{Vec3::Zero(), 1};
+  const Aabb box{Vec3::Constant(-1), Vec3::Constant(1)};
+  const Obb obb{Vec3::Zero(), Vec3::Ones(), Mat3::Identity()};
+  const Plane plane{};
+  int calls = 0;
+  const auto at = [&](const auto& shape, const Vec3& q) {
+    calls += 2;
+    (void)closestPoint(shape, q);
+    (void)squaredDistance(shape, q);
+  };
+  for (const Vec3& q : bad.points) {
+    at(tri, q), at(seg, q), at(ray, q), at(sphere, q), at(box, q), at(obb, q), at(plane, q);
+    (void)beyondAnEdgeLine(tri, q, 1);
+  }
+  for (const Triangle& t : bad.triangles) at(t, p), (void)beyondAnEdgeLine(t, p, 1);
+  for (const Segment& s : bad.segments) at(s, p);
+  for (const Ray& r : bad.rays) at(r, p);
+  for (const Sphere& s : bad.spheres) at(s, p);
+  for (const Aabb& b : bad.aabbs) at(b, p);
+  for (const Obb& b : bad.obbs) at(b, p);
+  for (const Plane& pl : bad.planes) at(pl, p);
+  EXPECT_GT(calls, 200);
+  EXPECT_EQ(closestPoint(tri, p), Vec3(Real(0.2), Real(0.3), 0));
 }
 
 }  // namespace

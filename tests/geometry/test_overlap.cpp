@@ -4,6 +4,8 @@
 // coincident cases are frequent there) and a general-position family (random floats, random
 // rotations), each with its hit rate checked to lie in [20%, 80%].
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -476,6 +478,30 @@ TEST(OverlapProperty, PlanePlane) {
     }
     return std::pair{a, b};
   });
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(OverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Sphere sphere{Vec3::Zero(), 1};
+  const Aabb box{Vec3::Constant(-1), Vec3::Constant(1)};
+  const Obb obb{Vec3::Zero(), Vec3::Ones(), Mat3::Identity()};
+  const Plane plane{};
+  int calls = 0;
+  const auto all = [&](const auto& shape) {
+    calls += 4;
+    (void)overlaps(sphere, shape), (void)overlaps(box, shape), (void)overlaps(obb, shape), (void)overlaps(plane, shape);
+  };
+  for (const Sphere& s : bad.spheres) all(s);
+  for (const Aabb& b : bad.aabbs) all(b);
+  for (const Obb& b : bad.obbs) all(b);
+  for (const Plane& p : bad.planes) all(p);
+  EXPECT_GT(calls, 150);
+  EXPECT_TRUE(overlaps(sphere, box) && overlaps(box, obb) && overlaps(obb, plane) && overlaps(sphere, plane));
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // book's code gets wrong, a watertightness test on closed meshes, and seeded property tests
 // against the exact CGAL oracle (crux::exact) in an integer-grid and a general-position family.
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -1047,6 +1049,46 @@ TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
     EXPECT_TRUE(hit->point.allFinite()) << std::setprecision(17) << hit->point.transpose();
   }
   if constexpr (std::is_same_v<Real, float>) EXPECT_FALSE(hit) << "t = 8/(5·FLT_MIN)·|dir| overflows float";
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const Sphere sphere{Vec3::Zero(), 1};
+  const Aabb box{Vec3::Constant(-1), Vec3::Constant(1)};
+  const Obb obb{Vec3::Zero(), Vec3::Ones(), Mat3::Identity()};
+  const Plane plane{};
+  const Ray ray{Vec3(Real(0.2), Real(0.2), 2), Vec3(0, 0, -1)};
+  const Segment seg{Vec3(Real(0.2), Real(0.2), 2), Vec3(Real(0.2), Real(0.2), -2)};
+  int calls = 0;
+  const auto both = [&](const auto& shape) {
+    calls += 2;
+    (void)raycast(ray, shape);
+    (void)intersects(seg, shape);
+  };
+  for (const Ray& r : bad.rays) {
+    (void)raycast(r, tri), (void)raycast(r, sphere), (void)raycast(r, box), (void)raycast(r, obb), (void)raycast(r, plane);
+    calls += 5;
+  }
+  for (const Segment& s : bad.segments) {
+    (void)intersects(s, tri), (void)intersects(s, sphere), (void)intersects(s, box), (void)intersects(s, obb);
+    (void)intersects(s, plane);
+    calls += 5;
+  }
+  for (const Triangle& t : bad.triangles) both(t);
+  for (const Sphere& s : bad.spheres) both(s);
+  for (const Aabb& b : bad.aabbs) both(b);
+  for (const Obb& b : bad.obbs) both(b);
+  for (const Plane& p : bad.planes) both(p);
+  EXPECT_GT(calls, 150);
+  // the good inputs hit: the bad ones went through the same entry points
+  EXPECT_TRUE(raycast(ray, tri) && raycast(ray, sphere) && raycast(ray, box) && raycast(ray, obb) && raycast(ray, plane));
+  EXPECT_TRUE(intersects(seg, tri) && intersects(seg, sphere) && intersects(seg, box) && intersects(seg, obb));
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 // pointA − pointB = separation·normal); the documented deterministic normal of the flat cases.
 // Failing cases are printed with 17 digits.
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <crux/geometry/triangle_contact.hpp>
 
 #include <crux/geometry/closest_point.hpp>
@@ -709,6 +711,32 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   EXPECT_GT(built, cases / 2);
   EXPECT_EQ(missed, 0) << first;
   EXPECT_EQ(falseHits, 0);
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const Vec3 c(Real(0.2), Real(0.2), Real(0.4)), c1(Real(0.4), Real(0.2), Real(0.4));
+  int calls = 0;
+  ContactManifold m;
+  SphereTriangleContact one;
+  const auto all = [&](const Triangle& t, const Vec3& p, const Vec3& q, Real r) {
+    calls += 3;
+    (void)sphereTriangleContacts(t, p, r, 0, m);
+    (void)sphereTriangleContact(t, p, r, 0, one);
+    (void)capsuleTriangleContacts(t, p, q, r, 0, m);
+  };
+  for (const Triangle& t : bad.triangles) all(t, c, c1, Real(0.5));
+  for (const Vec3& p : bad.points) all(tri, p, c1, Real(0.5)), all(tri, c, p, Real(0.5));
+  for (const Real r : test_support::nonFiniteValues()) all(tri, c, c1, r);
+  all(tri, c, c1, -1);
+  EXPECT_GT(calls, 80);
+  EXPECT_TRUE(sphereTriangleContacts(tri, c, Real(0.5), 0, m));
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 // position, degenerate (segments, points), coplanar, parallel planes, touching and crossing
 // (integer grid), and scaled (1e-3, 1e4).
 
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
@@ -294,6 +296,23 @@ TEST(TriangleDistance, PointTrianglesAndIdenticalTriangles) {
   const TriangleDistanceResult r = closestPoints(t, t);
   EXPECT_TRUE(r.intersecting);
   EXPECT_EQ(r.distance, 0);
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(TriangleDistancePreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const test_support::BadPrimitives bad = test_support::badPrimitives();
+  const Triangle tri{Vec3(0, 0, 1), Vec3(1, 0, 1), Vec3(0, 1, 1)};
+  int calls = 0;
+  for (const Triangle& t : bad.triangles) {
+    (void)closestPoints(t, tri), (void)closestPoints(tri, t), (void)distance(t, t);
+    calls += 3;
+  }
+  EXPECT_GT(calls, 20);
+  EXPECT_EQ(distance(tri, Triangle{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}), 1);
 }
 
 }  // namespace

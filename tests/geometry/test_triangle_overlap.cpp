@@ -3,8 +3,10 @@
 
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
+#include <crux/precondition.hpp>
 
 #include "exact/exact.hpp"
+#include "support/bad_inputs.hpp"
 #include "support/test_scale.hpp"
 
 #include <gtest/gtest.h>
@@ -853,4 +855,37 @@ TEST(TriangleTriangle, SymmetricOffTheExactGrid) {
                       << " | " << c[0].c.transpose() << ", B = " << c[1].a.transpose() << " | "
                       << c[1].b.transpose() << " | " << c[1].c.transpose();
   }
+}
+
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
+// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
+// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
+// checks here.
+TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
+  const crux::test_support::BadPrimitives bad = crux::test_support::badPrimitives();
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  const Sphere sphere{Vec3::Zero(), 1};
+  const Aabb box{Vec3::Constant(-1), Vec3::Constant(1)};
+  const Obb obb{Vec3::Zero(), Vec3::Ones(), Mat3::Identity()};
+  const Plane plane{};
+  int calls = 0;
+  const auto all = [&](const Triangle& t) {
+    calls += 7;
+    (void)crux::overlaps(t, tri), (void)crux::overlaps(t, sphere), (void)crux::overlaps(t, box);
+    (void)crux::overlaps(t, obb), (void)crux::overlaps(t, plane);
+    (void)crux::withinDistance(t, Vec3::Zero(), 1, 0), (void)crux::withinDistance(t, Vec3::Zero(), Vec3::Ones(), 1, 0);
+  };
+  for (const Triangle& t : bad.triangles) all(t);
+  for (const Sphere& s : bad.spheres) (void)crux::overlaps(tri, s), ++calls;
+  for (const Aabb& b : bad.aabbs) (void)crux::overlaps(tri, b), ++calls;
+  for (const Obb& b : bad.obbs) (void)crux::overlaps(tri, b), ++calls;
+  for (const Plane& p : bad.planes) (void)crux::overlaps(tri, p), ++calls;
+  for (const Vec3& p : bad.points) {
+    (void)crux::withinDistance(tri, p, 1, 0), (void)crux::withinDistance(tri, Vec3::Zero(), p, 1, 0);
+    calls += 2;
+  }
+  for (const crux::Real r : crux::test_support::nonFiniteValues()) (void)crux::withinDistance(tri, Vec3::Zero(), r, 0), ++calls;
+  EXPECT_GT(calls, 120);
+  EXPECT_TRUE(crux::overlaps(tri, sphere) && crux::overlaps(tri, box) && crux::overlaps(tri, obb) && crux::overlaps(tri, plane));
 }

@@ -9,6 +9,11 @@
 /// min·64+max) of its corners, Face 0 front — normal (b−a)×(c−a) — or 1 back), featureB a box
 /// feature numbered as contact.cpp / ConvexShape::vertex number them (Face 2·axis + (side > 0),
 /// Vertex by sign bits, Edge min·64+max of its two vertex indices).
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>

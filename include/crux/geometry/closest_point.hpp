@@ -2,6 +2,11 @@
 /// @file closest_point.hpp  Closest point of a shape to a point, and squared distances.
 ///
 /// All shapes are closed sets: a point inside a solid (sphere, box) is its own closest point.
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/shapes.hpp>
 

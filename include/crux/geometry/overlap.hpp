@@ -7,6 +7,11 @@
 ///
 /// One function exists per unordered pair, for the order Triangle < Sphere < Aabb < Obb <
 /// Plane; the reversed order is derived by the template at the end of this file.
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/shapes.hpp>
 

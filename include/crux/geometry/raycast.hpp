@@ -5,6 +5,11 @@
 /// computed in floating point afterwards. t is in world units (s·|dir|). A ray whose origin
 /// lies in a solid shape (sphere, box) hits at t = 0. Triangles are hit from both faces;
 /// a degenerate triangle is hit where the ray meets its segment/point.
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/shapes.hpp>
 

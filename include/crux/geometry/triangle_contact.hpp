@@ -19,6 +19,11 @@
 ///
 /// Degenerate triangles (kTriangleDegenerateRelative, triangle_class.hpp) are the segment or
 /// point they span: no face, closest points over their three edges.
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>

@@ -12,6 +12,11 @@
 /// point they span: their "edges" still cover them and they have no face. Parallel and coplanar
 /// pairs need no special case: parallel edge pairs are clamped (RTCD 5.1.9) and the face
 /// projections cover the interior. Everything is computed in double whatever Real is.
+///
+/// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
+/// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
+/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
+/// answer, never undefined behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/shapes.hpp>
