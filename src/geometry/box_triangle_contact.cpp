@@ -2,8 +2,8 @@
 // and edge–edge closest points. Fixed-size buffers only; falls back to contacts() (GJK/EPA) when
 // the SAT axis does not realise the distance.
 
-#include <crux/precondition.hpp>
 #include <crux/geometry/box_triangle_contact.hpp>
+#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -361,6 +361,13 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
   const bool referenceFace = hasFace && shape.referenceFace;  // (triangle_class.hpp)
   const double featureLen = referenceFace ? normalLen : 0.0;  // the fallback's feature: no thin face
 
+  // The triangle's separation from each box face pair: beyond the +k face (posSep) and beyond
+  // the −k face (negSep).
+  double posSep[3], negSep[3];
+  for (int k = 0; k < 3; ++k) {
+    const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
+    posSep[k] = lo - h[k], negSep[k] = -h[k] - hi;
+  }
   Axis face;  // best box face: the first of the largest separations (NaN never wins)
   {
     // selected without branches (which face wins is unpredictable: each branch here was
@@ -368,10 +375,8 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     double sep[3];
     bool positive[3];
     for (int k = 0; k < 3; ++k) {
-      const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
-      const double pos = lo - h[k], neg = -h[k] - hi;
-      sep[k] = std::max(pos, neg);
-      positive[k] = pos >= neg;
+      sep[k] = std::max(posSep[k], negSep[k]);
+      positive[k] = posSep[k] >= negSep[k];
     }
     // (std::max(a, b) is b when a < b, else a: `b > a ? b : a`, compiled to maxsd)
     const bool w0 = sep[0] > face.sep;
@@ -447,11 +452,10 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
     best.n.cwiseAbs().maxCoeff(&k);
     if (!(std::abs(best.n[k]) >= kFeatureCos)) return fallback(half, tri, m, t, h, normal, featureLen, unscale, out);
     const double s = best.n[k] > 0 ? 1.0 : -1.0;
-    const double lo = std::min(t[0][k], std::min(t[1][k], t[2][k])), hi = std::max(t[0][k], std::max(t[1][k], t[2][k]));
     best.kind = AxisKind::BoxFace;
     best.i = k;
     best.n = V::Unit(k) * s;
-    best.sep = s > 0 ? lo - h[k] : -h[k] - hi;
+    best.sep = s > 0 ? posSep[k] : negSep[k];
   }
   out.normal = best.n.cast<Real>();
 

@@ -5,12 +5,12 @@
 /// by the best-conditioned formula for the region found (projection onto an edge's line or the
 /// triangle's plane), never by a division that can be 0/0.
 
-#include <crux/precondition.hpp>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
 #include <crux/geometry/closest_point.hpp>
+#include <crux/precondition.hpp>
 #include <crux/geometry/predicates.hpp>
 
 #include "geometry/closest_point_internal.hpp"

@@ -6,11 +6,11 @@
 /// for integer-grid inputs (|coordinates| <= 64, OBB axes signed unit vectors). See overlap.hpp
 /// and docs/geometry.md. Closed sets: every comparison accepts equality.
 
-#include <crux/precondition.hpp>
 #include <algorithm>
 #include <cmath>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
+#include <crux/precondition.hpp>
 
 namespace crux {
 namespace {

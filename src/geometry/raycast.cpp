@@ -9,11 +9,11 @@
 /// cross-multiplication (no division before the answer is known); the reported distance is
 /// computed from the winning fraction at the end.
 
-#include <crux/precondition.hpp>
 #include <array>
 #include <cmath>
 #include <crux/geometry/predicates.hpp>
 #include <crux/geometry/raycast.hpp>
+#include <crux/precondition.hpp>
 
 #include "geometry/ray_triangle.hpp"
 #include <limits>

@@ -2,10 +2,10 @@
 // per-triangle fast path), with contact.hpp's feature selection and clipping rules. Double
 // precision, fixed-size data, no exceptions.
 
-#include <crux/precondition.hpp>
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
+#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>

@@ -3,10 +3,10 @@
 // whose common point comes from the one point–triangle closest point (closest_point_internal.hpp).
 // All arithmetic in double; see triangle_distance.hpp.
 
-#include <crux/precondition.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
 #include <crux/geometry/triangle_class.hpp>
+#include <crux/precondition.hpp>
 
 #include "geometry/closest_point_internal.hpp"
 

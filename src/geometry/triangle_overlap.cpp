@@ -8,10 +8,10 @@
 /// docs/geometry.md for the range). Degenerate triangles are classified exactly
 /// (predicates::classify) and tested as the segment or point they are.
 
-#include <crux/precondition.hpp>
 #include <crux/error.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
+#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>

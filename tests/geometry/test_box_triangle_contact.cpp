@@ -6,8 +6,6 @@
 // routine's shortcuts against its full SAT bit for bit, no heap allocation, and a
 // microbenchmark (printed, not asserted).
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -31,6 +29,8 @@
 
 #if CRUX_HAVE_CCD_ORACLE
 #include "ccd/ccd_oracle.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 #endif
 
 namespace crux {

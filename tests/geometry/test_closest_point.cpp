@@ -2,8 +2,6 @@
 // seeded property tests of the triangle against CGAL's exact closest point, and optimality
 // checks (the variational inequality of a projection onto a convex set) for the other shapes.
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +18,8 @@
 
 #include "exact/exact.hpp"
 #include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {

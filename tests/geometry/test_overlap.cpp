@@ -4,8 +4,6 @@
 // coincident cases are frequent there) and a general-position family (random floats, random
 // rotations), each with its hit rate checked to lie in [20%, 80%].
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,6 +17,8 @@
 
 #include "exact/exact.hpp"
 #include "support/test_scale.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {

@@ -2,8 +2,6 @@
 // book's code gets wrong, a watertightness test on closed meshes, and seeded property tests
 // against the exact CGAL oracle (crux::exact) in an integer-grid and a general-position family.
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -26,6 +24,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {

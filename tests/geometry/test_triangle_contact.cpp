@@ -5,8 +5,6 @@
 // pointA − pointB = separation·normal); the documented deterministic normal of the flat cases.
 // Failing cases are printed with 17 digits.
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <crux/geometry/triangle_contact.hpp>
 
 #include <crux/geometry/closest_point.hpp>
@@ -25,6 +23,8 @@
 
 #include "support/grid_touching.hpp"
 #include "support/test_scale.hpp"
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {

@@ -5,8 +5,6 @@
 // position, degenerate (segments, points), coplanar, parallel planes, touching and crossing
 // (integer grid), and scaled (1e-3, 1e4).
 
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #include <crux/geometry/closest_point.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
@@ -25,6 +23,8 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <crux/precondition.hpp>
+#include "support/bad_inputs.hpp"
 
 namespace crux {
 namespace {
