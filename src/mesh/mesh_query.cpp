@@ -199,6 +199,8 @@ struct RayAllVisitor {
   }
 };
 
+/// The closest hit, or with stopAtFirst the first hit found (raycastAny), whose point and normal are
+/// then left zero: a yes/no answer needs no hit formed.
 std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const RayQueryOptions& options,
                                       QueryPath path, bool stopAtFirst) {
   if (!detail::entryPreconditions(stopAtFirst ? "raycastAny(Mesh, Ray)" : "raycastClosest(Mesh, Ray)", detail::rule::kRay, ray))
@@ -214,6 +216,7 @@ std::optional<MeshRayHit> raycastBest(const Mesh& mesh, const Ray& ray, const Ra
       mesh_detail::walkOrdered(mesh, v);
     }
     if (!v.found) return std::nullopt;
+    if (stopAtFirst) return MeshRayHit{v.best.t, Vec3::Zero(), Vec3::Zero(), v.bestTriangle};  // (raycastAny: yes/no)
     return test.hit(v.best, v.bestTriangle);
   };
   const Real sLimit = box.parameterLimit(options.maxDistance);
