@@ -12,7 +12,8 @@
 /// a message naming the query and the rule, so that a bad input is found where it was made.
 /// Release callers who want an error rather than an empty answer call validate(...) first: it
 /// throws InvalidInput naming the field. The primitive layer (one shape against another or a
-/// point) runs unchecked unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS is 1 (debugPreconditions).
+/// point) aborts the same way in those builds (debugPreconditions), and under NDEBUG answers a
+/// non-queryable input with an unspecified value, never undefined behaviour.
 
 #include <crux/geometry/shapes.hpp>  // queryable(...): its Vec3 overload must be visible here (no ADL for Eigen)
 
@@ -24,15 +25,10 @@
 #endif
 #endif
 
-/// The primitive layer's debug check (debugPreconditions) is opt-in: 1 turns it on. Off by
-/// default, also in debug builds, because that layer answers more than the cheap rules admit and
-/// callers rely on it: withinDistance with a negative radius is false, and a plane normal whose
-/// square underflows (double builds) is still a plane to the exact predicates. With the check on,
-/// 5 of the 917 tests of a double build abort on such inputs (beyondAnEdgeLine, overlaps(Triangle,
-/// Plane), withinDistance), and the mesh and scene queries, which call the layer in their inner
-/// loops, have checked their own inputs at entry already.
+/// The primitive layer's check (debugPreconditions) follows CRUX_CHECK_PRECONDITIONS: on in debug
+/// builds, off under NDEBUG; define it to 0 or 1 to choose otherwise.
 #ifndef CRUX_CHECK_PRIMITIVE_PRECONDITIONS
-#define CRUX_CHECK_PRIMITIVE_PRECONDITIONS 0
+#define CRUX_CHECK_PRIMITIVE_PRECONDITIONS CRUX_CHECK_PRECONDITIONS
 #endif
 
 namespace crux::detail {
@@ -75,12 +71,12 @@ bool entryPreconditions(const char* query, const char* rule, const Inputs&... in
 }
 
 /// The check of the primitive layer (one shape against another or a point: raycast, intersects,
-/// overlaps, withinDistance, closestPoint, squaredDistance, triangle–triangle closest points and
-/// the triangle contact routines): with CRUX_CHECK_PRIMITIVE_PRECONDITIONS it aborts like
-/// entryPreconditions; otherwise it is nothing. These queries run unchecked, as they are the
-/// inner loop of the mesh and scene queries, which check their own inputs once at entry: a
-/// non-queryable input gets an unspecified answer, never undefined behaviour (tested per family,
-/// also under ASan + UBSan).
+/// overlaps, withinDistance, closestPoint, squaredDistance, beyondAnEdgeLine, triangle–triangle
+/// closest points and the triangle contact routines): with CRUX_CHECK_PRIMITIVE_PRECONDITIONS
+/// (debug builds) it aborts like entryPreconditions; under NDEBUG it is nothing, as these queries
+/// are the inner loop of the mesh and scene queries, which check their own inputs once at entry,
+/// and a non-queryable input gets an unspecified answer, never undefined behaviour (tested per
+/// family).
 template <class... Inputs>
 void debugPreconditions([[maybe_unused]] const char* query, [[maybe_unused]] const Inputs&... inputs) {
   if constexpr (CRUX_CHECK_PRIMITIVE_PRECONDITIONS != 0) {

@@ -731,10 +731,8 @@ TEST(BoxTriangleContact, MicrobenchmarkAgainstTheGenericRoutine) {
   EXPECT_GT(sink, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
-// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
-// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
-// checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
+// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
 TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   // (the routine's fallback is distance(ConvexShape, ...), a query family that checks its inputs
   // at entry: with CRUX_CHECK_PRECONDITIONS, as in CI's sanitizer stage, that aborts instead)
@@ -754,6 +752,17 @@ TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBe
   }
   EXPECT_GT(calls, 30);
   EXPECT_TRUE(boxTriangleContacts(Vec3::Ones(), tri, 0, m));
+}
+
+// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
+// input with a message naming the query.
+TEST(BoxTriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  const Triangle tri{Vec3(-2, -2, Real(0.9)), Vec3(2, -2, Real(0.9)), Vec3(0, 2, Real(0.9))};
+  ContactManifold m;
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_DEATH((void)boxTriangleContacts(Vec3(1, nan, 1), tri, 0, m),
+               "precondition violated in boxTriangleContacts\\(point, Triangle\\)");
 }
 
 }  // namespace

@@ -660,17 +660,19 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   EXPECT_GT(within, cases / 10);
   // a degenerate triangle (collinear corners) says nothing
   EXPECT_FALSE(beyondAnEdgeLine({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, Vec3(0, -5, 0), Real(1)));
-  // NaN in the point or in d says nothing either (no comparison holds)
+  // NaN in d says nothing either (no comparison holds); a NaN point breaks the precondition
+  // (debug builds abort, naming the query; under NDEBUG the answer is false, as no comparison holds)
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
-  EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)));
   EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), nan));
+  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    EXPECT_DEATH((void)beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)), "precondition violated in beyondAnEdgeLine");
+  else
+    EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)));
   EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
-// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
-// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
-// checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
+// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
 TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -701,6 +703,17 @@ TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviou
   for (const Plane& pl : bad.planes) at(pl, p);
   EXPECT_GT(calls, 200);
   EXPECT_EQ(closestPoint(tri, p), Vec3(Real(0.2), Real(0.3), 0));
+}
+
+// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
+// input with a message naming the query.
+TEST(ClosestPointPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  const Real inf = std::numeric_limits<Real>::infinity();
+  EXPECT_DEATH((void)closestPoint(Aabb{Vec3::Zero(), Vec3::Ones()}, Vec3(0, inf, 0)),
+               "precondition violated in closestPoint\\(Aabb, point\\)");
+  EXPECT_DEATH((void)squaredDistance(Plane{Vec3::Zero(), 1}, Vec3::Zero()),
+               "precondition violated in squaredDistance\\(Plane, point\\)");
 }
 
 }  // namespace

@@ -371,7 +371,7 @@ TEST(NearDegenerate, TrianglePlaneEqualsExact) {
     collect(p.normal, v);
     v.push_back(&p.d);
     f.perturb(v);
-    if (p.normal == Vec3::Zero()) return {};
+    if (!crux::queryable(p)) return {};  // (a normal whose square underflows is out of the domain)
     const bool native = crux::overlaps(t, p), exact = crux::exact::overlaps(t, p);
     hits += exact;
     if (native == exact) return {};
@@ -411,7 +411,7 @@ TEST(NearDegenerate, RayTriangleEqualsExact) {
     collect(r.origin, v);
     collect(r.dir, v);
     f.perturb(v);
-    if (r.dir == Vec3::Zero()) return {};
+    if (!crux::queryable(r)) return {};  // (a direction whose square underflows is out of the domain)
     const auto native = crux::raycast(r, t);
     const auto exact = crux::exact::raycast(r, t);
     hits += exact.has_value();
@@ -468,7 +468,7 @@ TEST(NearDegenerate, SphereAndPlanePairsEqualExact) {
     v.push_back(&s.radius);
     f.perturb(v);
     s.radius = std::abs(s.radius);
-    if (p.normal == Vec3::Zero()) return {};
+    if (!crux::queryable(p)) return {};  // (a normal whose square underflows is out of the domain)
     const bool native = crux::overlaps(s, p), exact = crux::exact::overlaps(s, p);
     hits += exact;
     if (native == exact) return {};
@@ -502,7 +502,7 @@ TEST(NearDegenerate, SphereAndPlanePairsEqualExact) {
     collect(p.normal, v);
     v.push_back(&p.d);
     f.perturb(v);
-    if (p.normal == Vec3::Zero()) return {};
+    if (!crux::queryable(p)) return {};  // (a normal whose square underflows is out of the domain)
     const Aabb b{lo.cwiseMin(hi), lo.cwiseMax(hi)};
     const bool native = crux::overlaps(b, p), exact = crux::exact::overlaps(b, p);
     hits += exact;

@@ -1051,10 +1051,8 @@ TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
   if constexpr (std::is_same_v<Real, float>) EXPECT_FALSE(hit) << "t = 8/(5·FLT_MIN)·|dir| overflows float";
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
-// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
-// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
-// checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
+// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
 TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -1089,6 +1087,18 @@ TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   // the good inputs hit: the bad ones went through the same entry points
   EXPECT_TRUE(raycast(ray, tri) && raycast(ray, sphere) && raycast(ray, box) && raycast(ray, obb) && raycast(ray, plane));
   EXPECT_TRUE(intersects(seg, tri) && intersects(seg, sphere) && intersects(seg, box) && intersects(seg, obb));
+}
+
+// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
+// input with a message naming the query.
+TEST(RaycastPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  EXPECT_DEATH((void)raycast(Ray{Vec3::Zero(), Vec3::Zero()}, tri),
+               "precondition violated in raycast\\(Ray, Triangle\\)");
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_DEATH((void)intersects(Segment{Vec3(nan, 0, 0), Vec3::Ones()}, tri),
+               "precondition violated in intersects\\(Segment, Triangle\\)");
 }
 
 }  // namespace

@@ -588,24 +588,24 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
     if (centre) {
       what << "sphere centre " << centre->transpose();
       EXPECT_TRUE(withinDistance(tri, *centre, radius, margin)) << what.str();
-      EXPECT_FALSE(withinDistance(tri, *centre, radius - 1, margin)) << what.str();
+      if (radius >= 1) EXPECT_FALSE(withinDistance(tri, *centre, radius - 1, margin)) << what.str();
       if (sphereTriangleContacts(tri, *centre, radius, margin, m)) {
         EXPECT_LE(m.points[0].separation, margin) << what.str();
       } else if (++missed == 1) {
         first = what.str();
       }
-      falseHits += sphereTriangleContacts(tri, *centre, radius - 1, margin, m);
+      if (radius >= 1) falseHits += sphereTriangleContacts(tri, *centre, radius - 1, margin, m);
       return;
     }
     what << "capsule " << p0.transpose() << " -> " << p1.transpose();
     EXPECT_TRUE(withinDistance(tri, p0, p1, radius, margin)) << what.str();
-    EXPECT_FALSE(withinDistance(tri, p0, p1, radius - 1, margin)) << what.str();
+    if (radius >= 1) EXPECT_FALSE(withinDistance(tri, p0, p1, radius - 1, margin)) << what.str();
     if (capsuleTriangleContacts(tri, p0, p1, radius, margin, m)) {
       for (int j = 0; j < m.count; ++j) EXPECT_LE(m.points[j].separation, margin) << what.str();
     } else if (++missed == 1) {
       first = what.str();
     }
-    falseHits += capsuleTriangleContacts(tri, p0, p1, radius - 1, margin, m);
+    if (radius >= 1) falseHits += capsuleTriangleContacts(tri, p0, p1, radius - 1, margin, m);
   };
   for (int i = 0; i < cases; ++i) {
     const Vec3 X = draws.point(5);
@@ -685,7 +685,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
       first = what.str();
     }
     EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
-    falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
+    if (radius >= 1) falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
     // the same pair as a capsule (the segment) against a triangle cornered at the sphere's centre
     const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Triangle corner{centre, v[0] + offset, v[1] + offset};
@@ -696,7 +696,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
            << ", capsule " << p0.transpose() << " -> " << p1.transpose() << " radius " << radius << " margin " << margin;
       first = what.str();
     }
-    falseHits += capsuleTriangleContacts(corner, p0, p1, radius - 1, margin, m);
+    if (radius >= 1) falseHits += capsuleTriangleContacts(corner, p0, p1, radius - 1, margin, m);
     // and through the generic convex pair routine (GJK with the exact margin decision)
     if (!contacts(ConvexShape(tri), Transform::identity(), ConvexShape(Sphere{centre, radius}), Transform::identity(),
                   margin, m) &&
@@ -713,10 +713,8 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   EXPECT_EQ(falseHits, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
-// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
-// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
-// checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
+// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
 TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -737,6 +735,20 @@ TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   all(tri, c, c1, -1);
   EXPECT_GT(calls, 80);
   EXPECT_TRUE(sphereTriangleContacts(tri, c, Real(0.5), 0, m));
+}
+
+// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
+// input with a message naming the query.
+TEST(TriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  ContactManifold m;
+  const Vec3 c(Real(0.2), Real(0.2), Real(0.4));
+  EXPECT_DEATH((void)sphereTriangleContacts(tri, c, -1, 0, m),
+               "precondition violated in sphereTriangleContacts");
+  const Real nan = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_DEATH((void)capsuleTriangleContacts(tri, c, Vec3(nan, 0, 0), Real(0.5), 0, m),
+               "precondition violated in capsuleTriangleContacts");
 }
 
 }  // namespace

@@ -857,10 +857,8 @@ TEST(TriangleTriangle, SymmetricOffTheExactGrid) {
   }
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked in
-// every build (with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts naming the query); its answer
-// is then unspecified, but the call returns without undefined behaviour, which the sanitizer stage
-// checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
+// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
 TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const crux::test_support::BadPrimitives bad = crux::test_support::badPrimitives();
@@ -888,4 +886,16 @@ TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   for (const crux::Real r : crux::test_support::nonFiniteValues()) (void)crux::withinDistance(tri, Vec3::Zero(), r, 0), ++calls;
   EXPECT_GT(calls, 120);
   EXPECT_TRUE(crux::overlaps(tri, sphere) && crux::overlaps(tri, box) && crux::overlaps(tri, obb) && crux::overlaps(tri, plane));
+}
+
+// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
+// input with a message naming the query.
+TEST(TriangleOverlapPreconditions, DebugBuildsAbortNamingTheQuery) {
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  const crux::Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+  EXPECT_DEATH((void)crux::withinDistance(tri, Vec3::Zero(), -1, 0),
+               "precondition violated in withinDistance\\(Triangle, point\\)");
+  const crux::Real inf = std::numeric_limits<crux::Real>::infinity();
+  EXPECT_DEATH((void)crux::overlaps(tri, crux::Triangle{Vec3::Zero(), Vec3::Ones(), Vec3(inf, 0, 0)}),
+               "precondition violated in overlaps\\(Triangle, Triangle\\)");
 }

@@ -15,8 +15,8 @@
 ///
 /// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
 /// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
-/// Unchecked (an abort with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an unspecified
-/// answer, never undefined behaviour.
+/// Debug builds abort on a violation, naming the query; under NDEBUG it is unchecked: an
+/// unspecified answer, never undefined behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/shapes.hpp>
