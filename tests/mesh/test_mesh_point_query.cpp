@@ -12,6 +12,7 @@
 #include <random>
 
 #include "support/scene_fixtures.hpp"
+#include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
 
 namespace crux {
 namespace {
@@ -28,7 +29,7 @@ TEST(MeshClosestPoint, BvhEqualsBruteForceBitForBit) {
   const auto mesh = test::bumpySphere(24, 32);
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-2.5, 2.5);
-  for (int i = 0; i < 2000; ++i) {
+  for (int i = 0, n = test::scaledCases(2000, 300); i < n; ++i) {
     const Vec3 p(Real(u(rng)), Real(u(rng)), Real(u(rng)));
     const MeshClosestPoint a = closestPoint(*mesh, p);
     const MeshClosestPoint b = closestPoint(*mesh, p, kNoLimit, QueryPath::BruteForce);

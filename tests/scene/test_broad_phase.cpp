@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer steps in the sanitizer stage
+
 namespace crux {
 namespace {
 
@@ -297,12 +299,13 @@ std::unique_ptr<BroadPhase> treeWithRayTreeAlways() {
   return std::make_unique<DynamicAabbTree>(o);
 }
 
+// (the ray tree is rebuilt at the first ray after every change: scaled under the sanitizers)
 TEST(DynamicAabbTree, RayTreeMatchesBruteForceUnderRandomInsertRemoveMove) {
-  randomSequence(treeWithRayTreeAlways(), kNearOrigin, 0x5eed0001, 4000);
+  randomSequence(treeWithRayTreeAlways(), kNearOrigin, 0x5eed0001, test::scaledCases(4000, 800));
 }
 
 TEST(DynamicAabbTree, RayTreeMatchesBruteForceAtMillionCoordinates) {
-  randomSequence(treeWithRayTreeAlways(), kAtMillion, 0x5eed0002, 3000);
+  randomSequence(treeWithRayTreeAlways(), kAtMillion, 0x5eed0002, test::scaledCases(3000, 600));
 }
 
 TEST_P(EveryTree, FindsBoxesFarOutsideAnyInitialBounds) {
