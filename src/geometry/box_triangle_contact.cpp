@@ -618,13 +618,14 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
 }  // namespace
 
 bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
-  detail::debugPreconditions("boxTriangleContacts(point, Triangle)", half, tri);
+  // (the half extents as the box they span: finite and >= 0)
+  detail::debugPreconditions("boxTriangleContacts(half extents, Triangle)", Aabb{-half, half}, tri);
   return boxTriangleContactsImpl<true>(half, tri, margin, out);
 }
 
 namespace detail {
 bool boxTriangleContactsFullSat(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
-  detail::debugPreconditions("boxTriangleContactsFullSat(point, Triangle)", half, tri);
+  detail::debugPreconditions("boxTriangleContactsFullSat(half extents, Triangle)", Aabb{-half, half}, tri);
   return boxTriangleContactsImpl<false>(half, tri, margin, out);
 }
 }  // namespace detail

@@ -731,8 +731,9 @@ TEST(BoxTriangleContact, MicrobenchmarkAgainstTheGenericRoutine) {
   EXPECT_GT(sink, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   // (the routine's fallback is distance(ConvexShape, ...), a query family that checks its inputs
   // at entry: with CRUX_CHECK_PRECONDITIONS, as in CI's sanitizer stage, that aborts instead)
@@ -746,7 +747,9 @@ TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBe
     (void)boxTriangleContacts(Vec3::Ones(), t, 0, m), (void)detail::boxTriangleContactsFullSat(Vec3::Ones(), t, 0, m);
     calls += 2;
   }
-  for (const Vec3& half : bad.points) {
+  std::vector<Vec3> halves = bad.points;
+  halves.push_back(Vec3(1, -1, 1));  // a negative half extent
+  for (const Vec3& half : halves) {
     (void)boxTriangleContacts(half, tri, 0, m), (void)detail::boxTriangleContactsFullSat(half, tri, 0, m);
     calls += 2;
   }
@@ -754,15 +757,18 @@ TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBe
   EXPECT_TRUE(boxTriangleContacts(Vec3::Ones(), tri, 0, m));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(BoxTriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const Triangle tri{Vec3(-2, -2, Real(0.9)), Vec3(2, -2, Real(0.9)), Vec3(0, 2, Real(0.9))};
   ContactManifold m;
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
   EXPECT_DEATH((void)boxTriangleContacts(Vec3(1, nan, 1), tri, 0, m),
-               "precondition violated in boxTriangleContacts\\(point, Triangle\\)");
+               "precondition violated in boxTriangleContacts\\(half extents, Triangle\\)");
+  EXPECT_DEATH((void)boxTriangleContacts(Vec3(1, -1, 1), tri, 0, m),
+               "precondition violated in boxTriangleContacts\\(half extents, Triangle\\)");
 }
 
 }  // namespace

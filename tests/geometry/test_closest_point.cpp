@@ -661,7 +661,7 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   // a degenerate triangle (collinear corners) says nothing
   EXPECT_FALSE(beyondAnEdgeLine({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(2, 0, 0)}, Vec3(0, -5, 0), Real(1)));
   // NaN in d says nothing either (no comparison holds); a NaN point breaks the precondition
-  // (debug builds abort, naming the query; under NDEBUG the answer is false, as no comparison holds)
+  // (with the primitive check on it aborts naming the query; otherwise false, no comparison holds)
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
   EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), nan));
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
@@ -671,8 +671,9 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -705,10 +706,11 @@ TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviou
   EXPECT_EQ(closestPoint(tri, p), Vec3(Real(0.2), Real(0.3), 0));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(ClosestPointPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const Real inf = std::numeric_limits<Real>::infinity();
   EXPECT_DEATH((void)closestPoint(Aabb{Vec3::Zero(), Vec3::Ones()}, Vec3(0, inf, 0)),
                "precondition violated in closestPoint\\(Aabb, point\\)");

@@ -480,8 +480,9 @@ TEST(OverlapProperty, PlanePlane) {
   });
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(OverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -502,10 +503,11 @@ TEST(OverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   EXPECT_TRUE(overlaps(sphere, box) && overlaps(box, obb) && overlaps(obb, plane) && overlaps(sphere, plane));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(OverlapPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   EXPECT_DEATH((void)overlaps(Sphere{Vec3::Zero(), -1}, Aabb{Vec3::Zero(), Vec3::Ones()}),
                "precondition violated in overlaps\\(Sphere, Aabb\\)");
   EXPECT_DEATH((void)overlaps(Plane{Vec3::Zero(), 0}, Plane{}),

@@ -1053,8 +1053,9 @@ TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
   if constexpr (std::is_same_v<Real, float>) EXPECT_FALSE(hit) << "t = 8/(5·FLT_MIN)·|dir| overflows float";
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -1091,10 +1092,11 @@ TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   EXPECT_TRUE(intersects(seg, tri) && intersects(seg, sphere) && intersects(seg, box) && intersects(seg, obb));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(RaycastPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   EXPECT_DEATH((void)raycast(Ray{Vec3::Zero(), Vec3::Zero()}, tri),
                "precondition violated in raycast\\(Ray, Triangle\\)");

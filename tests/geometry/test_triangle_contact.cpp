@@ -581,6 +581,8 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
   auto check = [&](const char* kind, const Triangle& tri, const Vec3* centre, const Vec3& p0, const Vec3& p1,
                    Real reach) {
     const Real margin = Real(draws.integer(0, 1)), radius = reach - margin;
+    // one less reach, with both parts >= 0: the radius one less, or the margin when the radius is 0
+    const Real lessRadius = radius >= 1 ? radius - 1 : radius, lessMargin = radius >= 1 ? margin : margin - 1;
     std::ostringstream what;
     what << kind << ": triangle " << tri.a.transpose() << " | " << tri.b.transpose() << " | " << tri.c.transpose()
          << ", radius " << radius << " margin " << margin << ", ";
@@ -588,24 +590,24 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
     if (centre) {
       what << "sphere centre " << centre->transpose();
       EXPECT_TRUE(withinDistance(tri, *centre, radius, margin)) << what.str();
-      if (radius >= 1) EXPECT_FALSE(withinDistance(tri, *centre, radius - 1, margin)) << what.str();
+      EXPECT_FALSE(withinDistance(tri, *centre, lessRadius, lessMargin)) << what.str();
       if (sphereTriangleContacts(tri, *centre, radius, margin, m)) {
         EXPECT_LE(m.points[0].separation, margin) << what.str();
       } else if (++missed == 1) {
         first = what.str();
       }
-      if (radius >= 1) falseHits += sphereTriangleContacts(tri, *centre, radius - 1, margin, m);
+      falseHits += sphereTriangleContacts(tri, *centre, lessRadius, lessMargin, m);
       return;
     }
     what << "capsule " << p0.transpose() << " -> " << p1.transpose();
     EXPECT_TRUE(withinDistance(tri, p0, p1, radius, margin)) << what.str();
-    if (radius >= 1) EXPECT_FALSE(withinDistance(tri, p0, p1, radius - 1, margin)) << what.str();
+    EXPECT_FALSE(withinDistance(tri, p0, p1, lessRadius, lessMargin)) << what.str();
     if (capsuleTriangleContacts(tri, p0, p1, radius, margin, m)) {
       for (int j = 0; j < m.count; ++j) EXPECT_LE(m.points[j].separation, margin) << what.str();
     } else if (++missed == 1) {
       first = what.str();
     }
-    if (radius >= 1) falseHits += capsuleTriangleContacts(tri, p0, p1, radius - 1, margin, m);
+    falseHits += capsuleTriangleContacts(tri, p0, p1, lessRadius, lessMargin, m);
   };
   for (int i = 0; i < cases; ++i) {
     const Vec3 X = draws.point(5);
@@ -676,6 +678,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
     const Triangle tri{s0 + offset, s0 + d + offset, c + offset};
     const Vec3 centre = X + offset;
     const Real margin = Real(draws.integer(0, 1)), radius = Real(k) - margin;
+    const Real lessRadius = radius >= 1 ? radius - 1 : radius, lessMargin = radius >= 1 ? margin : margin - 1;
     ++built;
     ContactManifold m;
     if (!sphereTriangleContacts(tri, centre, radius, margin, m) && ++missed == 1) {
@@ -685,7 +688,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
       first = what.str();
     }
     EXPECT_TRUE(withinDistance(tri, centre, radius, margin));
-    if (radius >= 1) falseHits += sphereTriangleContacts(tri, centre, radius - 1, margin, m);
+    falseHits += sphereTriangleContacts(tri, centre, lessRadius, lessMargin, m);
     // the same pair as a capsule (the segment) against a triangle cornered at the sphere's centre
     const Vec3 v[2] = {test::pointBehind(draws, X, n), test::pointBehind(draws, X, n)};
     const Triangle corner{centre, v[0] + offset, v[1] + offset};
@@ -696,7 +699,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
            << ", capsule " << p0.transpose() << " -> " << p1.transpose() << " radius " << radius << " margin " << margin;
       first = what.str();
     }
-    if (radius >= 1) falseHits += capsuleTriangleContacts(corner, p0, p1, radius - 1, margin, m);
+    falseHits += capsuleTriangleContacts(corner, p0, p1, lessRadius, lessMargin, m);
     // and through the generic convex pair routine (GJK with the exact margin decision)
     if (!contacts(ConvexShape(tri), Transform::identity(), ConvexShape(Sphere{centre, radius}), Transform::identity(),
                   margin, m) &&
@@ -713,8 +716,9 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   EXPECT_EQ(falseHits, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -737,10 +741,11 @@ TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   EXPECT_TRUE(sphereTriangleContacts(tri, c, Real(0.5), 0, m));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(TriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   ContactManifold m;
   const Vec3 c(Real(0.2), Real(0.2), Real(0.4));

@@ -298,8 +298,9 @@ TEST(TriangleDistance, PointTrianglesAndIdenticalTriangles) {
   EXPECT_EQ(r.distance, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(TriangleDistancePreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
@@ -313,10 +314,11 @@ TEST(TriangleDistancePreconditions, NonQueryableInputsReturnWithoutUndefinedBeha
   EXPECT_EQ(distance(tri, Triangle{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)}), 1);
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(TriangleDistancePreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const Triangle tri{Vec3(0, 0, 1), Vec3(1, 0, 1), Vec3(0, 1, 1)};
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
   EXPECT_DEATH((void)closestPoints(tri, Triangle{Vec3::Zero(), Vec3(nan, 0, 0), Vec3::Ones()}),

@@ -857,8 +857,9 @@ TEST(TriangleTriangle, SymmetricOffTheExactGrid) {
   }
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): under NDEBUG the primitive layer runs
-// unchecked; its answer is then unspecified, but the call returns without undefined behaviour.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
+// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
+// returns without undefined behaviour, which the sanitizer stage checks here.
 TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const crux::test_support::BadPrimitives bad = crux::test_support::badPrimitives();
@@ -888,10 +889,11 @@ TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   EXPECT_TRUE(crux::overlaps(tri, sphere) && crux::overlaps(tri, box) && crux::overlaps(tri, obb) && crux::overlaps(tri, plane));
 }
 
-// Debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) abort on a non-queryable
-// input with a message naming the query.
+// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// aborts with a message naming the query.
 TEST(TriangleOverlapPreconditions, DebugBuildsAbortNamingTheQuery) {
-  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "the primitive check is off in this (release) build";
+  if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
+    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
   const crux::Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   EXPECT_DEATH((void)crux::withinDistance(tri, Vec3::Zero(), -1, 0),
                "precondition violated in withinDistance\\(Triangle, point\\)");

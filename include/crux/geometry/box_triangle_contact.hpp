@@ -12,7 +12,7 @@
 ///
 /// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
 /// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
-/// Debug builds abort on a violation, naming the query; under NDEBUG it is unchecked: an
+/// Unchecked (an abort naming the query with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an
 /// unspecified answer, never undefined behaviour (where the routine falls back to
 /// distance(ConvexShape, ...), that query's entry check applies).
 
