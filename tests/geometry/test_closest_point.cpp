@@ -665,7 +665,8 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   const Real nan = std::numeric_limits<Real>::quiet_NaN();
   EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), nan));
   if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    EXPECT_DEATH((void)beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)), "precondition violated in beyondAnEdgeLine");
+    EXPECT_DEATH((void)beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)),
+                 "precondition violated in beyondAnEdgeLine");
   else
     EXPECT_FALSE(beyondAnEdgeLine(kUnit, Vec3(nan, -5, 0), Real(1)));
   EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)

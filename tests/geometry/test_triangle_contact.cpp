@@ -20,6 +20,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "support/grid_touching.hpp"
 #include "support/test_scale.hpp"
@@ -560,6 +561,12 @@ TEST(TriangleContact, CapsuleThroughTheFaceTakesTheMinimumTranslation) {
   EXPECT_GT(double(minSeparation(m)), -0.03);
 }
 
+/// Radius and margin reaching one less than radius + margin (integers, radius + margin >= 1), both
+/// >= 0 as the primitive layer requires: the radius one less, or the margin when the radius is 0.
+std::pair<Real, Real> oneReachShort(Real radius, Real margin) {
+  return radius >= 1 ? std::pair<Real, Real>(radius - 1, margin) : std::pair<Real, Real>(radius, margin - 1);
+}
+
 // Touching on the integer grid must be reported (every boolean answer on integer-grid
 // inputs equals the exact answer; crux diff found a capsule touching a segment triangle at
 // distance exactly 1, which the double distance put at 1 + 2e-16, and dropped). Two constructions,
@@ -581,8 +588,7 @@ TEST(TriangleContact, TouchingOnTheIntegerGridIsReported) {
   auto check = [&](const char* kind, const Triangle& tri, const Vec3* centre, const Vec3& p0, const Vec3& p1,
                    Real reach) {
     const Real margin = Real(draws.integer(0, 1)), radius = reach - margin;
-    // one less reach, with both parts >= 0: the radius one less, or the margin when the radius is 0
-    const Real lessRadius = radius >= 1 ? radius - 1 : radius, lessMargin = radius >= 1 ? margin : margin - 1;
+    const auto [lessRadius, lessMargin] = oneReachShort(radius, margin);
     std::ostringstream what;
     what << kind << ": triangle " << tri.a.transpose() << " | " << tri.b.transpose() << " | " << tri.c.transpose()
          << ", radius " << radius << " margin " << margin << ", ";
@@ -678,7 +684,7 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
     const Triangle tri{s0 + offset, s0 + d + offset, c + offset};
     const Vec3 centre = X + offset;
     const Real margin = Real(draws.integer(0, 1)), radius = Real(k) - margin;
-    const Real lessRadius = radius >= 1 ? radius - 1 : radius, lessMargin = radius >= 1 ? margin : margin - 1;
+    const auto [lessRadius, lessMargin] = oneReachShort(radius, margin);
     ++built;
     ContactManifold m;
     if (!sphereTriangleContacts(tri, centre, radius, margin, m) && ++missed == 1) {
