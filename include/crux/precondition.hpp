@@ -12,8 +12,8 @@
 /// a message naming the query and the rule, so that a bad input is found where it was made.
 /// Release callers who want an error rather than an empty answer call validate(...) first: it
 /// throws InvalidInput naming the field. The primitive layer (one shape against another or a
-/// point) answers a non-queryable input with an unspecified value, never undefined behaviour; with
-/// CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1 it aborts the same way (debugPreconditions).
+/// point) aborts the same way in debug builds (debugPreconditions); in release builds it answers a
+/// non-queryable input with an unspecified value, never undefined behaviour.
 
 #include <crux/geometry/shapes.hpp>  // queryable(...): its Vec3 overload must be visible here (no ADL for Eigen)
 
@@ -25,13 +25,16 @@
 #endif
 #endif
 
-/// The primitive layer's check (debugPreconditions) is opt-in: 1 turns it on (in the library's
-/// build and the caller's). Off by default, also in debug builds, because the layer is the inner
-/// loop of the mesh, scene and contact queries, which call it on values they derive from checked
-/// input: a fattened broad-phase box or a triangle mapped by an extreme pose may overflow to ±inf
-/// for finite input, which the layer answers conservatively and its check would abort on.
+/// The primitive layer's check (debugPreconditions) follows CRUX_CHECK_PRECONDITIONS: on in debug
+/// builds, off with NDEBUG; 0 or 1 overrides it. It guards the public entries of the layer
+/// (src/geometry/checked_primitives.cpp; and the test reference detail::boxTriangleContactsFullSat).
+/// The mesh, scene, contact and world layers call the
+/// unchecked routines behind them (src/geometry/unchecked.hpp): they check their own inputs at
+/// entry, and the values they derive from them (a fattened broad-phase box, a triangle mapped by
+/// an extreme pose) may overflow to ±inf for finite input, which the routines answer
+/// conservatively and the check would abort on.
 #ifndef CRUX_CHECK_PRIMITIVE_PRECONDITIONS
-#define CRUX_CHECK_PRIMITIVE_PRECONDITIONS 0
+#define CRUX_CHECK_PRIMITIVE_PRECONDITIONS CRUX_CHECK_PRECONDITIONS
 #endif
 
 namespace crux::detail {
@@ -75,10 +78,10 @@ bool entryPreconditions(const char* query, const char* rule, const Inputs&... in
 
 /// The check of the primitive layer (one shape against another or a point: raycast, intersects,
 /// overlaps, withinDistance, closestPoint, squaredDistance, beyondAnEdgeLine, triangle–triangle
-/// closest points and the triangle contact routines): with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1
-/// it aborts like entryPreconditions (tested per family); otherwise it is nothing, and a
-/// non-queryable input gets an unspecified answer, never undefined behaviour (tested per family,
-/// also under ASan + UBSan).
+/// closest points and the triangle contact routines): with CRUX_CHECK_PRIMITIVE_PRECONDITIONS (on
+/// in debug builds) it aborts like entryPreconditions (tested per family); otherwise it is
+/// nothing, and a non-queryable input gets an unspecified answer, never undefined behaviour
+/// (tested per family on the unchecked routines, also under ASan + UBSan).
 template <class... Inputs>
 void debugPreconditions([[maybe_unused]] const char* query, [[maybe_unused]] const Inputs&... inputs) {
   if constexpr (CRUX_CHECK_PRIMITIVE_PRECONDITIONS != 0) {

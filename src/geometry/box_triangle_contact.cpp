@@ -2,6 +2,8 @@
 // and edge–edge closest points. Fixed-size buffers only; falls back to contacts() (GJK/EPA) when
 // the SAT axis does not realise the distance.
 
+#include "geometry/unchecked.hpp"
+
 #include <crux/geometry/box_triangle_contact.hpp>
 #include <crux/precondition.hpp>
 
@@ -617,9 +619,7 @@ bool boxTriangleContactsImpl(const Vec3& half, const Triangle& tri, Real margin,
 
 }  // namespace
 
-bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
-  // (the half extents as the box they span: finite and >= 0)
-  detail::debugPreconditions("boxTriangleContacts(half extents, Triangle)", Aabb{-half, half}, tri);
+bool unchecked::boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out) {
   return boxTriangleContactsImpl<true>(half, tri, margin, out);
 }
 

@@ -5,12 +5,13 @@
 /// by the best-conditioned formula for the region found (projection onto an edge's line or the
 /// triangle's plane), never by a division that can be 0/0.
 
+#include "geometry/unchecked.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
 #include <crux/geometry/closest_point.hpp>
-#include <crux/precondition.hpp>
 #include <crux/geometry/predicates.hpp>
 
 #include "geometry/closest_point_internal.hpp"
@@ -92,44 +93,36 @@ WVec3 closestOnObb(const Obb& b, const WVec3& p) {
 
 }  // namespace
 
-Vec3 closestPoint(const Triangle& t, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Triangle, point)", t, p);
+Vec3 unchecked::closestPoint(const Triangle& t, const Vec3& p) {
   return narrow(closestOnTriangle(t, wide(p)));
 }
 
-Vec3 closestPoint(const Segment& s, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Segment, point)", s, p);
+Vec3 unchecked::closestPoint(const Segment& s, const Vec3& p) {
   return narrow(closestOnSegment(wide(s.start), wide(s.end), wide(p)));
 }
 
-Vec3 closestPoint(const Ray& r, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Ray, point)", r, p);
+Vec3 unchecked::closestPoint(const Ray& r, const Vec3& p) {
   return narrow(closestOnRay(r, wide(p)));
 }
 
-Vec3 closestPoint(const Sphere& s, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Sphere, point)", s, p);
+Vec3 unchecked::closestPoint(const Sphere& s, const Vec3& p) {
   return narrow(closestOnSphere(s, wide(p)));
 }
 
-Vec3 closestPoint(const Aabb& b, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Aabb, point)", b, p);
+Vec3 unchecked::closestPoint(const Aabb& b, const Vec3& p) {
   return p.cwiseMax(b.min).cwiseMin(b.max);  // per axis, each axis against its own bounds
 }
 
-Vec3 closestPoint(const Obb& b, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Obb, point)", b, p);
+Vec3 unchecked::closestPoint(const Obb& b, const Vec3& p) {
   return narrow(closestOnObb(b, wide(p)));
 }
 
-Vec3 closestPoint(const Plane& pl, const Vec3& p) {
-  detail::debugPreconditions("closestPoint(Plane, point)", pl, p);
+Vec3 unchecked::closestPoint(const Plane& pl, const Vec3& p) {
   const WVec3 n = wide(pl.normal), x = wide(p);
   return narrow(x - n * ((n.dot(x) - Wide(pl.d)) / n.squaredNorm()));
 }
 
-bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
-  detail::debugPreconditions("beyondAnEdgeLine(Triangle, point)", t, p);
+bool unchecked::beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
   const Eigen::Vector3d v[3] = {t.a.cast<double>(), t.b.cast<double>(), t.c.cast<double>()};
   const Eigen::Vector3d n = (v[1] - v[0]).cross(v[2] - v[0]);
   const Eigen::Vector3d q = p.cast<double>();
@@ -142,38 +135,32 @@ bool beyondAnEdgeLine(const Triangle& t, const Vec3& p, Real d) {
   return false;
 }
 
-Real squaredDistance(const Triangle& t, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Triangle, point)", t, p);
+Real unchecked::squaredDistance(const Triangle& t, const Vec3& p) {
   const WVec3 x = wide(p);
   return Real((closestOnTriangle(t, x) - x).squaredNorm());
 }
 
-Real squaredDistance(const Segment& s, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Segment, point)", s, p);
+Real unchecked::squaredDistance(const Segment& s, const Vec3& p) {
   const WVec3 x = wide(p);
   return Real((closestOnSegment(wide(s.start), wide(s.end), x) - x).squaredNorm());
 }
 
-Real squaredDistance(const Ray& r, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Ray, point)", r, p);
+Real unchecked::squaredDistance(const Ray& r, const Vec3& p) {
   const WVec3 x = wide(p);
   return Real((closestOnRay(r, x) - x).squaredNorm());
 }
 
-Real squaredDistance(const Sphere& s, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Sphere, point)", s, p);
+Real unchecked::squaredDistance(const Sphere& s, const Vec3& p) {
   const Wide gap = (wide(p) - wide(s.center)).norm() - Wide(s.radius);
   return gap > 0 ? Real(gap * gap) : Real(0);
 }
 
-Real squaredDistance(const Aabb& b, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Aabb, point)", b, p);
+Real unchecked::squaredDistance(const Aabb& b, const Vec3& p) {
   const WVec3 x = wide(p);
   return Real((closestOnAabb(b, x) - x).squaredNorm());
 }
 
-Real squaredDistance(const Obb& b, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Obb, point)", b, p);
+Real unchecked::squaredDistance(const Obb& b, const Vec3& p) {
   // Σ of the squared per-axis excesses (the axes are orthonormal).
   const WVec3 d = wide(p) - wide(b.center);
   Wide d2 = 0;
@@ -184,8 +171,7 @@ Real squaredDistance(const Obb& b, const Vec3& p) {
   return Real(d2);
 }
 
-Real squaredDistance(const Plane& pl, const Vec3& p) {
-  detail::debugPreconditions("squaredDistance(Plane, point)", pl, p);
+Real unchecked::squaredDistance(const Plane& pl, const Vec3& p) {
   const WVec3 n = wide(pl.normal);
   const Wide s = n.dot(wide(p)) - Wide(pl.d);
   return Real(s * s / n.squaredNorm());

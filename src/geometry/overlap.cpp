@@ -6,11 +6,12 @@
 /// for integer-grid inputs (|coordinates| <= 64, OBB axes signed unit vectors). See overlap.hpp
 /// and docs/geometry.md. Closed sets: every comparison accepts equality.
 
+#include "geometry/unchecked.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
-#include <crux/precondition.hpp>
 
 namespace crux {
 namespace {
@@ -75,8 +76,7 @@ bool boxesOverlap(const WideBox& a, const WideBox& b) {
 
 }  // namespace
 
-bool overlaps(const Sphere& a, const Sphere& b) {
-  detail::debugPreconditions("overlaps(Sphere, Sphere)", a, b);
+bool unchecked::overlaps(const Sphere& a, const Sphere& b) {
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
     const T r = T(Wide(a.radius)) + T(Wide(b.radius));
@@ -84,8 +84,7 @@ bool overlaps(const Sphere& a, const Sphere& b) {
   });
 }
 
-bool overlaps(const Sphere& s, const Aabb& b) {
-  detail::debugPreconditions("overlaps(Sphere, Aabb)", s, b);
+bool unchecked::overlaps(const Sphere& s, const Aabb& b) {
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
     T d2 = T(Wide(0));
@@ -104,8 +103,7 @@ bool overlaps(const Sphere& s, const Aabb& b) {
   });
 }
 
-bool overlaps(const Sphere& s, const Obb& b) {
-  detail::debugPreconditions("overlaps(Sphere, Obb)", s, b);
+bool unchecked::overlaps(const Sphere& s, const Obb& b) {
   // Distance in the box frame axesᵀ(c - center), the axes exactly as given.
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
@@ -121,8 +119,7 @@ bool overlaps(const Sphere& s, const Obb& b) {
   });
 }
 
-bool overlaps(const Sphere& s, const Plane& p) {
-  detail::debugPreconditions("overlaps(Sphere, Plane)", s, p);
+bool unchecked::overlaps(const Sphere& s, const Plane& p) {
   // (n·c - d)² <= r²|n|²: |n| times the signed distance against |n| times the radius.
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
@@ -133,18 +130,15 @@ bool overlaps(const Sphere& s, const Plane& p) {
   });
 }
 
-bool overlaps(const Aabb& a, const Aabb& b) {
-  detail::debugPreconditions("overlaps(Aabb, Aabb)", a, b);
+bool unchecked::overlaps(const Aabb& a, const Aabb& b) {
   return (a.min.array() <= b.max.array()).all() && (b.min.array() <= a.max.array()).all();
 }
 
-bool overlaps(const Aabb& a, const Obb& b) {
-  detail::debugPreconditions("overlaps(Aabb, Obb)", a, b);
+bool unchecked::overlaps(const Aabb& a, const Obb& b) {
   return boxesOverlap(wideBox(a), wideBox(b));
 }
 
-bool overlaps(const Aabb& b, const Plane& p) {
-  detail::debugPreconditions("overlaps(Aabb, Plane)", b, p);
+bool unchecked::overlaps(const Aabb& b, const Plane& p) {
   // n·x over the box spans [lo, hi], reached at the corners picked by the signs of n.
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
@@ -161,13 +155,11 @@ bool overlaps(const Aabb& b, const Plane& p) {
   });
 }
 
-bool overlaps(const Obb& a, const Obb& b) {
-  detail::debugPreconditions("overlaps(Obb, Obb)", a, b);
+bool unchecked::overlaps(const Obb& a, const Obb& b) {
   return boxesOverlap(wideBox(a), wideBox(b));
 }
 
-bool overlaps(const Obb& b, const Plane& p) {
-  detail::debugPreconditions("overlaps(Obb, Plane)", b, p);
+bool unchecked::overlaps(const Obb& b, const Plane& p) {
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
     const robust::V3<T> n = robust::lift<T>(p.normal);
@@ -181,8 +173,7 @@ bool overlaps(const Obb& b, const Plane& p) {
   });
 }
 
-bool overlaps(const Plane& a, const Plane& b) {
-  detail::debugPreconditions("overlaps(Plane, Plane)", a, b);
+bool unchecked::overlaps(const Plane& a, const Plane& b) {
   return robust::filtered([&](auto& judge) {
     using T = predicates::NumberOf<decltype(judge)>;
     const robust::V3<T> na = robust::lift<T>(a.normal), nb = robust::lift<T>(b.normal);

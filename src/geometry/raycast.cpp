@@ -9,11 +9,12 @@
 /// cross-multiplication (no division before the answer is known); the reported distance is
 /// computed from the winning fraction at the end.
 
+#include "geometry/unchecked.hpp"
+
 #include <array>
 #include <cmath>
 #include <crux/geometry/predicates.hpp>
 #include <crux/geometry/raycast.hpp>
-#include <crux/precondition.hpp>
 
 #include "geometry/ray_triangle.hpp"
 #include <limits>
@@ -425,16 +426,14 @@ std::optional<RayHit> rayHitAt(const Ray& ray, const RayCrossing& c, Real maxT, 
 
 }  // namespace geometry_detail
 
-std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
-  detail::debugPreconditions("raycast(Ray, Triangle)", ray, t);
+std::optional<RayHit> unchecked::raycast(const Ray& ray, const Triangle& t, Real maxT) {
   const std::optional<geometry_detail::RayCrossing> c = geometry_detail::rayTriangleCrossing(ray, t);
   if (!c) return std::nullopt;
   return geometry_detail::rayHitAt(ray, *c, maxT);
 }
 
 
-std::optional<RayHit> raycast(const Ray& ray, const Sphere& sp, Real maxT) {
-  detail::debugPreconditions("raycast(Ray, Sphere)", ray, sp);
+std::optional<RayHit> unchecked::raycast(const Ray& ray, const Sphere& sp, Real maxT) {
   const WVec3 o = wide(ray.origin), d = wide(ray.dir), c = wide(sp.center);
   const WVec3 m = o - c;
   const Wide r = sp.radius;
@@ -452,8 +451,7 @@ std::optional<RayHit> raycast(const Ray& ray, const Sphere& sp, Real maxT) {
   return makeHit(o, d, s, r > 0 ? WVec3(p - c) : WVec3::Zero(), maxT);
 }
 
-std::optional<RayHit> raycast(const Ray& ray, const Aabb& box, Real maxT) {
-  detail::debugPreconditions("raycast(Ray, Aabb)", ray, box);
+std::optional<RayHit> unchecked::raycast(const Ray& ray, const Aabb& box, Real maxT) {
   const WVec3 o = wide(ray.origin), d = wide(ray.dir);
   const auto e = slabs(o, d, wide(box.min), wide(box.max), std::nullopt);
   if (!e) return std::nullopt;
@@ -462,8 +460,7 @@ std::optional<RayHit> raycast(const Ray& ray, const Aabb& box, Real maxT) {
   return makeHit(o, d, e->s.value(), normal, maxT);
 }
 
-std::optional<RayHit> raycast(const Ray& ray, const Obb& box, Real maxT) {
-  detail::debugPreconditions("raycast(Ray, Obb)", ray, box);
+std::optional<RayHit> unchecked::raycast(const Ray& ray, const Obb& box, Real maxT) {
   const WVec3 o = wide(ray.origin), d = wide(ray.dir);
   const WVec3 lo = toBoxFrame(box, o - wide(box.center)), ld = toBoxFrame(box, d);
   const WVec3 h = wide(box.half);
@@ -474,8 +471,7 @@ std::optional<RayHit> raycast(const Ray& ray, const Obb& box, Real maxT) {
   return makeHit(o, d, e->s.value(), normal, maxT);
 }
 
-std::optional<RayHit> raycast(const Ray& ray, const Plane& p, Real maxT) {
-  detail::debugPreconditions("raycast(Ray, Plane)", ray, p);
+std::optional<RayHit> unchecked::raycast(const Ray& ray, const Plane& p, Real maxT) {
   const WVec3 o = wide(ray.origin), d = wide(ray.dir), n = wide(p.normal);
   const Wide f = n.dot(o) - Wide(p.d);  // signed distance times |n|
   const Wide nd = n.dot(d);
@@ -484,8 +480,7 @@ std::optional<RayHit> raycast(const Ray& ray, const Plane& p, Real maxT) {
   return makeHit(o, d, -f / nd, f > 0 ? n : WVec3(-n), maxT);
 }
 
-bool intersects(const Segment& seg, const Triangle& t) {
-  detail::debugPreconditions("intersects(Segment, Triangle)", seg, t);
+bool unchecked::intersects(const Segment& seg, const Triangle& t) {
   const predicates::TriangleShape shape = predicates::classify(t);
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
@@ -502,8 +497,7 @@ bool intersects(const Segment& seg, const Triangle& t) {
   });
 }
 
-bool intersects(const Segment& seg, const Sphere& sp) {
-  detail::debugPreconditions("intersects(Segment, Sphere)", seg, sp);
+bool unchecked::intersects(const Segment& seg, const Sphere& sp) {
   const WVec3 a = wide(seg.start), b = wide(seg.end), c = wide(sp.center);
   const Wide rr = Wide(sp.radius) * Wide(sp.radius);
   const WVec3 e = b - a, m = c - a;
@@ -514,21 +508,18 @@ bool intersects(const Segment& seg, const Sphere& sp) {
   return m.cross(e).squaredNorm() <= rr * len2;
 }
 
-bool intersects(const Segment& seg, const Aabb& box) {
-  detail::debugPreconditions("intersects(Segment, Aabb)", seg, box);
+bool unchecked::intersects(const Segment& seg, const Aabb& box) {
   const WVec3 o = wide(seg.start), d = wide(seg.end) - o;
   return slabs(o, d, wide(box.min), wide(box.max), Fraction{1, 1}).has_value();
 }
 
-bool intersects(const Segment& seg, const Obb& box) {
-  detail::debugPreconditions("intersects(Segment, Obb)", seg, box);
+bool unchecked::intersects(const Segment& seg, const Obb& box) {
   const WVec3 c = wide(box.center), h = wide(box.half);
   const WVec3 a = toBoxFrame(box, wide(seg.start) - c), b = toBoxFrame(box, wide(seg.end) - c);
   return slabs(a, b - a, -h, h, Fraction{1, 1}).has_value();
 }
 
-bool intersects(const Segment& seg, const Plane& p) {
-  detail::debugPreconditions("intersects(Segment, Plane)", seg, p);
+bool unchecked::intersects(const Segment& seg, const Plane& p) {
   const WVec3 n = wide(p.normal);
   const Wide f0 = n.dot(wide(seg.start)) - Wide(p.d), f1 = n.dot(wide(seg.end)) - Wide(p.d);
   return !((f0 > 0 && f1 > 0) || (f0 < 0 && f1 < 0));

@@ -2,10 +2,11 @@
 // per-triangle fast path), with contact.hpp's feature selection and clipping rules. Double
 // precision, fixed-size data, no exceptions.
 
+#include "geometry/unchecked.hpp"
+
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/raycast.hpp>
-#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -231,7 +232,7 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
     bool clamp = false;
     if (!contact_detail::withinMargin(
             d - r, m, band,
-            [&] { return withinDistance(tri, Vec3(p.cast<Real>()), static_cast<Real>(r), static_cast<Real>(m)); }, clamp))
+            [&] { return unchecked::withinDistance(tri, Vec3(p.cast<Real>()), static_cast<Real>(r), static_cast<Real>(m)); }, clamp))
       return false;
     if (clamp) d = r + m;
   }
@@ -252,8 +253,7 @@ bool sphereCore(const Triangle& tri, const V3& p, double r, double m, TriD& t, V
 
 }  // namespace
 
-bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
-  detail::debugPreconditions("sphereTriangleContacts(Triangle, point)", tri, centre, Sphere{centre, radius});
+bool unchecked::sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
   out.count = 0;
   const V3 p = centre.cast<double>();
   const double r = double(radius);
@@ -266,9 +266,8 @@ bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius
   return true;
 }
 
-bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+bool unchecked::sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
                            SphereTriangleContact& out) {
-  detail::debugPreconditions("sphereTriangleContact(Triangle, point)", tri, centre, Sphere{centre, radius});
   const V3 p = centre.cast<double>();
   const double r = double(radius);
   TriD t;
@@ -284,9 +283,8 @@ bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius,
   return true;
 }
 
-bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
+bool unchecked::capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
                              ContactManifold& out) {
-  detail::debugPreconditions("capsuleTriangleContacts(Triangle, point, point)", tri, p0In, p1In, Sphere{p0In, radius});
   out.count = 0;
   const V3 s[2] = {p0In.cast<double>(), p1In.cast<double>()};
   const double r = double(radius), mg = double(margin);
@@ -355,7 +353,7 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
         pb = s[k];
       }
     }
-    crossing = intersects(Segment{p0In, p1In}, tri);
+    crossing = unchecked::intersects(Segment{p0In, p1In}, tri);
   } else if (!t.degenerate) {
     // x on the plane: inside the closed triangle
     auto inside = [&](const V3& x) { return closest_detail::projectsInside(t.p, t.m, x); };
@@ -381,7 +379,7 @@ bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& 
   auto inMargin = [&](double& core) {
     bool clamp = false;
     if (!contact_detail::withinMargin(
-            core - r, mg, tolAbs, [&] { return withinDistance(tri, p0In, p1In, radius, margin); }, clamp))
+            core - r, mg, tolAbs, [&] { return unchecked::withinDistance(tri, p0In, p1In, radius, margin); }, clamp))
       return false;
     if (clamp) core = r + mg;
     return true;

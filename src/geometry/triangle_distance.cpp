@@ -3,10 +3,11 @@
 // whose common point comes from the one point–triangle closest point (closest_point_internal.hpp).
 // All arithmetic in double; see triangle_distance.hpp.
 
+#include "geometry/unchecked.hpp"
+
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/triangle_distance.hpp>
 #include <crux/geometry/triangle_class.hpp>
-#include <crux/precondition.hpp>
 
 #include "geometry/closest_point_internal.hpp"
 
@@ -150,8 +151,7 @@ bool straddles(const Tri& from, const Tri& to, double scale) {
 
 }  // namespace
 
-TriangleDistanceResult closestPoints(const Triangle& a, const Triangle& b) {
-  detail::debugPreconditions("closestPoints(Triangle, Triangle)", a, b);
+TriangleDistanceResult unchecked::closestPoints(const Triangle& a, const Triangle& b) {
   const Tri A(a), B(b);
   Candidate best;
   for (int i = 0; i < 3; ++i)
@@ -169,7 +169,7 @@ TriangleDistanceResult closestPoints(const Triangle& a, const Triangle& b) {
   // give a rounded near-zero: whenever the corners straddle both planes, decide exactly.
   double scale = 0;
   for (int i = 0; i < 3; ++i) scale = std::max({scale, A.v[i].cwiseAbs().maxCoeff(), B.v[i].cwiseAbs().maxCoeff()});
-  if (straddles(B, A, scale) && straddles(A, B, scale) && overlaps(a, b)) {
+  if (straddles(B, A, scale) && straddles(A, B, scale) && unchecked::overlaps(a, b)) {
     r.intersecting = true;
     if (best.d2 > 0) {
       crossings(A, B, false, best);
@@ -184,6 +184,6 @@ TriangleDistanceResult closestPoints(const Triangle& a, const Triangle& b) {
   return r;
 }
 
-Real distance(const Triangle& a, const Triangle& b) { return closestPoints(a, b).distance; }
+Real distance(const Triangle& a, const Triangle& b) { return closestPoints(a, b).distance; }  // (the checked entry)
 
 }  // namespace crux

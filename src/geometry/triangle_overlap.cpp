@@ -8,10 +8,11 @@
 /// docs/geometry.md for the range). Degenerate triangles are classified exactly
 /// (predicates::classify) and tested as the segment or point they are.
 
+#include "geometry/unchecked.hpp"
+
 #include <crux/error.hpp>
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
-#include <crux/precondition.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -470,13 +471,11 @@ bool overlapsOrdered(const Triangle& a, const Triangle& b) {
 
 // Symmetric by construction: the pair is evaluated in one canonical order (the signs are exact,
 // so both orders agree; the canonical order keeps the filter's work identical too).
-bool overlaps(const Triangle& a, const Triangle& b) {
-  detail::debugPreconditions("overlaps(Triangle, Triangle)", a, b);
+bool unchecked::overlaps(const Triangle& a, const Triangle& b) {
   return precedes(b, a) ? overlapsOrdered(b, a) : overlapsOrdered(a, b);
 }
 
-bool overlaps(const Triangle& t, const Sphere& s) {
-  detail::debugPreconditions("overlaps(Triangle, Sphere)", t, s);
+bool unchecked::overlaps(const Triangle& t, const Sphere& s) {
   // Cheap rejection: the sphere's box misses the triangle's box on some axis, by a margin the
   // filter certifies (no exact stage here: an uncertain margin just goes on to the full test).
   for (int i = 0; i < 3; ++i) {
@@ -492,8 +491,7 @@ bool overlaps(const Triangle& t, const Sphere& s) {
   });
 }
 
-bool overlaps(const Triangle& t, const Aabb& b) {
-  detail::debugPreconditions("overlaps(Triangle, Aabb)", t, b);
+bool unchecked::overlaps(const Triangle& t, const Aabb& b) {
   // Box normals first, on the inputs themselves (exact comparisons).
   for (int i = 0; i < 3; ++i) {
     if (t.a[i] > b.max[i] && t.b[i] > b.max[i] && t.c[i] > b.max[i]) return false;
@@ -511,8 +509,7 @@ bool overlaps(const Triangle& t, const Aabb& b) {
   });
 }
 
-bool overlaps(const Triangle& t, const Obb& b) {
-  detail::debugPreconditions("overlaps(Triangle, Obb)", t, b);
+bool unchecked::overlaps(const Triangle& t, const Obb& b) {
   // Box coordinates v = axesᵀ (x - center) with the caller's axes as given (exactly).
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
@@ -528,8 +525,7 @@ bool overlaps(const Triangle& t, const Obb& b) {
   });
 }
 
-bool overlaps(const Triangle& t, const Plane& p) {
-  detail::debugPreconditions("overlaps(Triangle, Plane)", t, p);
+bool unchecked::overlaps(const Triangle& t, const Plane& p) {
   return robust::filtered([&](auto& judge) {
     using T = NumberOf<decltype(judge)>;
     const V3<T> n = lift<T>(p.normal);
@@ -550,16 +546,14 @@ bool withinDistance(const WVec3* a, int na, const WVec3* b, int nb, Wide radiusA
   });
 }
 
-bool withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin) {
-  detail::debugPreconditions("withinDistance(Triangle, point)", t, x, Sphere{x, radius});
+bool unchecked::withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin) {
   const WVec3 tri[3] = {wide(t.a), wide(t.b), wide(t.c)}, point = wide(x);
-  return withinDistance(tri, 3, &point, 1, Wide(radius), 0, Wide(margin));
+  return crux::withinDistance(tri, 3, &point, 1, Wide(radius), 0, Wide(margin));
 }
 
-bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin) {
-  detail::debugPreconditions("withinDistance(Triangle, point, point)", t, p, q, Sphere{p, radius});
+bool unchecked::withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin) {
   const WVec3 tri[3] = {wide(t.a), wide(t.b), wide(t.c)}, segment[2] = {wide(p), wide(q)};
-  return withinDistance(tri, 3, segment, 2, Wide(radius), 0, Wide(margin));
+  return crux::withinDistance(tri, 3, segment, 2, Wide(radius), 0, Wide(margin));
 }
 
 }  // namespace crux

@@ -7,6 +7,7 @@
 #include <crux/mesh/mesh_query_data.hpp>
 #include <crux/precondition.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "geometry/bits.hpp"
 #include "geometry/small_sort.hpp"
 #include "lanes.hpp"
@@ -267,7 +268,7 @@ struct Best {
 
   /// Offers triangle pair (i, j) (b's triangle already in a's frame).
   void offer(const Triangle& ta, const Triangle& tbMapped, std::uint32_t i, std::uint32_t j) {
-    const TriangleDistanceResult d = closestPoints(ta, tbMapped);
+    const TriangleDistanceResult d = unchecked::closestPoints(ta, tbMapped);
     if (d.distance > limit || (r.found && !(d.distance < r.distance))) return;
     r.found = true;
     r.distance = d.distance;

@@ -5,6 +5,7 @@
 
 #include <crux/geometry/closest_point.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "mesh_walk.hpp"
 #include "node_tests.hpp"
 
@@ -52,7 +53,7 @@ struct ClosestPointVisitor {
     return true;
   }
   void visit(const Triangle& t, std::uint32_t tri) {
-    const Vec3 q = closestPoint(t, p);
+    const Vec3 q = unchecked::closestPoint(t, p);
     const Real d2 = (q - p).squaredNorm();
     if (d2 > best2) return;
     if (best.found && (d2 > best.distance || (d2 == best.distance && tri > best.triangle))) return;

@@ -13,6 +13,7 @@
 #include <crux/geometry/overlap.hpp>
 #include <crux/geometry/predicates.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "geometry/ray_triangle.hpp"
 #include "mesh_walk.hpp"
 #include "node_tests.hpp"
@@ -313,16 +314,16 @@ bool segmentQuery(const Mesh& mesh, const Segment& s, QueryPath path, std::vecto
   // products, which it never rejects; a direction that overflows Real is not filtered.
   const mesh_detail::RayTriangleFilter filter(Ray{s.start, d});
   auto tri = [&](const Triangle& t) {
-    return filter.classify(t) != mesh_detail::RayTriangleFilter::kMisses && intersects(s, t);
+    return filter.classify(t) != mesh_detail::RayTriangleFilter::kMisses && unchecked::intersects(s, t);
   };
   auto slots = [&](std::uint32_t first, std::uint32_t count, auto&& touched) {
     return mesh_detail::filterSlots(filter, mesh, first, count,
                                     [&](std::uint32_t k, const Triangle& t, mesh_detail::RayTriangleFilter::Verdict) {
-                                      return !intersects(s, t) || touched(k);
+                                      return !unchecked::intersects(s, t) || touched(k);
                                     });
   };
   if (!d.allFinite()) {  // (a direction that overflows Real is not filtered)
-    auto exactOnly = [&](const Triangle& t) { return intersects(s, t); };
+    auto exactOnly = [&](const Triangle& t) { return unchecked::intersects(s, t); };
     return shapeQuery(mesh, path, node, exactOnly, out, lanes);
   }
   return shapeQuery(mesh, path, node, tri, out, lanes, slots);
@@ -332,7 +333,7 @@ bool sphereQuery(const Mesh& mesh, const Sphere& s, QueryPath path, std::vector<
   if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Sphere)", detail::rule::kSphere, s)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {absMax(s.center), s.radius});
   auto node = [&](const Aabb& b) { return mesh_detail::sphereTouchesBox(s.center, s.radius, b, pad); };
-  auto tri = [&](const Triangle& t) { return overlaps(t, s); };
+  auto tri = [&](const Triangle& t) { return unchecked::overlaps(t, s); };
   return shapeQuery(mesh, path, node, tri, out);
 }
 
@@ -340,7 +341,7 @@ bool aabbQuery(const Mesh& mesh, const Aabb& q, QueryPath path, std::vector<std:
   if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Aabb)", detail::rule::kAabb, q)) return false;
   const Real pad = kNodeBoxPad * shapeScale(mesh, {maxAbs(q)});
   auto node = [&](const Aabb& b) { return mesh_detail::boxTouchesBox(q, b, pad); };
-  auto tri = [&](const Triangle& t) { return overlaps(t, q); };
+  auto tri = [&](const Triangle& t) { return unchecked::overlaps(t, q); };
   return shapeQuery(mesh, path, node, tri, out);
 }
 
@@ -351,7 +352,7 @@ bool obbQuery(const Mesh& mesh, const Obb& q, QueryPath path, std::vector<std::u
   const mesh_detail::ObbBoxTest::Placed placed = box.place(q.center, q.half);
   auto node = [&](const Aabb& b) { return box.touches(placed, b); };
   auto lanes = [&](const WideBvhNode& n) { return box.touches4(placed, n); };
-  auto tri = [&](const Triangle& t) { return overlaps(t, q); };
+  auto tri = [&](const Triangle& t) { return unchecked::overlaps(t, q); };
   return shapeQuery(mesh, path, node, tri, out, lanes);
 }
 
@@ -359,7 +360,7 @@ bool planeQuery(const Mesh& mesh, const Plane& p, QueryPath path, std::vector<st
   if (!detail::entryPreconditions("overlaps / touchingTriangles(Mesh, Plane)", detail::rule::kPlane, p)) return false;
   const Real scale = mesh.scale();
   auto node = [&](const Aabb& b) { return mesh_detail::planeTouchesBox(p.normal, p.d, b, kNodeBoxPad, scale); };
-  auto tri = [&](const Triangle& t) { return overlaps(t, p); };
+  auto tri = [&](const Triangle& t) { return unchecked::overlaps(t, p); };
   return shapeQuery(mesh, path, node, tri, out);
 }
 
@@ -382,7 +383,7 @@ bool triangleQuery(const Mesh& mesh, const Triangle& q, QueryPath path, std::vec
                        4 * std::numeric_limits<Wide>::epsilon() * (s + r);
     return s <= r + slack;
   };
-  auto tri = [&](const Triangle& t) { return overlaps(t, q); };
+  auto tri = [&](const Triangle& t) { return unchecked::overlaps(t, q); };
   return shapeQuery(mesh, path, node, tri, out);
 }
 
@@ -394,7 +395,7 @@ using mesh_detail::RelativeFrame;
 /// triangle–triangle test.
 bool trianglePair(const Triangle& ta, const Aabb& boxA, const Triangle& tbMapped, const Aabb& boxB) {
   if ((boxA.min.array() > boxB.max.array()).any() || (boxB.min.array() > boxA.max.array()).any()) return false;
-  return overlaps(ta, tbMapped);
+  return unchecked::overlaps(ta, tbMapped);
 }
 
 using PairList = std::vector<std::pair<std::uint32_t, std::uint32_t>>;

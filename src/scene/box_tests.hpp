@@ -7,6 +7,7 @@
 #include <crux/mesh/bvh.hpp>
 #include <crux/scene/broad_phase.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "../mesh/lanes.hpp"
 
 #include <string>
@@ -41,8 +42,8 @@ struct SphereRegion {
   const Sphere& shape;
   // overlaps(Sphere, Aabb) accumulates per-axis excesses that only shrink as the box grows
   // (rounding is monotone), so the node test is conservative.
-  bool leaf(const Aabb& box) const { return overlaps(shape, box); }
-  bool node(const Aabb& bounds) const { return overlaps(shape, bounds); }
+  bool leaf(const Aabb& box) const { return unchecked::overlaps(shape, box); }
+  bool node(const Aabb& bounds) const { return unchecked::overlaps(shape, bounds); }
 };
 struct ObbRegion {
   const Obb& shape;
@@ -50,7 +51,7 @@ struct ObbRegion {
   explicit ObbRegion(const Obb& s) : shape(s), enclosing(enclosingBox(s)) {}
   // Nodes are pruned by the OBB's enclosing box (exact comparisons, so conservative); the SAT
   // decides leaves only.
-  bool leaf(const Aabb& box) const { return boxesTouch(box, enclosing) && overlaps(box, shape); }
+  bool leaf(const Aabb& box) const { return boxesTouch(box, enclosing) && unchecked::overlaps(box, shape); }
   bool node(const Aabb& bounds) const { return boxesTouch(bounds, enclosing); }
 };
 

@@ -3,6 +3,7 @@
 
 #include <sstream>
 
+#include "geometry/unchecked.hpp"
 #include "box_tests.hpp"
 #include "../model/rigid.hpp"
 
@@ -276,7 +277,7 @@ std::vector<std::pair<ModelId, ModelId>> Scene::boundsPairs(ScenePath path) {
   for (const ModelId id : ids) boxes.push_back(sceneBounds(hierarchy_.placed(id)));
   for (std::size_t i = 0; i < ids.size(); ++i)
     for (std::size_t j = i + 1; j < ids.size(); ++j)
-      if (overlaps(boxes[i], boxes[j])) result.emplace_back(ids[i], ids[j]);
+      if (unchecked::overlaps(boxes[i], boxes[j])) result.emplace_back(ids[i], ids[j]);
   return result;
 }
 

@@ -18,6 +18,7 @@
 #include <crux/model/model_query.hpp>
 #include <crux/scene/scene.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "model/rigid.hpp"
 
 #include <algorithm>
@@ -181,18 +182,18 @@ class NativeWorld final : public CollisionWorld {
   void onMeshAdded(MeshHandle h, const Mesh& m) override { extras_[h.index] = std::make_unique<NativeMeshExtras>(m); }
   void onMeshRemoved(MeshHandle h) override { extras_.erase(h.index); }
 
-  Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return crux::closestPoint(t, p).cast<double>(); }
-  bool doOverlaps(const Triangle& t, const Sphere& s) override { return crux::overlaps(t, s); }
-  bool doOverlaps(const Triangle& t, const Aabb& b) override { return crux::overlaps(t, b); }
-  bool doOverlaps(const Triangle& t, const Obb& b) override { return crux::overlaps(t, b); }
-  bool doOverlaps(const Triangle& t, const Plane& p) override { return crux::overlaps(t, p); }
-  bool doOverlaps(const Triangle& a, const Triangle& b) override { return crux::overlaps(a, b); }
+  Vec3d doClosestPoint(const Triangle& t, const Vec3& p) override { return unchecked::closestPoint(t, p).cast<double>(); }
+  bool doOverlaps(const Triangle& t, const Sphere& s) override { return unchecked::overlaps(t, s); }
+  bool doOverlaps(const Triangle& t, const Aabb& b) override { return unchecked::overlaps(t, b); }
+  bool doOverlaps(const Triangle& t, const Obb& b) override { return unchecked::overlaps(t, b); }
+  bool doOverlaps(const Triangle& t, const Plane& p) override { return unchecked::overlaps(t, p); }
+  bool doOverlaps(const Triangle& a, const Triangle& b) override { return unchecked::overlaps(a, b); }
   std::optional<WorldRayHit> doRaycast(const Ray& r, const Triangle& t) override {
-    const std::optional<RayHit> h = crux::raycast(r, t);
+    const std::optional<RayHit> h = unchecked::raycast(r, t);
     if (!h) return std::nullopt;
     return toWorld(*h);
   }
-  bool doIntersects(const Segment& s, const Triangle& t) override { return crux::intersects(s, t); }
+  bool doIntersects(const Segment& s, const Triangle& t) override { return unchecked::intersects(s, t); }
 
   void doRaycast(MeshHandle m, const Ray& r, RayHitCollector& hits, const RayQueryOptions& options) override {
     collectHits(mesh(m), r, hits, options);

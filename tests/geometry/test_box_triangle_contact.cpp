@@ -27,10 +27,12 @@
 #include <support/test_scale.hpp>
 #include <vector>
 
+#include <crux/precondition.hpp>
+#include "geometry/unchecked.hpp"
+#include "support/bad_inputs.hpp"
+
 #if CRUX_HAVE_CCD_ORACLE
 #include "ccd/ccd_oracle.hpp"
-#include <crux/precondition.hpp>
-#include "support/bad_inputs.hpp"
 #endif
 
 namespace crux {
@@ -731,9 +733,10 @@ TEST(BoxTriangleContact, MicrobenchmarkAgainstTheGenericRoutine) {
   EXPECT_GT(sink, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
-// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
-// returns without undefined behaviour, which the sanitizer stage checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the routines behind the public entries
+// (geometry/unchecked.hpp, what those entries run in release builds and the mesh, scene and contact
+// layers call) give an unspecified answer, but return without undefined behaviour (checked in the
+// Release stage: see the skip below).
 TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   // (the routine's fallback is distance(ConvexShape, ...), a query family that checks its inputs
   // at entry: with CRUX_CHECK_PRECONDITIONS, as in CI's sanitizer stage, that aborts instead)
@@ -744,24 +747,24 @@ TEST(BoxTriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBe
   int calls = 0;
   ContactManifold m;
   for (const Triangle& t : bad.triangles) {
-    (void)boxTriangleContacts(Vec3::Ones(), t, 0, m), (void)detail::boxTriangleContactsFullSat(Vec3::Ones(), t, 0, m);
+    (void)unchecked::boxTriangleContacts(Vec3::Ones(), t, 0, m), (void)detail::boxTriangleContactsFullSat(Vec3::Ones(), t, 0, m);
     calls += 2;
   }
   std::vector<Vec3> halves = bad.points;
   halves.push_back(Vec3(1, -1, 1));  // a negative half extent
   for (const Vec3& half : halves) {
-    (void)boxTriangleContacts(half, tri, 0, m), (void)detail::boxTriangleContactsFullSat(half, tri, 0, m);
+    (void)unchecked::boxTriangleContacts(half, tri, 0, m), (void)detail::boxTriangleContactsFullSat(half, tri, 0, m);
     calls += 2;
   }
   EXPECT_GT(calls, 30);
-  EXPECT_TRUE(boxTriangleContacts(Vec3::Ones(), tri, 0, m));
+  EXPECT_TRUE(unchecked::boxTriangleContacts(Vec3::Ones(), tri, 0, m));
 }
 
-// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// In debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) a non-queryable input
 // aborts with a message naming the query.
 TEST(BoxTriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
   if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
+    GTEST_SKIP() << "the primitive check is off in this build (NDEBUG)";
   const Triangle tri{Vec3(-2, -2, Real(0.9)), Vec3(2, -2, Real(0.9)), Vec3(0, 2, Real(0.9))};
   ContactManifold m;
   const Real nan = std::numeric_limits<Real>::quiet_NaN();

@@ -19,6 +19,7 @@
 #include "exact/exact.hpp"
 #include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
 #include <crux/precondition.hpp>
+#include "geometry/unchecked.hpp"
 #include "support/bad_inputs.hpp"
 
 namespace crux {
@@ -672,11 +673,11 @@ TEST(BeyondAnEdgeLine, SaysExactlyWhetherSomeEdgeLineIsFartherThanDAndThenTheTri
   EXPECT_TRUE(beyondAnEdgeLine(kUnit, Vec3(0, -5, 0), Real(1)));  // (the same point, d = 1: 5 beyond)
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
-// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
-// returns without undefined behaviour, which the sanitizer stage checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the routines behind the public entries
+// (geometry/unchecked.hpp, what those entries run in release builds and the mesh, scene and contact
+// layers call) give an unspecified answer, but return without undefined behaviour, which the
+// sanitizer stage checks here.
 TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
-  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
   const Vec3 p(Real(0.2), Real(0.3), 2);
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
@@ -689,14 +690,14 @@ TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviou
   int calls = 0;
   const auto at = [&](const auto& shape, const Vec3& q) {
     calls += 2;
-    (void)closestPoint(shape, q);
-    (void)squaredDistance(shape, q);
+    (void)unchecked::closestPoint(shape, q);
+    (void)unchecked::squaredDistance(shape, q);
   };
   for (const Vec3& q : bad.points) {
     at(tri, q), at(seg, q), at(ray, q), at(sphere, q), at(box, q), at(obb, q), at(plane, q);
-    (void)beyondAnEdgeLine(tri, q, 1);
+    (void)unchecked::beyondAnEdgeLine(tri, q, 1);
   }
-  for (const Triangle& t : bad.triangles) at(t, p), (void)beyondAnEdgeLine(t, p, 1);
+  for (const Triangle& t : bad.triangles) at(t, p), (void)unchecked::beyondAnEdgeLine(t, p, 1);
   for (const Segment& s : bad.segments) at(s, p);
   for (const Ray& r : bad.rays) at(r, p);
   for (const Sphere& s : bad.spheres) at(s, p);
@@ -704,14 +705,14 @@ TEST(ClosestPointPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviou
   for (const Obb& b : bad.obbs) at(b, p);
   for (const Plane& pl : bad.planes) at(pl, p);
   EXPECT_GT(calls, 200);
-  EXPECT_EQ(closestPoint(tri, p), Vec3(Real(0.2), Real(0.3), 0));
+  EXPECT_EQ(unchecked::closestPoint(tri, p), Vec3(Real(0.2), Real(0.3), 0));
 }
 
-// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// In debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) a non-queryable input
 // aborts with a message naming the query.
 TEST(ClosestPointPreconditions, DebugBuildsAbortNamingTheQuery) {
   if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
+    GTEST_SKIP() << "the primitive check is off in this build (NDEBUG)";
   const Real inf = std::numeric_limits<Real>::infinity();
   EXPECT_DEATH((void)closestPoint(Aabb{Vec3::Zero(), Vec3::Ones()}, Vec3(0, inf, 0)),
                "precondition violated in closestPoint\\(Aabb, point\\)");

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 #include <crux/precondition.hpp>
+#include "geometry/unchecked.hpp"
 #include "support/bad_inputs.hpp"
 #include "support/test_scale.hpp"  // CRUX_TEST_SCALE: fewer cases in the sanitizer stage
 
@@ -1053,11 +1054,11 @@ TEST(RaycastPlane, HitBeyondTheRepresentableRangeIsAMiss) {
   if constexpr (std::is_same_v<Real, float>) EXPECT_FALSE(hit) << "t = 8/(5·FLT_MIN)·|dir| overflows float";
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
-// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
-// returns without undefined behaviour, which the sanitizer stage checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the routines behind the public entries
+// (geometry/unchecked.hpp, what those entries run in release builds and the mesh, scene and contact
+// layers call) give an unspecified answer, but return without undefined behaviour, which the
+// sanitizer stage checks here.
 TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
-  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const Sphere sphere{Vec3::Zero(), 1};
@@ -1069,16 +1070,16 @@ TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   int calls = 0;
   const auto both = [&](const auto& shape) {
     calls += 2;
-    (void)raycast(ray, shape);
-    (void)intersects(seg, shape);
+    (void)unchecked::raycast(ray, shape);
+    (void)unchecked::intersects(seg, shape);
   };
   for (const Ray& r : bad.rays) {
-    (void)raycast(r, tri), (void)raycast(r, sphere), (void)raycast(r, box), (void)raycast(r, obb), (void)raycast(r, plane);
+    (void)unchecked::raycast(r, tri), (void)unchecked::raycast(r, sphere), (void)unchecked::raycast(r, box), (void)unchecked::raycast(r, obb), (void)unchecked::raycast(r, plane);
     calls += 5;
   }
   for (const Segment& s : bad.segments) {
-    (void)intersects(s, tri), (void)intersects(s, sphere), (void)intersects(s, box), (void)intersects(s, obb);
-    (void)intersects(s, plane);
+    (void)unchecked::intersects(s, tri), (void)unchecked::intersects(s, sphere), (void)unchecked::intersects(s, box), (void)unchecked::intersects(s, obb);
+    (void)unchecked::intersects(s, plane);
     calls += 5;
   }
   for (const Triangle& t : bad.triangles) both(t);
@@ -1088,15 +1089,15 @@ TEST(RaycastPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
   for (const Plane& p : bad.planes) both(p);
   EXPECT_GT(calls, 150);
   // the good inputs hit: the bad ones went through the same entry points
-  EXPECT_TRUE(raycast(ray, tri) && raycast(ray, sphere) && raycast(ray, box) && raycast(ray, obb) && raycast(ray, plane));
-  EXPECT_TRUE(intersects(seg, tri) && intersects(seg, sphere) && intersects(seg, box) && intersects(seg, obb));
+  EXPECT_TRUE(unchecked::raycast(ray, tri) && unchecked::raycast(ray, sphere) && unchecked::raycast(ray, box) && unchecked::raycast(ray, obb) && unchecked::raycast(ray, plane));
+  EXPECT_TRUE(unchecked::intersects(seg, tri) && unchecked::intersects(seg, sphere) && unchecked::intersects(seg, box) && unchecked::intersects(seg, obb));
 }
 
-// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// In debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) a non-queryable input
 // aborts with a message naming the query.
 TEST(RaycastPreconditions, DebugBuildsAbortNamingTheQuery) {
   if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
+    GTEST_SKIP() << "the primitive check is off in this build (NDEBUG)";
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   EXPECT_DEATH((void)raycast(Ray{Vec3::Zero(), Vec3::Zero()}, tri),
                "precondition violated in raycast\\(Ray, Triangle\\)");

@@ -25,6 +25,7 @@
 #include "support/grid_touching.hpp"
 #include "support/test_scale.hpp"
 #include <crux/precondition.hpp>
+#include "geometry/unchecked.hpp"
 #include "support/bad_inputs.hpp"
 
 namespace crux {
@@ -722,11 +723,11 @@ TEST(TriangleContact, TouchingFarFromTheOriginIsReported) {
   EXPECT_EQ(falseHits, 0);
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
-// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
-// returns without undefined behaviour, which the sanitizer stage checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the routines behind the public entries
+// (geometry/unchecked.hpp, what those entries run in release builds and the mesh, scene and contact
+// layers call) give an unspecified answer, but return without undefined behaviour, which the
+// sanitizer stage checks here.
 TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
-  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const test_support::BadPrimitives bad = test_support::badPrimitives();
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const Vec3 c(Real(0.2), Real(0.2), Real(0.4)), c1(Real(0.4), Real(0.2), Real(0.4));
@@ -735,23 +736,23 @@ TEST(TriangleContactPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   SphereTriangleContact one;
   const auto all = [&](const Triangle& t, const Vec3& p, const Vec3& q, Real r) {
     calls += 3;
-    (void)sphereTriangleContacts(t, p, r, 0, m);
-    (void)sphereTriangleContact(t, p, r, 0, one);
-    (void)capsuleTriangleContacts(t, p, q, r, 0, m);
+    (void)unchecked::sphereTriangleContacts(t, p, r, 0, m);
+    (void)unchecked::sphereTriangleContact(t, p, r, 0, one);
+    (void)unchecked::capsuleTriangleContacts(t, p, q, r, 0, m);
   };
   for (const Triangle& t : bad.triangles) all(t, c, c1, Real(0.5));
   for (const Vec3& p : bad.points) all(tri, p, c1, Real(0.5)), all(tri, c, p, Real(0.5));
   for (const Real r : test_support::nonFiniteValues()) all(tri, c, c1, r);
   all(tri, c, c1, -1);
   EXPECT_GT(calls, 80);
-  EXPECT_TRUE(sphereTriangleContacts(tri, c, Real(0.5), 0, m));
+  EXPECT_TRUE(unchecked::sphereTriangleContacts(tri, c, Real(0.5), 0, m));
 }
 
-// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// In debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) a non-queryable input
 // aborts with a message naming the query.
 TEST(TriangleContactPreconditions, DebugBuildsAbortNamingTheQuery) {
   if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
+    GTEST_SKIP() << "the primitive check is off in this build (NDEBUG)";
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   ContactManifold m;
   const Vec3 c(Real(0.2), Real(0.2), Real(0.4));

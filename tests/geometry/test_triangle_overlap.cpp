@@ -6,6 +6,7 @@
 #include <crux/precondition.hpp>
 
 #include "exact/exact.hpp"
+#include "geometry/unchecked.hpp"
 #include "support/bad_inputs.hpp"
 #include "support/test_scale.hpp"
 
@@ -857,11 +858,11 @@ TEST(TriangleTriangle, SymmetricOffTheExactGrid) {
   }
 }
 
-// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the primitive layer runs unchecked
-// (unless CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1); its answer is then unspecified, but the call
-// returns without undefined behaviour, which the sanitizer stage checks here.
+// Non-queryable inputs (precondition.hpp, rule::kPrimitive): the routines behind the public entries
+// (geometry/unchecked.hpp, what those entries run in release builds and the mesh, scene and contact
+// layers call) give an unspecified answer, but return without undefined behaviour, which the
+// sanitizer stage checks here.
 TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehaviour) {
-  if (CRUX_CHECK_PRIMITIVE_PRECONDITIONS) GTEST_SKIP() << "this build aborts instead (precondition.hpp)";
   const crux::test_support::BadPrimitives bad = crux::test_support::badPrimitives();
   const Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   const Sphere sphere{Vec3::Zero(), 1};
@@ -871,29 +872,29 @@ TEST(TriangleOverlapPreconditions, NonQueryableInputsReturnWithoutUndefinedBehav
   int calls = 0;
   const auto all = [&](const Triangle& t) {
     calls += 7;
-    (void)crux::overlaps(t, tri), (void)crux::overlaps(t, sphere), (void)crux::overlaps(t, box);
-    (void)crux::overlaps(t, obb), (void)crux::overlaps(t, plane);
-    (void)crux::withinDistance(t, Vec3::Zero(), 1, 0), (void)crux::withinDistance(t, Vec3::Zero(), Vec3::Ones(), 1, 0);
+    (void)crux::unchecked::overlaps(t, tri), (void)crux::unchecked::overlaps(t, sphere), (void)crux::unchecked::overlaps(t, box);
+    (void)crux::unchecked::overlaps(t, obb), (void)crux::unchecked::overlaps(t, plane);
+    (void)crux::unchecked::withinDistance(t, Vec3::Zero(), 1, 0), (void)crux::unchecked::withinDistance(t, Vec3::Zero(), Vec3::Ones(), 1, 0);
   };
   for (const Triangle& t : bad.triangles) all(t);
-  for (const Sphere& s : bad.spheres) (void)crux::overlaps(tri, s), ++calls;
-  for (const Aabb& b : bad.aabbs) (void)crux::overlaps(tri, b), ++calls;
-  for (const Obb& b : bad.obbs) (void)crux::overlaps(tri, b), ++calls;
-  for (const Plane& p : bad.planes) (void)crux::overlaps(tri, p), ++calls;
+  for (const Sphere& s : bad.spheres) (void)crux::unchecked::overlaps(tri, s), ++calls;
+  for (const Aabb& b : bad.aabbs) (void)crux::unchecked::overlaps(tri, b), ++calls;
+  for (const Obb& b : bad.obbs) (void)crux::unchecked::overlaps(tri, b), ++calls;
+  for (const Plane& p : bad.planes) (void)crux::unchecked::overlaps(tri, p), ++calls;
   for (const Vec3& p : bad.points) {
-    (void)crux::withinDistance(tri, p, 1, 0), (void)crux::withinDistance(tri, Vec3::Zero(), p, 1, 0);
+    (void)crux::unchecked::withinDistance(tri, p, 1, 0), (void)crux::unchecked::withinDistance(tri, Vec3::Zero(), p, 1, 0);
     calls += 2;
   }
-  for (const crux::Real r : crux::test_support::nonFiniteValues()) (void)crux::withinDistance(tri, Vec3::Zero(), r, 0), ++calls;
+  for (const crux::Real r : crux::test_support::nonFiniteValues()) (void)crux::unchecked::withinDistance(tri, Vec3::Zero(), r, 0), ++calls;
   EXPECT_GT(calls, 120);
-  EXPECT_TRUE(crux::overlaps(tri, sphere) && crux::overlaps(tri, box) && crux::overlaps(tri, obb) && crux::overlaps(tri, plane));
+  EXPECT_TRUE(crux::unchecked::overlaps(tri, sphere) && crux::unchecked::overlaps(tri, box) && crux::unchecked::overlaps(tri, obb) && crux::unchecked::overlaps(tri, plane));
 }
 
-// With the primitive check on (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1, opt-in) a non-queryable input
+// In debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG) a non-queryable input
 // aborts with a message naming the query.
 TEST(TriangleOverlapPreconditions, DebugBuildsAbortNamingTheQuery) {
   if (!CRUX_CHECK_PRIMITIVE_PRECONDITIONS)
-    GTEST_SKIP() << "the primitive check is opt-in (CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1)";
+    GTEST_SKIP() << "the primitive check is off in this build (NDEBUG)";
   const crux::Triangle tri{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
   EXPECT_DEATH((void)crux::withinDistance(tri, Vec3::Zero(), -1, 0),
                "precondition violated in withinDistance\\(Triangle, point\\)");

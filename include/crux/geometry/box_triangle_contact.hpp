@@ -12,9 +12,10 @@
 ///
 /// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
 /// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
-/// Unchecked (an abort naming the query with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an
-/// unspecified answer, never undefined behaviour (where the routine falls back to
-/// distance(ConvexShape, ...), that query's entry check applies).
+/// Checked in debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG): an abort
+/// naming the query. Unchecked in release builds: an unspecified answer, never undefined
+/// behaviour (where the routine falls back to distance(ConvexShape, ...), that query's entry
+/// check applies).
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>

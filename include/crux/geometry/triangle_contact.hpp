@@ -22,8 +22,8 @@
 ///
 /// Preconditions: the primitive layer's (precondition.hpp, debugPreconditions): finite inputs,
 /// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
-/// Unchecked (an abort naming the query with CRUX_CHECK_PRIMITIVE_PRECONDITIONS=1): otherwise an
-/// unspecified answer, never undefined behaviour.
+/// Checked in debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG): an abort
+/// naming the query. Unchecked in release builds: an unspecified answer, never undefined behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>

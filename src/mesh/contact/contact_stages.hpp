@@ -9,6 +9,7 @@
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "geometry/contact/reduce.hpp"
 #include "mesh/contact/local_shape.hpp"
 #include "mesh/lanes.hpp"
@@ -229,7 +230,7 @@ class InternalEdgeFilter {
     const double t2 = double(tol) * double(tol);
     if (w.cross(e).squaredNorm() > 4 * t2 * e.squaredNorm()) return false;
     const Segment s{tri[i], tri[(i + 1) % 3]};
-    const Vec3 q = closestPoint(s, pa);
+    const Vec3 q = unchecked::closestPoint(s, pa);
     return (q - pa).squaredNorm() <= tol * tol;
   }
 
@@ -328,8 +329,8 @@ class InternalEdgeFilter {
     // projections lie well beyond an edge line (a box is larger than the triangles: 2.5 of 2.6
     // such points per query in the bench's box workload): that cheap test first, by 2 tol
     // (certain whatever the rounding), the closest point only for the rest.
-    if (beyondAnEdgeLine(ft, q.pointA, 2 * tol)) return false;
-    if ((closestPoint(ft, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
+    if (unchecked::beyondAnEdgeLine(ft, q.pointA, 2 * tol)) return false;
+    if ((unchecked::closestPoint(ft, q.pointA) - q.pointA).squaredNorm() > tol * tol) return false;
     p = q;
     return true;
   }
@@ -390,7 +391,7 @@ class InternalEdgeFilter {
     } else if ((pa2 - tri[region - 3]).template cast<double>().squaredNorm() > 4 * double(tol2)) {
       return false;
     }
-    if ((closestPoint(tri, pa2) - pa2).squaredNorm() > tol2) return false;
+    if ((unchecked::closestPoint(tri, pa2) - pa2).squaredNorm() > tol2) return false;
     p = q;
     return true;
   }

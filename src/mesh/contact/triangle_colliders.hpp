@@ -17,6 +17,7 @@
 #include <crux/geometry/triangle_contact.hpp>
 #include <crux/mesh/mesh_contact.hpp>
 
+#include "geometry/unchecked.hpp"
 #include "mesh/contact/contact_stages.hpp"
 #include "mesh/contact/local_shape.hpp"
 #include "mesh/node_tests.hpp"
@@ -81,7 +82,7 @@ class SphereCollider : public MeshFrameCollider {
 
   void collide(const CandidateTriangle& c, InternalEdgeFilter& out) const {
     SphereTriangleContact h;
-    if (!sphereTriangleContact(c.tri, ls_.p[0], ls_.radius, margin_, h)) return;
+    if (!unchecked::sphereTriangleContact(c.tri, ls_.p[0], ls_.radius, margin_, h)) return;
     MeshContactPoint p;
     p.pointA = h.pointA;
     p.pointB = h.pointB;
@@ -116,7 +117,7 @@ class CapsuleCollider : public MeshFrameCollider {
 
   void collide(const CandidateTriangle& c, InternalEdgeFilter& out) const {
     ContactManifold m;
-    if (capsuleTriangleContacts(c.tri, ls_.p[0], ls_.p[1], ls_.radius, margin_, m)) out.manifold(c, c.tri, m);
+    if (unchecked::capsuleTriangleContacts(c.tri, ls_.p[0], ls_.p[1], ls_.radius, margin_, m)) out.manifold(c, c.tri, m);
   }
 };
 
@@ -179,7 +180,7 @@ class BoxCollider {
       Uninitialised() {}
       ContactManifold m;
     } u;
-    if (!boxTriangleContacts(ls_.half, tb, margin_, u.m)) return;
+    if (!unchecked::boxTriangleContacts(ls_.half, tb, margin_, u.m)) return;
     out.manifold(c, tb, u.m);
   }
 
