@@ -302,7 +302,16 @@ bool fallback(const Vec3& half, const Triangle& tri, double m, const V* t, const
               double normalLen, double unscale, ContactManifold& out) {
   Obb box;
   box.half = half;
-  const DistanceResult d = distance(ConvexShape(tri), Transform{}, ConvexShape(box), Transform{});
+  const ConvexShape a(tri), b(box);
+  const Transform identity{};
+  // distance()'s entry rule without its debug-build abort: this routine belongs to the primitive
+  // layer, whose non-queryable inputs get an unspecified answer (here none, as distance()'s NaN
+  // gives in release builds)
+  if (!detail::queryable(detail::ShapesAtPoses{a, identity, b, identity})) {
+    out.count = 0;
+    return false;
+  }
+  const DistanceResult d = distance(a, identity, b, identity);
   out.normal = d.normal;
   out.count = 0;
   if (!(double(d.distance) <= m * unscale)) return false;

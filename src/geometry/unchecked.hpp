@@ -7,8 +7,8 @@
 // overflow to ±inf for finite input, which the routines answer conservatively and the entry check
 // would abort on. Same contracts and documentation as the public declarations; a non-queryable
 // input gets an unspecified answer, never undefined behaviour (the per-family tests call these
-// routines), except that boxTriangleContacts' fallback, distance(ConvexShape, ...), checks its
-// inputs at entry (an abort in debug builds). Pairs are in the public order only (overlap.hpp:
+// routines; boxTriangleContacts answers them with no contact before its GJK fallback, whose
+// public entry would abort on them in debug builds). Pairs are in the public order only (overlap.hpp:
 // Triangle < Sphere < Aabb < Obb < Plane); the reversed order exists for the public names alone.
 #pragma once
 

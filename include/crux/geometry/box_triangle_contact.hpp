@@ -14,8 +14,7 @@
 /// non-zero ray directions and plane normals, radii and half extents >= 0, AABB min <= max.
 /// Checked in debug builds (CRUX_CHECK_PRIMITIVE_PRECONDITIONS, on without NDEBUG): an abort
 /// naming the query. Unchecked in release builds: an unspecified answer, never undefined
-/// behaviour (where the routine falls back to distance(ConvexShape, ...), that query's entry
-/// check applies).
+/// behaviour.
 
 #include <crux/geometry/contact.hpp>
 #include <crux/geometry/triangle_class.hpp>
