@@ -107,15 +107,23 @@ def test_two_python_threads_run_batches_faster_than_one_after_the_other(bunny):
         bunny.ray_closest(both, threads=2)
 
     run()  # warm up
-    # Best of five each, interleaved, so a burst of load elsewhere on the machine hits all three.
-    seq, con, nat = [], [], []
-    for _ in range(5):
-        seq.append(timed(sequential))
-        con.append(timed(concurrent))
-        nat.append(timed(native))
-    s, c, n = min(seq), min(con), min(nat)
-    if n > 0.85 * s:
-        pytest.skip("no second core free: crux's own 2 threads took %.2f of the sequential time" % (n / s))
     # With the GIL held two Python threads serialise (c ~ s); released, they overlap like crux's
-    # own threads (c ~ n). Closer to the native time than to the sequential one:
-    assert c < s - 0.5 * (s - n), dict(sequential=seq, concurrent=con, native=nat)
+    # own threads (c ~ n). One round: best of five each, interleaved, so a burst of load elsewhere
+    # on the machine hits all three; it passes when the concurrent time is closer to the native
+    # time than to the sequential one. Up to three rounds: a held GIL cannot pass any of them (two
+    # serialised calls take the sequential time), but load can make one round inconclusive (a CI run saw
+    # c = 0.89 s with n = 0.67 s, s its sequential time).
+    rounds = []
+    for _ in range(3):
+        seq, con, nat = [], [], []
+        for _ in range(5):
+            seq.append(timed(sequential))
+            con.append(timed(concurrent))
+            nat.append(timed(native))
+        s, c, n = min(seq), min(con), min(nat)
+        if n > 0.85 * s:
+            pytest.skip("no second core free: crux's own 2 threads took %.2f of the sequential time" % (n / s))
+        rounds.append(dict(sequential=seq, concurrent=con, native=nat))
+        if c < s - 0.5 * (s - n):
+            return
+    pytest.fail("two Python threads did not overlap in %d rounds: %s" % (len(rounds), rounds))
