@@ -294,26 +294,22 @@ inline bool exceeds(double num, double a2, double bound) {
   return true;
 }
 
-/// The GJK/EPA pair (gjk.hpp's distance(), as contacts() uses): one point, the closest (or
-/// deepest) pair, with the features supporting the normal (contact.hpp's rule), when the
-/// signed distance is <= m. Unlike contacts(), no clipping: its edge–edge and sliver-plane
-/// clipping can put points off the shapes (docs/narrowphase.md).
+/// The GJK/EPA pair (gjk.hpp's distance() without its entry check: detail::coreQuery, as
+/// contacts() uses it): one point, the closest (or deepest) pair, with the features supporting
+/// the normal (contact.hpp's rule), when the signed distance is <= m. Unlike contacts(), no
+/// clipping: its edge–edge and sliver-plane clipping can put points off the shapes
+/// (docs/narrowphase.md). A pair distance()'s entry rule rejects gets no contact (this routine is
+/// the primitive layer's: no abort, and no GJK on non-finite input).
 bool fallback(const Vec3& half, const Triangle& tri, double m, const V* t, const V& h, const V& normal,
               double normalLen, double unscale, ContactManifold& out) {
   Obb box;
   box.half = half;
   const ConvexShape a(tri), b(box);
   const Transform identity{};
-  // distance()'s entry rule without its debug-build abort: this routine belongs to the primitive
-  // layer, whose non-queryable inputs get an unspecified answer (here none, as distance()'s NaN
-  // gives in release builds)
-  if (!detail::queryable(detail::ShapesAtPoses{a, identity, b, identity})) {
-    out.count = 0;
-    return false;
-  }
-  const DistanceResult d = distance(a, identity, b, identity);
-  out.normal = d.normal;
   out.count = 0;
+  if (!detail::queryable(detail::ShapesAtPoses{a, identity, b, identity})) return false;
+  const DistanceResult d = detail::coreQuery(detail::Placed(a, identity), detail::Placed(b, identity));
+  out.normal = d.normal;
   if (!(double(d.distance) <= m * unscale)) return false;
   const V n = d.normal.template cast<double>();
   ClipVertex f[4];
