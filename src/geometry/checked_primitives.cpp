@@ -59,6 +59,41 @@ bool overlaps(const Plane& a, const Plane& b) {
   return unchecked::overlaps(a, b);
 }
 
+bool overlaps(const Triangle& a, const Triangle& b) {
+  detail::debugPreconditions("overlaps(Triangle, Triangle)", a, b);
+  return unchecked::overlaps(a, b);
+}
+
+bool overlaps(const Triangle& t, const Sphere& s) {
+  detail::debugPreconditions("overlaps(Triangle, Sphere)", t, s);
+  return unchecked::overlaps(t, s);
+}
+
+bool overlaps(const Triangle& t, const Aabb& b) {
+  detail::debugPreconditions("overlaps(Triangle, Aabb)", t, b);
+  return unchecked::overlaps(t, b);
+}
+
+bool overlaps(const Triangle& t, const Obb& b) {
+  detail::debugPreconditions("overlaps(Triangle, Obb)", t, b);
+  return unchecked::overlaps(t, b);
+}
+
+bool overlaps(const Triangle& t, const Plane& p) {
+  detail::debugPreconditions("overlaps(Triangle, Plane)", t, p);
+  return unchecked::overlaps(t, p);
+}
+
+bool withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin) {
+  detail::debugPreconditions("withinDistance(Triangle, point)", t, x, Sphere{x, radius});
+  return unchecked::withinDistance(t, x, radius, margin);
+}
+
+bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin) {
+  detail::debugPreconditions("withinDistance(Triangle, point, point)", t, p, q, Sphere{p, radius});
+  return unchecked::withinDistance(t, p, q, radius, margin);
+}
+
 // Ray casts and segment tests (raycast.hpp).
 std::optional<RayHit> raycast(const Ray& ray, const Triangle& t, Real maxT) {
   detail::debugPreconditions("raycast(Ray, Triangle)", ray, t);
@@ -187,18 +222,22 @@ Real squaredDistance(const Plane& pl, const Vec3& p) {
 }
 
 // Sphere and capsule contacts against one triangle (triangle_contact.hpp).
-bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out) {
+bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+                            ContactManifold& out) {
   detail::debugPreconditions("sphereTriangleContacts(Triangle, point)", tri, centre, Sphere{centre, radius});
   return unchecked::sphereTriangleContacts(tri, centre, radius, margin, out);
 }
 
-bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin, SphereTriangleContact& out) {
+bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+                           SphereTriangleContact& out) {
   detail::debugPreconditions("sphereTriangleContact(Triangle, point)", tri, centre, Sphere{centre, radius});
   return unchecked::sphereTriangleContact(tri, centre, radius, margin, out);
 }
 
-bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin, ContactManifold& out) {
-  detail::debugPreconditions("capsuleTriangleContacts(Triangle, point, point)", tri, p0In, p1In, Sphere{p0In, radius});
+bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
+                             ContactManifold& out) {
+  detail::debugPreconditions("capsuleTriangleContacts(Triangle, point, point)", tri, p0In, p1In,
+                             Sphere{p0In, radius});
   return unchecked::capsuleTriangleContacts(tri, p0In, p1In, radius, margin, out);
 }
 
@@ -212,42 +251,6 @@ bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, Con
 TriangleDistanceResult closestPoints(const Triangle& a, const Triangle& b) {
   detail::debugPreconditions("closestPoints(Triangle, Triangle)", a, b);
   return unchecked::closestPoints(a, b);
-}
-
-// Overlap tests and the exact within-distance decisions (overlap.hpp).
-bool overlaps(const Triangle& a, const Triangle& b) {
-  detail::debugPreconditions("overlaps(Triangle, Triangle)", a, b);
-  return unchecked::overlaps(a, b);
-}
-
-bool overlaps(const Triangle& t, const Sphere& s) {
-  detail::debugPreconditions("overlaps(Triangle, Sphere)", t, s);
-  return unchecked::overlaps(t, s);
-}
-
-bool overlaps(const Triangle& t, const Aabb& b) {
-  detail::debugPreconditions("overlaps(Triangle, Aabb)", t, b);
-  return unchecked::overlaps(t, b);
-}
-
-bool overlaps(const Triangle& t, const Obb& b) {
-  detail::debugPreconditions("overlaps(Triangle, Obb)", t, b);
-  return unchecked::overlaps(t, b);
-}
-
-bool overlaps(const Triangle& t, const Plane& p) {
-  detail::debugPreconditions("overlaps(Triangle, Plane)", t, p);
-  return unchecked::overlaps(t, p);
-}
-
-bool withinDistance(const Triangle& t, const Vec3& x, Real radius, Real margin) {
-  detail::debugPreconditions("withinDistance(Triangle, point)", t, x, Sphere{x, radius});
-  return unchecked::withinDistance(t, x, radius, margin);
-}
-
-bool withinDistance(const Triangle& t, const Vec3& p, const Vec3& q, Real radius, Real margin) {
-  detail::debugPreconditions("withinDistance(Triangle, point, point)", t, p, q, Sphere{p, radius});
-  return unchecked::withinDistance(t, p, q, radius, margin);
 }
 
 }  // namespace crux

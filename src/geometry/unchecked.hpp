@@ -71,8 +71,10 @@ Real squaredDistance(const Plane& pl, const Vec3& p);
 
 // Sphere and capsule contacts against one triangle (triangle_contact.hpp).
 bool sphereTriangleContacts(const Triangle& tri, const Vec3& centre, Real radius, Real margin, ContactManifold& out);
-bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin, SphereTriangleContact& out);
-bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin, ContactManifold& out);
+bool sphereTriangleContact(const Triangle& tri, const Vec3& centre, Real radius, Real margin,
+                           SphereTriangleContact& out);
+bool capsuleTriangleContacts(const Triangle& tri, const Vec3& p0In, const Vec3& p1In, Real radius, Real margin,
+                             ContactManifold& out);
 
 // Box contacts against one triangle (box_triangle_contact.hpp).
 bool boxTriangleContacts(const Vec3& half, const Triangle& tri, Real margin, ContactManifold& out);

@@ -281,14 +281,14 @@ class Builder {
 
   /// Binned SAH over all three axes (Wald 2007) with min(bins, count, 4 + count / 20) bins per
   /// axis, at least 2: small nodes, which are most nodes, get fewer bins, whose sweeps cost less
-  /// and whose splits are nearly as good (Embree's binner sizes its bins the same way; bunny00:
-  /// 12 % fewer build instructions, 0.5 % more nodes per ray). Partitions the range in place;
+  /// and whose splits are nearly as good (Embree's binner sizes its bins the same way; figures in
+  /// docs/bvh.md). Partitions the range in place;
   /// leftCount 0 when no split beats a leaf (only allowed within the leaf cap) or the centroids
   /// cannot be binned (all equal). With parallelBins the binning pass runs
   /// in parallel chunks whose bins are merged (exact: min, max and integer sums).
   Split sahSplit(std::uint32_t first, std::uint32_t count, const Aabb& nodeBounds, const LaneBox& centroidBounds,
                  Scratch& scratch, bool parallelBins) {
-    const std::uint32_t bins = std::min(options_.bins, std::max(std::min(count, 4 + count / 20), 2u));  // (see above)
+    const std::uint32_t bins = std::min(options_.bins, std::max(std::min(count, 4 + count / 20), 2u));
     Bin* bin[3] = {scratch.bins.data(), scratch.bins.data() + bins, scratch.bins.data() + 2 * bins};
     Lanes scale = Lanes::Zero();
     bool any = false;

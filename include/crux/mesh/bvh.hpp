@@ -28,7 +28,7 @@ struct BvhNode {
 /// Build parameters.
 struct BvhBuildOptions {
   std::uint32_t maxLeafSize = 4;  ///< leaf size cap (a leaf never holds more)
-  std::uint32_t bins = 16;        ///< SAH bins per axis at most (a node of n primitives: min(bins, 4 + n/20), >= 2)
+  std::uint32_t bins = 16;        ///< SAH bins per axis at most (a node of n: min(bins, n, 4 + n/20), >= 2)
   Real traversalCost = 2;         ///< SAH cost of visiting a node, relative to one primitive test
 };
 
