@@ -181,6 +181,9 @@ struct Engine {
   std::string name;
   std::string config;
   std::function<Seconds()> pass;  ///< runs every query once (or one build); returns its time
+  /// 1: the pass runs on the calling thread alone (onOneThread: the rows compare one thread with
+  /// one thread); 0: on every core (rows for information).
+  int threads = 1;
   int reps = 1;
   std::vector<double> wallRuns, cpuRuns;  ///< per timed run: seconds per query (or per build)
   double wallMedian = 0, cpuMedian = 0;
@@ -225,6 +228,9 @@ Seconds timeIt(F&& f) {
 /// Times every engine of the workload: `firstPass[i]` is engine i's verification pass time,
 /// from which its repetition count is chosen so a run lasts ~secondsPerRun. Runs interleave
 /// the engines, alternating their order, so slow drifts of the machine hit all of them.
+/// One pass of e, on the calling thread alone unless e runs on every core.
+Seconds runPass(Engine& e) { return e.threads == 1 ? onOneThread(e.pass) : e.pass(); }
+
 void timeWorkload(Workload& w, const std::vector<double>& firstPass, const Settings& s, int runs, bool calibrate) {
   for (std::size_t i = 0; i < w.engines.size(); ++i) {
     Engine& e = w.engines[i];
@@ -237,7 +243,7 @@ void timeWorkload(Workload& w, const std::vector<double>& firstPass, const Setti
     for (std::size_t k = 0; k < w.engines.size(); ++k) {
       Engine& e = w.engines[r % 2 == 0 ? k : w.engines.size() - 1 - k];
       Seconds total;
-      for (int rep = 0; rep < e.reps; ++rep) total += e.pass();
+      for (int rep = 0; rep < e.reps; ++rep) total += runPass(e);
       e.wallRuns.push_back(total.wall / (e.reps * perRun));
       e.cpuRuns.push_back(total.cpu / (e.reps * perRun));
     }
@@ -839,7 +845,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < first.size(); ++i) {
       const double t = s.cpuClock ? first[i].cpu : first[i].wall;
       c.push_back(t >= s.secondsPerRun ? t : [&] {
-        const Seconds again = w.engines[i].pass();
+        const Seconds again = runPass(w.engines[i]);
         return s.cpuClock ? again.cpu : again.wall;
       }());
     }
@@ -877,7 +883,7 @@ int main(int argc, char** argv) {
 #endif
     // Answers are compared before anything is timed.
     std::vector<Seconds> first;
-    for (Engine& e : w.engines) first.push_back(e.pass());
+    for (Engine& e : w.engines) first.push_back(runPass(e));
     std::size_t hits = 0;
     for (const RayAnswer& a : answers[0]) hits += a.hit;
     w.hitRate = double(hits) / double(rays.size());
@@ -906,7 +912,7 @@ int main(int argc, char** argv) {
                         const std::function<std::string(std::size_t)>& describe,
                         const std::vector<std::function<std::string()>>& extras) {
     std::vector<Seconds> first;
-    for (Engine& e : w.engines) first.push_back(e.pass());
+    for (Engine& e : w.engines) first.push_back(runPass(e));
     w.hitRate = hitRate(answers[0]);
     for (std::size_t i = 1; i < w.engines.size(); ++i)
       compareOverlaps(answers[0], answers[i], cruxFlips, describe, in.radius, w.engines[i],
@@ -1084,6 +1090,7 @@ int main(int argc, char** argv) {
     const EmbreeConfig embreeAll{true, false, 0};
     auto embreeA = std::make_unique<EmbreePeer>(in.arrays, embreeAll);
     addBuild("embree", embreeAll.label(), [&] { return embreeA->rebuild(); });
+    w.engines.back().threads = 0;
     w.notes.push_back("embree: rtcNewScene..rtcCommitScene over shared buffers; 'all threads' is for information");
 #endif
 #if CRUX_BENCH_HAVE_FCL
@@ -1092,7 +1099,7 @@ int main(int argc, char** argv) {
 #if CRUX_BENCH_HAVE_BULLET
     addBuild("bullet", "btBvhTriangleMeshShape", [&] { return bullet->timeBuild(); });
 #endif
-    for (Engine& e : w.engines) e.pass();  // warm-up
+    for (Engine& e : w.engines) runPass(e);  // warm-up
     timeWorkload(w, {}, s, s.buildRuns, false);
     w.notes.push_back("crux BVH build alone (Mesh::buildSeconds, wall, median over the timed builds): " +
                       fmt("%.1f", median(std::vector<double>(bvhOnly.end() - std::ptrdiff_t(s.buildRuns), bvhOnly.end())) * 1e3) +
@@ -1157,7 +1164,7 @@ int main(int argc, char** argv) {
     // First pass: every engine refits to the moved vertices; then the refitted structures
     // answer queries, compared with crux's answers on its refitted mesh.
     std::vector<Seconds> first;
-    for (Engine& e : w.engines) first.push_back(e.pass());
+    for (Engine& e : w.engines) first.push_back(runPass(e));
     std::vector<RayAnswer> cruxRayAnswers(rays.size()), peerRayAnswers(rays.size());
     cruxRays(cruxMoving, rays, cruxRayAnswers.data());
     std::vector<std::uint8_t> cruxSphereAnswers(spheres.size()), peerSphereAnswers(spheres.size());

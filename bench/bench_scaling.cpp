@@ -223,10 +223,14 @@ struct Row {
 };
 std::vector<Row> gRows;
 
+/// One pass of e; a one-thread engine's on the calling thread alone (onOneThread), an N-thread
+/// engine's as it comes (its own std::threads, or Embree's all-core build).
+Seconds runPass(Engine& e) { return e.threads == 1 ? onOneThread(e.pass) : e.pass(); }
+
 void timeEngines(std::vector<Engine>& engines, double perPassItems, const Settings& s) {
   std::vector<int> reps(engines.size(), 1);
   for (std::size_t i = 0; i < engines.size(); ++i) {
-    const Seconds first = engines[i].pass();  // warm-up, sizes the runs
+    const Seconds first = runPass(engines[i]);  // warm-up, sizes the runs
     reps[i] = std::max(1, int(std::lround(s.secondsPerRun / std::max(s.cpuClock ? first.cpu : first.wall, 1e-9))));
   }
   std::vector<std::vector<double>> cpu(engines.size()), wall(engines.size());
@@ -234,7 +238,7 @@ void timeEngines(std::vector<Engine>& engines, double perPassItems, const Settin
     for (std::size_t k = 0; k < engines.size(); ++k) {
       const std::size_t i = r % 2 ? engines.size() - 1 - k : k;
       Seconds total;
-      for (int rep = 0; rep < reps[i]; ++rep) total += engines[i].pass();
+      for (int rep = 0; rep < reps[i]; ++rep) total += runPass(engines[i]);
       engines[i].runs.push_back((s.cpuClock ? total.cpu : total.wall) / (reps[i] * perPassItems));
       cpu[i].push_back(total.cpu / (reps[i] * perPassItems));
       wall[i].push_back(total.wall / (reps[i] * perPassItems));
@@ -499,7 +503,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < rayEngines.size(); ++i) {
       Engine& e = rayEngines[i];
       std::fill(answers.begin(), answers.end(), RayAnswer{-1.0f, kNoTriangle, 2});
-      e.pass();
+      runPass(e);
       e.mismatches = rayMismatches(reference, answers);
       if (i > 0)
         e.agreement = e.mismatches == 0 ? "agree" : "DISAGREE " + std::to_string(e.mismatches) + " of " + std::to_string(nr);
@@ -558,7 +562,7 @@ int main(int argc, char** argv) {
                         })});
 #endif
       // One refit each (to the moved vertices), then the answers of the refitted structures.
-      for (Engine& e : refits) e.pass();
+      for (Engine& e : refits) runPass(e);
       std::vector<RayAnswer> movedReference(nr);
       cruxRays(moving, rays.data(), nr, movedReference.data());
       std::mt19937_64 rng(s.seed + 7 * nt);

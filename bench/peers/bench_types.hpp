@@ -9,7 +9,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <ctime>
+#include <utility>
 #include <vector>
+
+#include <tbb/task_arena.h>
 
 namespace crux::bench {
 
@@ -100,5 +103,17 @@ class Stopwatch {
   std::chrono::steady_clock::time_point wall0_;
   double cpu0_;
 };
+
+/// Runs f() on the calling thread alone: inside a oneTBB task arena of one slot, so that the
+/// oneTBB parallel algorithms f reaches run serially. A "1 thread" row needs it: crux's BVH build
+/// and refit and Embree's commit run oneTBB's parallel algorithms on every core otherwise, and
+/// Embree's device setting `threads=1` does not hold once another Embree device of the process
+/// has asked for all cores (its task scheduler is shared): measured, both showed 150–200 %
+/// CPU in rows labelled one thread.
+template <class F>
+auto onOneThread(F&& f) {
+  tbb::task_arena arena(1);
+  return arena.execute(std::forward<F>(f));
+}
 
 }  // namespace crux::bench

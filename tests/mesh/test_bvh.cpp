@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <functional>
 #include <random>
 #include <vector>
@@ -652,6 +653,36 @@ TEST(BvhParallel, ParallelBuildEqualsSerialBitForBit) {
     }
     checkBvh(serial, c.prims, c.options);
   }
+}
+
+/// CPU seconds of the calling thread (CLOCK_THREAD_CPUTIME_ID) or of the whole process.
+double cpuSeconds(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+/// CPU seconds other threads of the process spent while the calling thread built `prims` in an
+/// arena of `threads` slots.
+double cpuOfOtherThreads(const std::vector<Aabb>& prims, int threads) {
+  const double thread0 = cpuSeconds(CLOCK_THREAD_CPUTIME_ID), process0 = cpuSeconds(CLOCK_PROCESS_CPUTIME_ID);
+  const Bvh bvh = buildWithThreads(prims, {}, threads);
+  EXPECT_FALSE(bvh.nodes.empty());
+  return (cpuSeconds(CLOCK_PROCESS_CPUTIME_ID) - process0) - (cpuSeconds(CLOCK_THREAD_CPUTIME_ID) - thread0);
+}
+
+TEST(BvhParallel, AOneSlotArenaBuildsOnTheCallingThreadAlone) {
+  // What the benches' one-thread build rows rely on (docs/bench.md): in a task arena of one slot
+  // the parallel builder runs on the calling thread alone. (Run first in this process: no oneTBB
+  // worker exists yet whose spinning could count.) The control, a two-slot arena, shows the check
+  // can fail: there other threads take part (on a machine of one core there is no control).
+  std::mt19937_64 rng(0xA1);
+  const std::vector<Aabb> prims = randomBoxes(std::size_t(test::scaledCases(120000, 40000)), rng);
+  EXPECT_LE(cpuOfOtherThreads(prims, 1), 1e-3);
+  if (tbb::info::default_concurrency() < 2) GTEST_SKIP() << "one core: no control";
+  double others = 0;
+  for (int round = 0; round < 3 && others <= 1e-3; ++round) others = cpuOfOtherThreads(prims, 2);  // (a busy machine may starve the worker once)
+  EXPECT_GT(others, 1e-3);
 }
 
 TEST(BvhParallel, BunnyParallelBuildEqualsSerial) {
