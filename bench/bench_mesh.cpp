@@ -225,12 +225,12 @@ Seconds timeIt(F&& f) {
   return watch.elapsed();
 }
 
-/// Times every engine of the workload: `firstPass[i]` is engine i's verification pass time,
-/// from which its repetition count is chosen so a run lasts ~secondsPerRun. Runs interleave
-/// the engines, alternating their order, so slow drifts of the machine hit all of them.
 /// One pass of e, on the calling thread alone unless e runs on every core.
 Seconds runPass(Engine& e) { return e.threads == 1 ? onOneThread(e.pass) : e.pass(); }
 
+/// Times every engine of the workload: `firstPass[i]` is engine i's verification pass time,
+/// from which its repetition count is chosen so a run lasts ~secondsPerRun. Runs interleave
+/// the engines, alternating their order, so slow drifts of the machine hit all of them.
 void timeWorkload(Workload& w, const std::vector<double>& firstPass, const Settings& s, int runs, bool calibrate) {
   for (std::size_t i = 0; i < w.engines.size(); ++i) {
     Engine& e = w.engines[i];
