@@ -13,8 +13,14 @@ a warm-up. Two computations are timed (median and best of --runs):
 The control: the same rays in this process on crux's own 1 and 2 threads. On a machine shared
 with other work, the workers' speedup cannot exceed that one; the load average is printed too.
 
+The workers start without Dask's default MALLOC_TRIM_THRESHOLD_=65536 (its nanny's
+pre-spawn-environ), as docs/python.md advises for crux workers: any explicit malloc threshold turns
+off glibc's adaptive mmap threshold, so every answer array becomes fresh pages to fault in, which
+made each crux call ~45 % slower in a worker than in this process. --dask-malloc-trim keeps
+Dask's default, to measure that.
+
 Usage: PYTHONPATH=build/python /usr/bin/python3 bench/python/bench_dask.py [--mesh PATH]
-       [--rays N] [--chunk N] [--runs N] [--workers 1,2]
+       [--rays N] [--chunk N] [--runs N] [--workers 1,2] [--dask-malloc-trim]
 """
 
 import argparse
@@ -53,7 +59,12 @@ def main():
     p.add_argument("--chunk", type=int, default=250_000)
     p.add_argument("--runs", type=int, default=3)
     p.add_argument("--workers", default="1,2")
+    p.add_argument("--dask-malloc-trim", action="store_true", help="keep Dask's MALLOC_TRIM_THRESHOLD_ for the workers")
     a = p.parse_args()
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ"))
+    if not a.dask_malloc_trim:
+        environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    dask.config.set({"distributed.nanny.pre-spawn-environ": environ})
     path = os.path.abspath(a.mesh)
 
     mesh = crux.Mesh.load(path)
@@ -63,6 +74,7 @@ def main():
     two, _ = median_seconds(lambda: mesh.ray_closest(rays, threads=2), 1)
     print("%s: %d triangles; %d rays in chunks of %d; in process: 1 thread %.2f s, 2 threads %.2f s (%.2fx);"
           " load average %s" % (os.path.basename(path), len(mesh), a.rays, a.chunk, one, two, one / two, load()))
+    print("workers' MALLOC_TRIM_THRESHOLD_: %s" % environ.get("MALLOC_TRIM_THRESHOLD_", "unset (glibc's adaptive thresholds)"))
     results = {}
     for n in [int(x) for x in a.workers.split(",")]:
         with distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",

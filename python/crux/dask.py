@@ -15,6 +15,11 @@ so parallelism comes from the worker processes (``LocalCluster(n_workers=N,
 threads_per_worker=1)`` or ``dask-worker --nthreads 1``). Blocks are recomputed when a worker
 dies, so the result is complete and identical. Several answers of one call (t, triangle, point,
 normal) come from one task per block: compute them together, ``dask.compute(*hits)``.
+
+Dask's nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which turns off glibc's adaptive
+mmap threshold: every answer array is then fresh memory to fault in, and a crux call in such a
+worker took ~45 % longer than in the client. docs/python.md ("crux.dask") shows how to start
+crux's workers without it.
 """
 
 import functools
