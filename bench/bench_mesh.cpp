@@ -225,9 +225,6 @@ Seconds timeIt(F&& f) {
   return watch.elapsed();
 }
 
-/// One pass of e, on the calling thread alone unless e runs on every core.
-Seconds runPass(Engine& e) { return e.threads == 1 ? onOneThread(e.pass) : e.pass(); }
-
 /// Times every engine of the workload: `firstPass[i]` is engine i's verification pass time,
 /// from which its repetition count is chosen so a run lasts ~secondsPerRun. Runs interleave
 /// the engines, alternating their order, so slow drifts of the machine hit all of them.

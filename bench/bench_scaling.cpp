@@ -223,10 +223,6 @@ struct Row {
 };
 std::vector<Row> gRows;
 
-/// One pass of e; a one-thread engine's on the calling thread alone (onOneThread), an N-thread
-/// engine's as it comes (its own std::threads, or Embree's all-core build).
-Seconds runPass(Engine& e) { return e.threads == 1 ? onOneThread(e.pass) : e.pass(); }
-
 void timeEngines(std::vector<Engine>& engines, double perPassItems, const Settings& s) {
   std::vector<int> reps(engines.size(), 1);
   for (std::size_t i = 0; i < engines.size(); ++i) {

@@ -116,4 +116,12 @@ auto onOneThread(F&& f) {
   return arena.execute(std::forward<F>(f));
 }
 
+/// One pass of a bench's engine (a struct with `int threads` and `std::function<Seconds()> pass`):
+/// a one-thread engine's on the calling thread alone (onOneThread), any other's as it comes (its
+/// own std::threads, or a peer's all-core build).
+template <class Engine>
+Seconds runPass(Engine& e) {
+  return e.threads == 1 ? onOneThread(e.pass) : e.pass();
+}
+
 }  // namespace crux::bench
