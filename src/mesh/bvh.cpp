@@ -19,6 +19,8 @@
 #include <crux/error.hpp>
 #include <crux/mesh/bvh.hpp>
 
+#include "build_array.hpp"
+#include "bvh_build.hpp"
 #include "tbb_policy.hpp"
 
 #include <tbb/blocked_range.h>
@@ -35,6 +37,8 @@
 
 namespace crux {
 namespace {
+
+using detail::BuildArray;
 
 /// Upper limit of BvhBuildOptions::bins.
 constexpr std::uint32_t kMaxBins = 256;
@@ -114,22 +118,29 @@ struct Scratch {
 /// decision depends only on the node's primitive range (binning is order-independent: min/max
 /// and integer counts are exact in any order), and the in-place partitions of disjoint ranges
 /// are the serial ones, so nodes and primIndices are identical bit for bit.
+/// The builder's result: the binary tree's nodes in the builder's own array (build_array.hpp),
+/// which buildBvh copies and buildWideBvh widens and drops.
+struct BinaryTree {
+  BuildArray<BvhNode> nodes;
+  std::vector<std::uint32_t> primIndices;
+};
+
 class Builder {
  public:
-  Builder(const std::vector<Aabb>& prims, const BvhBuildOptions& options, Bvh& out)
-      : options_(options), bvh_(out), parallel_(kTbbParallelAllowed && tbb::this_task_arena::max_concurrency() > 1) {
-    const auto n = static_cast<std::uint32_t>(prims.size());
-    prims_.resize(n);
-    bvh_.primIndices.resize(n);
+  /// n primitives (n >= 1), primitive i's box boxOf(i).
+  template <class BoxOf>
+  Builder(std::uint32_t n, const BoxOf& boxOf, const BvhBuildOptions& options)
+      : options_(options), parallel_(kTbbParallelAllowed && tbb::this_task_arena::max_concurrency() > 1), prims_(n) {
+    tree_.nodes = BuildArray<BvhNode>(2 * std::size_t(n) - 1);
+    tree_.primIndices.resize(n);
     for (std::uint32_t i = 0; i < n; ++i) {
-      BuildPrim& p = prims_[i];
-      p.min = lanes(prims[i].min);
-      p.max = lanes(prims[i].max);
-      bvh_.primIndices[i] = i;
+      const Aabb box = boxOf(i);
+      prims_.push_back(BuildPrim{lanes(box.min), lanes(box.max)});
+      tree_.primIndices[i] = i;
     }
   }
 
-  void run() {
+  BinaryTree run() && {
     const auto n = static_cast<std::uint32_t>(prims_.size());
     LaneBox bounds, centroids;
     for (const BuildPrim& p : prims_) {
@@ -143,16 +154,15 @@ class Builder {
     root.count = n;
     if (!parallel_ || n < kParallelSubtreeMin) {
       Scratch scratch(options_.bins);
-      bvh_.nodes.reserve(2 * std::size_t(n) - 1);
-      buildSerial(root, 0, centroids, bvh_.nodes, scratch);
-      bvh_.nodes.shrink_to_fit();
-      return;
+      buildSerial(root, 0, centroids, tree_.nodes, scratch);
+      return std::move(tree_);
     }
     Subtree top;
     top.root = root;
     expand(top, 0, centroids);
-    bvh_.nodes.resize(1 + 2 * top.pairs);
+    tree_.nodes.resize(1 + 2 * top.pairs);
     place(top, 0, 1);
+    return std::move(tree_);
   }
 
  private:
@@ -178,9 +188,10 @@ class Builder {
     std::size_t pairs = 0;  // child pairs in the subtree
   };
 
-  /// The serial build of the subtree under `root` into `nodes` (cleared; nodes[0] = root).
-  void buildSerial(const BvhNode& root, int depth, const LaneBox& centroids, std::vector<BvhNode>& nodes,
-                   Scratch& scratch) {
+  /// The serial build of the subtree under `root` into `nodes` (cleared; nodes[0] = root): the
+  /// tree's own array, or a parallel subtree's `local` one.
+  template <class Nodes>
+  void buildSerial(const BvhNode& root, int depth, const LaneBox& centroids, Nodes& nodes, Scratch& scratch) {
     nodes.clear();
     nodes.push_back(root);
     std::vector<Work> work;
@@ -219,7 +230,8 @@ class Builder {
 
   /// Splits nodes[w.node] if worthwhile, appending both children as a pair (left at index k,
   /// right at k + 1, both after the parent) and queueing them.
-  void process(const Work& w, std::vector<BvhNode>& nodes, std::vector<Work>& work, Scratch& scratch) {
+  template <class Nodes>
+  void process(const Work& w, Nodes& nodes, std::vector<Work>& work, Scratch& scratch) {
     const Split split = chooseSplit(nodes[w.node], w.depth, w.centroids, scratch, false);
     if (split.leftCount == 0) return;
     const auto child = static_cast<std::uint32_t>(nodes.size());
@@ -256,11 +268,11 @@ class Builder {
     t.pairs = 1 + t.left->pairs + t.right->pairs;
   }
 
-  /// Writes subtree t with its root at bvh_.nodes[at] and its child pairs from `base` on, where
+  /// Writes subtree t with its root at tree_.nodes[at] and its child pairs from `base` on, where
   /// the serial build puts them: the root's pair first, then the left subtree's pairs, then
   /// the right's.
   void place(const Subtree& t, std::size_t at, std::size_t base) {
-    BvhNode* out = bvh_.nodes.data();
+    BvhNode* out = tree_.nodes.data();
     if (t.left) {
       BvhNode n = t.root;
       n.first = static_cast<std::uint32_t>(base);
@@ -401,7 +413,7 @@ class Builder {
     // (Lomuto's scheme, every element swapped with the first right one, the boundary advanced
     // by the predicate: a Hoare partition mispredicts about every other element here), then
     // the children's centroid bounds over the two ranges.
-    std::uint32_t* ids = bvh_.primIndices.data() + first;
+    std::uint32_t* ids = tree_.primIndices.data() + first;
     std::uint32_t i = 0;
     for (std::uint32_t k = 0; k < count; ++k) {
       const BuildPrim p = prims[k];
@@ -434,7 +446,7 @@ class Builder {
     if (extent[1] > extent[axis]) axis = 1;
     if (extent[2] > extent[axis]) axis = 2;
     BuildPrim* prims = prims_.data() + first;
-    std::uint32_t* ids = bvh_.primIndices.data() + first;
+    std::uint32_t* ids = tree_.primIndices.data() + first;
     if (extent[axis] > 0) {
       // Sort a permutation so the primitives and their indices move together.
       std::vector<std::uint32_t>& order = scratch.order;
@@ -462,33 +474,52 @@ class Builder {
   }
 
   const BvhBuildOptions& options_;
-  Bvh& bvh_;
   const bool parallel_;  // the current task arena has more than one thread
-  std::vector<BuildPrim> prims_;
+  BuildArray<BuildPrim> prims_;
+  BinaryTree tree_;
 };
 
 bool validBounds(const Aabb& b) {
   return b.min.allFinite() && b.max.allFinite() && (b.min.array() <= b.max.array()).all();
 }
 
-}  // namespace
-
-Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+/// The build's entry rule: valid options and a primitive count the 32-bit indices can hold.
+void checkBuild(std::size_t count, const BvhBuildOptions& options) {
   if (options.maxLeafSize == 0) throw InvalidInput("buildBvh: maxLeafSize must be at least 1");
   if (options.bins < 2 || options.bins > kMaxBins)
     throw InvalidInput("buildBvh: bins must be in [2, " + std::to_string(kMaxBins) + "], got " +
                        std::to_string(options.bins));
   if (!(options.traversalCost >= 0) || !std::isfinite(options.traversalCost))
     throw InvalidInput("buildBvh: traversalCost must be finite and >= 0");
-  if (primBounds.size() >= std::size_t(std::numeric_limits<std::uint32_t>::max()) / 2)
-    throw InvalidInput("buildBvh: too many primitives (" + std::to_string(primBounds.size()) + ")");
+  if (count >= std::size_t(std::numeric_limits<std::uint32_t>::max()) / 2)
+    throw InvalidInput("buildBvh: too many primitives (" + std::to_string(count) + ")");
+}
+
+/// checkBuild, and every box finite and non-empty.
+void checkBuild(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  checkBuild(primBounds.size(), options);
   for (std::size_t i = 0; i < primBounds.size(); ++i)
     if (!validBounds(primBounds[i]))
       throw InvalidInput("buildBvh: primitive " + std::to_string(i) + " has non-finite or empty bounds");
+}
 
+BinaryTree buildBinary(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  return Builder(static_cast<std::uint32_t>(primBounds.size()), [&](std::uint32_t i) { return primBounds[i]; },
+                 options)
+      .run();
+}
+
+WideBvh widen(const BvhNode* nodes, std::vector<std::uint32_t> primIndices);
+
+}  // namespace
+
+Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  checkBuild(primBounds, options);
   Bvh bvh;
   if (primBounds.empty()) return bvh;
-  Builder(primBounds, options, bvh).run();
+  BinaryTree tree = buildBinary(primBounds, options);
+  bvh.nodes.assign(tree.nodes.begin(), tree.nodes.end());
+  bvh.primIndices = std::move(tree.primIndices);
   return bvh;
 }
 
@@ -525,44 +556,57 @@ void refitBvh(Bvh& bvh, const std::vector<Aabb>& primBounds) {
 }
 
 
-WideBvh widenBvh(const Bvh& bvh) {
-  WideBvh wide;
-  if (bvh.nodes.empty()) return wide;
-  constexpr Real inf = std::numeric_limits<Real>::infinity();
-  // (binary node, wide node) pairs still to fill, in creation order: children after parents
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{0u, 0u}};
-  wide.nodes.reserve(bvh.nodes.size() / 2 + 1);
-  wide.nodes.emplace_back();
-  for (std::size_t next = 0; next < todo.size(); ++next) {
-    const auto [binary, index] = todo[next];
-    // the lanes: the binary node's children, then, while fewer than four, the inner lane of
-    // largest surface area replaced in place by its two children (the SAH's measure of how
-    // often a ray enters it; in place keeps the leaves in the binary tree's left-to-right
-    // order); a leaf root is its own single lane
-    std::uint32_t lanes[4];
-    int n = 0;
-    const BvhNode& b = bvh.nodes[binary];
-    if (b.isLeaf()) {
-      lanes[n++] = binary;
-    } else {
-      lanes[n++] = b.first;
-      lanes[n++] = b.first + 1;
-      while (n < 4) {
-        int open = -1;
-        Real openArea = -1;
-        for (int i = 0; i < n; ++i) {
-          const BvhNode& lane = bvh.nodes[lanes[i]];
-          if (!lane.isLeaf() && lane.bounds.area() > openArea) open = i, openArea = lane.bounds.area();
-        }
-        if (open < 0) break;
-        const std::uint32_t first = bvh.nodes[lanes[open]].first;
-        for (int i = n; i > open + 1; --i) lanes[i] = lanes[i - 1];
-        lanes[open] = first;
-        lanes[open + 1] = first + 1;
-        ++n;
-      }
+namespace {
+
+/// The lanes of the wide node made from binary node `binary` (its children, then, while fewer
+/// than four, the inner lane of largest surface area replaced in place by its two children: the
+/// SAH's measure of how often a ray enters it; in place keeps the leaves in the binary tree's
+/// left-to-right order; a leaf root is its own single lane). Returns the number of lanes.
+int wideLanes(const BvhNode* nodes, std::uint32_t binary, std::uint32_t (&lanes)[4]) {
+  int n = 0;
+  const BvhNode& b = nodes[binary];
+  if (b.isLeaf()) {
+    lanes[n++] = binary;
+    return n;
+  }
+  lanes[n++] = b.first;
+  lanes[n++] = b.first + 1;
+  while (n < 4) {
+    int open = -1;
+    Real openArea = -1;
+    for (int i = 0; i < n; ++i) {
+      const BvhNode& lane = nodes[lanes[i]];
+      if (!lane.isLeaf() && lane.bounds.area() > openArea) open = i, openArea = lane.bounds.area();
     }
-    WideBvhNode node;
+    if (open < 0) break;
+    const std::uint32_t first = nodes[lanes[open]].first;
+    for (int i = n; i > open + 1; --i) lanes[i] = lanes[i - 1];
+    lanes[open] = first;
+    lanes[open + 1] = first + 1;
+    ++n;
+  }
+  return n;
+}
+
+/// The wide tree of a binary tree (nodes[0] its root). Two passes over the wide nodes in
+/// creation order (children after parents): the first counts them, so the node array is
+/// allocated once at its size (no spare capacity, no copy); the second fills them.
+WideBvh widen(const BvhNode* nodes, std::vector<std::uint32_t> primIndices) {
+  WideBvh wide;
+  std::vector<std::uint32_t> todo{0u};  // binary node of each wide node, in creation order
+  for (std::size_t next = 0; next < todo.size(); ++next) {
+    std::uint32_t lanes[4];
+    const int n = wideLanes(nodes, todo[next], lanes);
+    for (int i = 0; i < n; ++i)
+      if (!nodes[lanes[i]].isLeaf()) todo.push_back(lanes[i]);
+  }
+  constexpr Real inf = std::numeric_limits<Real>::infinity();
+  wide.nodes.resize(todo.size());
+  std::uint32_t created = 1;
+  for (std::size_t index = 0; index < todo.size(); ++index) {
+    std::uint32_t lanes[4];
+    const int n = wideLanes(nodes, todo[index], lanes);
+    WideBvhNode& node = wide.nodes[index];
     for (int i = 0; i < 4; ++i) {
       node.minX[i] = node.minY[i] = node.minZ[i] = inf;
       node.maxX[i] = node.maxY[i] = node.maxZ[i] = -inf;
@@ -570,32 +614,55 @@ WideBvh widenBvh(const Bvh& bvh) {
       node.count[i] = 0;
     }
     for (int i = 0; i < n; ++i) {
-      const BvhNode& lane = bvh.nodes[lanes[i]];
+      const BvhNode& lane = nodes[lanes[i]];
       node.minX[i] = lane.bounds.min.x();
       node.minY[i] = lane.bounds.min.y();
       node.minZ[i] = lane.bounds.min.z();
       node.maxX[i] = lane.bounds.max.x();
       node.maxY[i] = lane.bounds.max.y();
       node.maxZ[i] = lane.bounds.max.z();
-      if (lane.isLeaf()) {
-        node.child[i] = lane.first;
-        node.count[i] = lane.count;
-      } else {
-        node.child[i] = static_cast<std::uint32_t>(wide.nodes.size());
-        todo.push_back({lanes[i], node.child[i]});
-        wide.nodes.emplace_back();
-      }
+      // a leaf lane keeps its slots; an inner lane is the next wide node created (the first
+      // pass pushed them in this order)
+      node.child[i] = lane.isLeaf() ? lane.first : created++;
+      node.count[i] = lane.isLeaf() ? lane.count : 0;
     }
-    wide.nodes[index] = node;
   }
-  wide.nodes.shrink_to_fit();
-  wide.primIndices = bvh.primIndices;
+  wide.primIndices = std::move(primIndices);
   return wide;
 }
 
-WideBvh buildWideBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
-  return widenBvh(buildBvh(primBounds, options));
+}  // namespace
+
+WideBvh widenBvh(const Bvh& bvh) {
+  if (bvh.nodes.empty()) return {};
+  return widen(bvh.nodes.data(), bvh.primIndices);
 }
+
+WideBvh buildWideBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  checkBuild(primBounds, options);
+  if (primBounds.empty()) return {};
+  BinaryTree tree = buildBinary(primBounds, options);
+  return widen(tree.nodes.data(), std::move(tree.primIndices));
+}
+
+namespace detail {
+
+WideBvh buildTriangleWideBvh(const std::vector<Vec3>& vertices, const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                             const BvhBuildOptions& options) {
+  checkBuild(triangles.size(), options);
+  if (triangles.empty()) return {};
+  BinaryTree tree = Builder(
+                        static_cast<std::uint32_t>(triangles.size()),
+                        [&](std::uint32_t i) {
+                          const std::array<std::uint32_t, 3>& t = triangles[i];
+                          return bounds(Triangle{vertices[t[0]], vertices[t[1]], vertices[t[2]]});
+                        },
+                        options)
+                        .run();
+  return widen(tree.nodes.data(), std::move(tree.primIndices));
+}
+
+}  // namespace detail
 
 Aabb wideRootBounds(const WideBvh& bvh) {
   Aabb box = Aabb::empty();

@@ -1,5 +1,7 @@
 #include <crux/mesh/mesh.hpp>
 
+#include "bvh_build.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -132,7 +134,7 @@ Mesh::Mesh(std::vector<Vec3> vertices, std::vector<TriangleIndices> triangles, s
 
   const auto start = std::chrono::steady_clock::now();
   try {
-    bvh_ = buildWideBvh(triangleBounds(), options);
+    bvh_ = detail::buildTriangleWideBvh(vertices_, triangles_, options);
   } catch (const InvalidInput& e) {  // bad build options
     throw InvalidInput(name_ + ": " + e.what());
   }
@@ -169,12 +171,6 @@ std::vector<Vec3> Mesh::slotCorners() const {
   std::vector<Vec3> out(3 * slotTriangles_.size());
   for (std::size_t k = 0; k < slotTriangles_.size(); ++k)
     for (int i = 0; i < 3; ++i) out[3 * k + i] = vertices_[slotTriangles_[k][i]];
-  return out;
-}
-
-std::vector<Aabb> Mesh::triangleBounds() const {
-  std::vector<Aabb> out(triangles_.size());
-  for (std::size_t i = 0; i < triangles_.size(); ++i) out[i] = crux::bounds(triangle(std::uint32_t(i)));
   return out;
 }
 

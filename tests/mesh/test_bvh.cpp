@@ -426,6 +426,42 @@ TEST(WideBvh, CollapsesTheBinaryTreeLaneForLane) {
   for (std::size_t k = 0; k < prims.size(); ++k) ASSERT_EQ(v.seen[k], 1) << k;
 }
 
+/// Whether two wide trees are the same node for node, bit for bit (fields compared, not padding).
+void expectSameWideTree(const WideBvh& a, const WideBvh& b) {
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  ASSERT_EQ(a.primIndices, b.primIndices);
+  for (std::size_t i = 0; i < a.nodes.size(); ++i) {
+    const WideBvhNode &x = a.nodes[i], &y = b.nodes[i];
+    const Real* const xs[6] = {x.minX, x.minY, x.minZ, x.maxX, x.maxY, x.maxZ};
+    const Real* const ys[6] = {y.minX, y.minY, y.minZ, y.maxX, y.maxY, y.maxZ};
+    for (int c = 0; c < 6; ++c) ASSERT_EQ(std::memcmp(xs[c], ys[c], 4 * sizeof(Real)), 0) << "node " << i;
+    ASSERT_EQ(std::memcmp(x.child, y.child, sizeof x.child), 0) << "node " << i;
+    ASSERT_EQ(std::memcmp(x.count, y.count, sizeof x.count), 0) << "node " << i;
+  }
+}
+
+TEST(WideBvh, BuildWideBvhAndTheMeshTreeEqualTheWidenedBinaryTree) {
+  // buildWideBvh widens the builder's own arrays and a Mesh's build reads each triangle's box
+  // from its vertices; both must give the tree of widenBvh(buildBvh(boxes)), serial and parallel.
+  std::mt19937_64 rng(0x51DE);
+  for (std::size_t n : {1u, 2u, 7u, 1000u, 40000u}) {
+    SCOPED_TRACE(n);
+    const std::vector<Aabb> prims = randomBoxes(n, rng);
+    expectSameWideTree(buildWideBvh(prims), widenBvh(buildBvh(prims)));
+  }
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> triangles;
+  std::uniform_real_distribution<double> u(-10, 10);
+  for (std::uint32_t i = 0; i < 60000; ++i) {
+    vertices.emplace_back(Real(u(rng)), Real(u(rng)), Real(u(rng)));
+    if (i >= 2) triangles.push_back({i - 2, i - 1, i});
+  }
+  const Mesh mesh(vertices, triangles);
+  std::vector<Aabb> boxes;
+  for (std::uint32_t i = 0; i < mesh.triangleCount(); ++i) boxes.push_back(bounds(mesh.triangle(i)));
+  expectSameWideTree(mesh.bvh(), widenBvh(buildBvh(boxes)));
+}
+
 TEST(WideBvh, OrderedTraversalVisitsEnteredLanesByKeyThenLaneDepthFirst) {
   // traverseWideBvhOrdered against a recursive reference: at each node the entered lanes are
   // visited nearest key first, equal keys in lane order, each lane's subtree before the next,

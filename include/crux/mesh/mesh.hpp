@@ -87,7 +87,6 @@ class Mesh {
   double buildSeconds() const { return buildSeconds_; }
 
  private:
-  std::vector<Aabb> triangleBounds() const;
   void updateBounds();  ///< bounds_ and scale_ from the tree
 
   std::vector<Vec3> vertices_;

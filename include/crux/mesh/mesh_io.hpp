@@ -28,7 +28,7 @@ struct MeshMemoryEstimate {
   /// exceeds it.
   std::size_t meshBytes = 0;
   /// Peak during construction: the vertices and indices, plus the BVH builder's temporaries
-  /// (triangle boxes, the builder's primitive array, and binary node arrays counted twice
+  /// (the builder's primitive array, and binary node arrays counted twice
   /// because the parallel build assembles per-task node arrays before copying them into place),
   /// or, when larger, the widening step (the binary tree and the wide tree at once).
   std::size_t peakBytes = 0;
