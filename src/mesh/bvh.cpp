@@ -503,13 +503,16 @@ void checkBuild(const std::vector<Aabb>& primBounds, const BvhBuildOptions& opti
       throw InvalidInput("buildBvh: primitive " + std::to_string(i) + " has non-finite or empty bounds");
 }
 
-BinaryTree buildBinary(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
-  return Builder(static_cast<std::uint32_t>(primBounds.size()), [&](std::uint32_t i) { return primBounds[i]; },
-                 options)
-      .run();
+/// The binary tree over n >= 1 primitives, primitive i's box boxOf(i) (checked by the caller).
+template <class BoxOf>
+BinaryTree buildBinary(std::size_t n, const BoxOf& boxOf, const BvhBuildOptions& options) {
+  return Builder(static_cast<std::uint32_t>(n), boxOf, options).run();
 }
 
-WideBvh widen(const BvhNode* nodes, std::vector<std::uint32_t> primIndices);
+/// buildBinary over an array of boxes.
+BinaryTree buildBinary(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options) {
+  return buildBinary(primBounds.size(), [&](std::uint32_t i) { return primBounds[i]; }, options);
+}
 
 }  // namespace
 
@@ -651,14 +654,11 @@ WideBvh buildTriangleWideBvh(const std::vector<Vec3>& vertices, const std::vecto
                              const BvhBuildOptions& options) {
   checkBuild(triangles.size(), options);
   if (triangles.empty()) return {};
-  BinaryTree tree = Builder(
-                        static_cast<std::uint32_t>(triangles.size()),
-                        [&](std::uint32_t i) {
-                          const std::array<std::uint32_t, 3>& t = triangles[i];
-                          return bounds(Triangle{vertices[t[0]], vertices[t[1]], vertices[t[2]]});
-                        },
-                        options)
-                        .run();
+  const auto triangleBox = [&](std::uint32_t i) {
+    const std::array<std::uint32_t, 3>& t = triangles[i];
+    return bounds(Triangle{vertices[t[0]], vertices[t[1]], vertices[t[2]]});
+  };
+  BinaryTree tree = buildBinary(triangles.size(), triangleBox, options);
   return widen(tree.nodes.data(), std::move(tree.primIndices));
 }
 

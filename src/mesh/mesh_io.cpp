@@ -73,12 +73,13 @@ MeshMemoryEstimate estimateMeshMemory(std::size_t vertices, std::size_t triangle
   // During the binary build: vertices, triangles, the builder's prims (each triangle's box is
   // read from the vertices) and primIndices, and the node arrays twice (per-task arrays + the
   // final one); then, while the binary tree is widened: vertices, triangles, the binary tree,
-  // the wide one, the widening's list of wide nodes and primIndices (moved, not copied).
+  // the wide one, the widening's list of wide nodes (grown by push_back: up to twice its size)
+  // and primIndices (moved, not copied).
   // slotTriangles is allocated after the temporaries are freed, in less space than they took.
   const std::size_t buildTemporaries = mul(triangles, kBuildPrimBytes);
   e.peakBytes =
       add(add(add(add(vertexBytes, indexBytes), buildTemporaries), primIndexBytes), mul(2, nodeBytes));
-  const std::size_t wideList = mul(wideNodes, sizeof(std::uint32_t));
+  const std::size_t wideList = mul(2 * sizeof(std::uint32_t), wideNodes);
   const std::size_t widening =
       add(add(add(vertexBytes, indexBytes), add(nodeBytes, wideBytes)), add(primIndexBytes, wideList));
   e.peakBytes = std::max(e.peakBytes, widening);

@@ -60,17 +60,20 @@ std::string thpMode() {
   return open == std::string::npos || close == std::string::npos ? "" : line.substr(open + 1, close - open - 1);
 }
 
-/// The "THPeligible:" value of the mapping that starts at `start` in /proc/self/smaps (-1: none).
-int thpEligible(const void* start) {
+/// The "THPeligible:" value of the mapping that holds `address` in /proc/self/smaps (-1: none;
+/// the kernel may merge the array's mapping with a neighbour of the same flags, so the mapping
+/// is found by containment, not by its start).
+int thpEligible(const void* address) {
   std::ifstream in("/proc/self/smaps");
   std::string line;
   bool inside = false;
+  const auto at = reinterpret_cast<std::uintptr_t>(address);
   while (std::getline(in, line)) {
-    std::uintptr_t from = 0;
+    std::uintptr_t from = 0, to = 0;
     char dash = 0;
     std::istringstream head(line);
-    if (head >> std::hex >> from >> dash && dash == '-') {
-      inside = from == reinterpret_cast<std::uintptr_t>(start);
+    if (head >> std::hex >> from >> dash >> to && dash == '-') {
+      inside = from <= at && at < to;
       continue;
     }
     if (inside && line.rfind("THPeligible:", 0) == 0) return std::stoi(line.substr(12));
