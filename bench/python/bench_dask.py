@@ -27,7 +27,6 @@ Usage: PYTHONPATH=build/python /usr/bin/python3 bench/python/bench_dask.py [--me
 
 import argparse
 import contextlib
-import functools
 import itertools
 import os
 import statistics
@@ -51,6 +50,14 @@ def seconds(call):
     start = time.perf_counter()
     call()
     return time.perf_counter() - start
+
+
+def fresh_graphs(path, rays):
+    """A function giving a new crux.dask.ray_closest graph over `rays` at each call: each run its
+    own graph (max_distance differs, beyond every hit), else dask would hand back the results of
+    the previous run still held by the workers."""
+    runs = itertools.count(1)
+    return lambda: cd.ray_closest(path, rays, max_distance=1e30 * next(runs))
 
 
 def paired(before, after):
@@ -99,10 +106,7 @@ def main():
                                 for f, c in zip(futures, pieces)])
             held = client.who_has(futures)
             per_worker = sorted(sum(1 for ws in held.values() if w in ws) for w in client.scheduler_info()["workers"])
-            # each run its own graph (max_distance differs, beyond every hit): dask would otherwise
-            # hand back results of the previous run still held by the workers
-            runs = itertools.count(1)
-            fresh = functools.partial(lambda d, runs: cd.ray_closest(path, d, max_distance=1e30 * next(runs)), d, runs)
+            fresh = fresh_graphs(path, d)
             client.compute(da.isfinite(fresh().t).sum(), sync=True)  # warm-up: every worker loads the mesh
             setups[n] = (client, fresh, per_worker)
         times = {("control", 1): [], ("control", 2): []}
