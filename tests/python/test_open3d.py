@@ -29,11 +29,14 @@ from conftest import SOURCE_DIR, random_points, random_rays, torus, unit_cube
 sys.path.insert(0, os.path.join(SOURCE_DIR, "bench", "python"))
 from open3d_peer import import_open3d  # noqa: E402
 
+# Without Open3D every test is collected and skipped (a module-level skip collects nothing, and
+# pytest's exit status for that, 5, fails the CTest test).
 try:
     o3d, SHIM = import_open3d()
 except ImportError:
-    pytest.skip("open3d is not importable (python3-open3d: CRUX_SETUP_OPEN3D=1 scripts/setup)",
-                allow_module_level=True)
+    o3d, SHIM = None, "absent"
+pytestmark = pytest.mark.skipif(
+    o3d is None, reason="open3d is not importable (python3-open3d: CRUX_SETUP_OPEN3D=1 scripts/setup)")
 
 EPS = float(np.finfo(np.float32).eps)
 RAY_TOLERANCE = 32   # in eps (|o|_inf + t)
