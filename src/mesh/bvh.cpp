@@ -21,6 +21,7 @@
 
 #include "build_array.hpp"
 #include "bvh_build.hpp"
+#include "lanes.hpp"
 #include "tbb_policy.hpp"
 
 #include <tbb/blocked_range.h>
@@ -43,25 +44,32 @@ using detail::BuildArray;
 /// Upper limit of BvhBuildOptions::bins.
 constexpr std::uint32_t kMaxBins = 256;
 
-/// Four-lane coordinates (x, y, z, 0) so box growth is two SIMD min/max operations.
-using Lanes = Eigen::Array<Real, 4, 1>;
-using LaneIndex = Eigen::Array<int, 4, 1>;
+/// Four-lane coordinates (x, y, z, 0) so box growth is two SIMD min/max operations (the mesh
+/// layer's lane type, lanes.hpp).
+using mesh_detail::Lanes;
+using mesh_detail::lanesMax;
+using mesh_detail::lanesMin;
+/// Four bin indices (x, y, z, unused).
+using LaneIndex = std::int32_t __attribute__((vector_size(16)));
 
-Lanes lanes(const Vec3& v) { return Lanes(v.x(), v.y(), v.z(), 0); }
+constexpr Real kInf = std::numeric_limits<Real>::infinity();
+
+Lanes lanes(const Vec3& v) { return Lanes{v.x(), v.y(), v.z(), 0}; }
+Lanes broadcast(Real x) { return Lanes{x, x, x, x}; }
 Vec3 vec(const Lanes& l) { return Vec3(l[0], l[1], l[2]); }
 
 /// A box over lanes; the empty box has min = +inf, max = -inf.
 struct LaneBox {
-  Lanes min = Lanes::Constant(std::numeric_limits<Real>::infinity());
-  Lanes max = Lanes::Constant(-std::numeric_limits<Real>::infinity());
+  Lanes min = broadcast(kInf);
+  Lanes max = broadcast(-kInf);
   void grow(const Lanes& lo, const Lanes& hi) {
-    min = min.min(lo);
-    max = max.max(hi);
+    min = lanesMin(min, lo);
+    max = lanesMax(max, hi);
   }
   void grow(const LaneBox& b) { grow(b.min, b.max); }
   /// As an Aabb, with -0 coordinates made +0 (x + 0): min/max of +0 and -0 depend on operand
   /// order, and the parallel build merges bins in a different order than the serial one.
-  Aabb aabb() const { return {vec(min + Lanes::Zero()), vec(max + Lanes::Zero())}; }
+  Aabb aabb() const { return {vec(min + Real(0)), vec(max + Real(0))}; }
 };
 
 /// A primitive as the builder moves it around: its bounds in lanes, partitioned in place
@@ -209,6 +217,9 @@ class Builder {
   Split chooseSplit(const BvhNode& node, int depth, const LaneBox& centroids, Scratch& scratch, bool parallelBins) {
     const std::uint32_t first = node.first, count = node.count;
     if (count <= 1) return {};
+    // A node the SAH can only make a leaf is not binned: with count <= traversalCost its leaf
+    // cost count·A is at most traversalCost·A + any split's cost (>= 0), also when rounded.
+    if (count <= options_.maxLeafSize && Wide(count) <= Wide(options_.traversalCost)) return {};
     Split split;
     const bool forceBalanced = depth + ceilLog2(count) > kBvhMaxDepth - 2;
     if (!forceBalanced) split = sahSplit(first, count, node.bounds, centroids, scratch, parallelBins);
@@ -302,7 +313,7 @@ class Builder {
                  Scratch& scratch, bool parallelBins) {
     const std::uint32_t bins = std::min(options_.bins, std::max(std::min(count, 4 + count / 20), 2u));
     Bin* bin[3] = {scratch.bins.data(), scratch.bins.data() + bins, scratch.bins.data() + 2 * bins};
-    Lanes scale = Lanes::Zero();
+    Lanes scale = broadcast(0);
     bool any = false;
     for (int a = 0; a < 3; ++a) {
       const Real extent = centroidBounds.max[a] - centroidBounds.min[a];
@@ -315,10 +326,13 @@ class Builder {
 
     const Lanes cmin = centroidBounds.min;
     const Real lastBin = Real(bins - 1);
+    const Lanes zero = broadcast(0), last = broadcast(lastBin);
     // The one binning formula (lane-wise, so the scalar use in the partition below computes
-    // bit-identical values): bin = min(floor((centroid - cmin) * scale), bins - 1).
+    // bit-identical values): bin = min(floor((centroid - cmin) * scale), bins - 1). On an unusable
+    // axis (scale 0) whose centroid extent overflowed, (centroid - cmin) * scale is inf · 0 = NaN:
+    // max(·, 0) makes it bin 0 (lanesMax gives its second operand for a NaN).
     auto binOf = [&](const BuildPrim& p) -> LaneIndex {
-      return ((p.centroid() - cmin) * scale).min(lastBin).template cast<int>();
+      return __builtin_convertvector(lanesMin(lanesMax((p.centroid() - cmin) * scale, zero), last), LaneIndex);
     };
     auto binOnAxis = [&](const BuildPrim& p, int a) -> std::uint32_t {
       const Real c = p.min[a] * Real(0.5) + p.max[a] * Real(0.5);
