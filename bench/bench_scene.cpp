@@ -27,6 +27,7 @@
 /// row includes that work (model hierarchy + worldBounds) and the broad-phase rows do not.
 
 #include "bench_output.hpp"
+#include "peers/bench_types.hpp"
 #include <crux/mesh/mesh.hpp>
 #include <crux/model/model_query.hpp>
 #include <crux/scene/dynamic_aabb_tree.hpp>
@@ -88,26 +89,9 @@ struct Options {
   bool has(const char* w) const { return workloads.find(w) != std::string::npos; }
 };
 
-/// Wall and process CPU time.
-struct Seconds {
-  double wall = 0, cpu = 0;
-};
-class Stopwatch {
- public:
-  Stopwatch() : wall0_(std::chrono::steady_clock::now()), cpu0_(cpuNow()) {}
-  Seconds elapsed() const {
-    return {std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count(), cpuNow() - cpu0_};
-  }
-
- private:
-  static double cpuNow() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-  }
-  std::chrono::steady_clock::time_point wall0_;
-  double cpu0_;
-};
+/// Wall and process CPU time (bench/peers/bench_types.hpp, shared with the other benches).
+using crux::bench::Seconds;
+using crux::bench::Stopwatch;
 
 /// Median run (by the reported clock) of a set of runs.
 struct Timing {
