@@ -168,7 +168,7 @@ class Builder {
     Subtree top;
     top.root = root;
     expand(top, 0, centroids);
-    tree_.nodes.resize(1 + 2 * top.pairs);
+    tree_.nodes.resizeForOverwrite(1 + 2 * top.pairs);  // place constructs every node
     place(top, 0, 1);
     return std::move(tree_);
   }
@@ -288,7 +288,7 @@ class Builder {
       BvhNode n = t.root;
       n.first = static_cast<std::uint32_t>(base);
       n.count = 0;
-      out[at] = n;
+      new (out + at) BvhNode(n);
       tbb::parallel_invoke([&] { place(*t.left, base, base + 2); },
                            [&] { place(*t.right, base + 1, base + 2 + 2 * t.left->pairs); });
       return;
@@ -298,8 +298,8 @@ class Builder {
       if (!n.isLeaf()) n.first = static_cast<std::uint32_t>(base + n.first - 1);
       return n;
     };
-    out[at] = relocate(t.local[0]);
-    for (std::size_t c = 1; c < t.local.size(); ++c) out[base + c - 1] = relocate(t.local[c]);
+    new (out + at) BvhNode(relocate(t.local[0]));
+    for (std::size_t c = 1; c < t.local.size(); ++c) new (out + base + c - 1) BvhNode(relocate(t.local[c]));
   }
 
   /// Binned SAH over all three axes (Wald 2007) with min(bins, count, 4 + count / 20) bins per

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <fstream>
+#include <limits>
+#include <new>
 #include <sstream>
 #include <string>
 
@@ -34,6 +36,20 @@ TEST(BuildArray, AppendsAndValueInitialisesWithinItsCapacity) {
   EXPECT_EQ(array.data(), nullptr);  // NOLINT(bugprone-use-after-move): the moved-from state is empty
   moved.clear();
   EXPECT_EQ(moved.size(), 0u);
+}
+
+TEST(BuildArray, ResizeForOverwriteLeavesConstructionToTheCaller) {
+  BuildArray<Item> array(4);
+  array.resizeForOverwrite(4);
+  ASSERT_EQ(array.size(), 4u);
+  for (std::uint32_t i = 0; i < 4; ++i) new (array.data() + i) Item{i, 2 * i};
+  EXPECT_EQ(array[3].a, 3u);
+  EXPECT_EQ(array[3].b, 6u);
+}
+
+TEST(BuildArray, ACapacityWhoseBytesOverflowIsRefused) {
+  const std::size_t tooMany = std::numeric_limits<std::size_t>::max() / sizeof(Item) + 1;
+  EXPECT_THROW(BuildArray<Item>{tooMany}, std::bad_array_new_length);
 }
 
 TEST(BuildArray, SmallArraysUseTheHeapLargeOnesAMappingOfTheirOwn) {
