@@ -327,16 +327,13 @@ class Builder {
     const Lanes cmin = centroidBounds.min;
     const Real lastBin = Real(bins - 1);
     const Lanes zero = broadcast(0), last = broadcast(lastBin);
-    // The one binning formula (lane-wise, so the scalar use in the partition below computes
-    // bit-identical values): bin = min(floor((centroid - cmin) * scale), bins - 1). On an unusable
-    // axis (scale 0) whose centroid extent overflowed, (centroid - cmin) * scale is inf · 0 = NaN:
-    // max(·, 0) makes it bin 0 (lanesMax gives its second operand for a NaN).
+    // The one binning formula, used by the binning pass and the partition below (so a primitive
+    // goes to the side of the bin it was counted in): bin = min(floor((centroid - cmin) * scale),
+    // bins - 1) per axis. On an unusable axis (scale 0) whose centroid extent overflowed,
+    // (centroid - cmin) * scale is inf · 0 = NaN: max(·, 0) makes it bin 0 (lanesMax gives its
+    // second operand for a NaN).
     auto binOf = [&](const BuildPrim& p) -> LaneIndex {
       return __builtin_convertvector(lanesMin(lanesMax((p.centroid() - cmin) * scale, zero), last), LaneIndex);
-    };
-    auto binOnAxis = [&](const BuildPrim& p, int a) -> std::uint32_t {
-      const Real c = p.min[a] * Real(0.5) + p.max[a] * Real(0.5);
-      return static_cast<std::uint32_t>(std::min((c - cmin[a]) * scale[a], lastBin));
     };
     BuildPrim* prims = prims_.data() + first;
     auto binRange = [&](std::uint32_t begin, std::uint32_t end, Bin* const* into) {
@@ -432,7 +429,7 @@ class Builder {
     for (std::uint32_t k = 0; k < count; ++k) {
       const BuildPrim p = prims[k];
       const std::uint32_t id = ids[k];
-      const bool left = binOnAxis(p, bestAxis) < bestSplit;
+      const bool left = std::uint32_t(binOf(p)[bestAxis]) < bestSplit;
       prims[k] = prims[i];
       ids[k] = ids[i];
       prims[i] = p;
