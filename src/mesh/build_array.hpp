@@ -39,7 +39,10 @@ inline constexpr std::size_t kBuildHugePageBytes = std::size_t(2) << 20;
 inline void* allocateBuildMemory(std::size_t bytes, std::size_t align, std::size_t& mapped) {
   mapped = 0;
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-  if (bytes >= kBuildHugePageBytes && align <= kBuildHugePageBytes) {
+  // (sizes within two huge pages of the largest std::size_t would wrap in the rounding below:
+  // they go to operator new, which throws std::bad_alloc)
+  if (bytes >= kBuildHugePageBytes && bytes <= std::numeric_limits<std::size_t>::max() - 2 * kBuildHugePageBytes &&
+      align <= kBuildHugePageBytes) {
     const std::size_t length = (bytes + kBuildHugePageBytes - 1) / kBuildHugePageBytes * kBuildHugePageBytes;
     // over-map by one huge page, then unmap the unaligned head and the tail
     void* raw = ::mmap(nullptr, length + kBuildHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "mesh/build_array.hpp"
+#include "support/sanitized.hpp"
 
 namespace crux::detail {
 namespace {
@@ -50,6 +51,13 @@ TEST(BuildArray, ResizeForOverwriteLeavesConstructionToTheCaller) {
 TEST(BuildArray, ACapacityWhoseBytesOverflowIsRefused) {
   const std::size_t tooMany = std::numeric_limits<std::size_t>::max() / sizeof(Item) + 1;
   EXPECT_THROW(BuildArray<Item>{tooMany}, std::bad_array_new_length);
+}
+
+TEST(BuildArray, ACapacityNoMemoryCanHoldThrowsBadAlloc) {
+  // Its bytes fit std::size_t but rounding them up to whole huge pages would wrap.
+  if (CRUX_TEST_SANITIZED) GTEST_SKIP() << "sanitizer allocators abort on such a request instead of throwing";
+  volatile std::size_t most = std::numeric_limits<std::size_t>::max() / sizeof(Item);  // not folded: no size warning
+  EXPECT_THROW(BuildArray<Item>{most}, std::bad_alloc);
 }
 
 TEST(BuildArray, SmallArraysUseTheHeapLargeOnesAMappingOfTheirOwn) {
