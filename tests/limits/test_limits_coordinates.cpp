@@ -246,9 +246,10 @@ TEST(LimitsCoordinates, HugeCoordinatesGiveFiniteSymmetricAnswers) {
 
 // A mesh whose triangles sit at both ends of the range (x = ±0.9 of the largest Real): its
 // centroids are farther apart than the largest Real, so the BVH builder cannot bin along x (the
-// extent overflows; it used to write out of bounds there) and splits along y. Rays, segments,
-// sphere and box overlaps give the brute-force answers (and, in float builds, the hits);
-// mesh–mesh overlap is symmetric.
+// extent overflows; it used to write out of bounds there), and no split of the root has a finite
+// cost: the root is split by count, which separates the two ends, and the SAH splits below it.
+// Rays, segments, sphere and box overlaps give the brute-force answers (and, in float builds,
+// the hits); mesh–mesh overlap is symmetric.
 TEST(LimitsCoordinates, MeshesSpanningBothEndsOfTheRangeBuildAndAnswerAsBruteForce) {
   // Products of two coordinates near the largest float fit in Wide (double); near the largest
   // double they overflow, and only "no crash, same answers on both paths" is claimed.

@@ -181,9 +181,9 @@ TEST(Bvh, SahSeparatesTwoDistantClusters) {
 }
 
 TEST(Bvh, NodesWithinTheLeafCapSplitOnlyWhenTheSahSaysSo) {
-  // Two far-apart unit boxes: a leaf costs 2·A, a split traversalCost·A + 2 (A, the pair's area,
-  // is ~4e6). Below two primitive tests per node the SAH splits them; at two it cannot (and the
-  // builder then skips their binning: count <= traversalCost).
+  // Two unit boxes 1000 apart: a leaf costs 2·A, a split traversalCost·A + 12 (A, the pair's
+  // surface area, is 4006; each box's is 6). Below traversalCost ~1.997 the SAH splits them; from
+  // two on it cannot (and the builder then skips their binning: count <= traversalCost).
   const std::vector<Aabb> prims{{Vec3(0, 0, 0), Vec3(1, 1, 1)}, {Vec3(1000, 0, 0), Vec3(1001, 1, 1)}};
   for (const Real cost : {Real(0), Real(1), Real(1.9), Real(2), Real(3)}) {
     BvhBuildOptions options;
@@ -250,34 +250,6 @@ TEST(Bvh, ExponentiallySpacedClustersForceTheBalancedFallback) {
   EXPECT_GE(s.maxDepth, 80);
 }
 
-
-TEST(Bvh, CentroidsFartherApartThanTheLargestRealAreBinnedInRange) {
-  // Centroids at ±0.9 of the largest Real on x: their extent overflows to inf, so x cannot be
-  // binned (its scale is 0) and (centroid − min) · 0 is inf · 0 = NaN there; that must give
-  // bin 0, not an index out of range. y and z stay usable. Large enough for the parallel build's
-  // chunked binning too.
-  const Real big = Real(0.9) * std::numeric_limits<Real>::max();
-  std::vector<Aabb> prims;
-  for (int i = 0; i < 20000; ++i) {
-    const Real x = i % 2 ? big : -big, y = Real(i % 97), z = Real(i % 13);
-    prims.push_back({Vec3(x, y, z), Vec3(x, y + 1, z + 1)});
-  }
-  for (const int threads : {1, 2}) {
-    Bvh bvh;
-    tbb::task_arena(threads).execute([&] { bvh = buildBvh(prims); });
-    checkBvh(bvh, prims, {});
-  }
-  std::vector<Vec3> vertices;
-  std::vector<TriangleIndices> triangles;
-  for (int i = 0; i < 64; ++i) {
-    const Real x = i % 2 ? big : -big;
-    const auto k = static_cast<std::uint32_t>(vertices.size());
-    vertices.insert(vertices.end(), {Vec3(x, Real(i), 0), Vec3(x, Real(i) + 1, 0), Vec3(x, Real(i), 1)});
-    triangles.push_back({k, k + 1, k + 2});
-  }
-  const Mesh mesh(vertices, triangles, "far apart");
-  EXPECT_EQ(mesh.bvh().primIndices.size(), 64u);
-}
 TEST(Bvh, TraversalStackNeverOverflowsOnTheDeepestTree) {
   // Same adversarial input; visiting every leaf uses the deepest stack traverseBvh can need.
   const std::vector<Aabb> prims = exponentialClusters(30000, 120);
@@ -687,6 +659,37 @@ void expectIdentical(const Bvh& serial, const Bvh& parallel) {
                         b.bounds.max.x(), b.bounds.max.y(), b.bounds.max.z()};
     ASSERT_EQ(std::memcmp(sa, sb, sizeof sa), 0) << "node " << i << ": " << str(a.bounds) << " vs " << str(b.bounds);
   }
+}
+
+TEST(Bvh, CentroidsFartherApartThanTheLargestRealAreBinnedInRange) {
+  // Centroids at ±0.9 of the largest Real on x: their extent overflows to inf, so x cannot be
+  // binned (its scale is 0) and (centroid − min) · 0 is inf · 0 = NaN there; that must give
+  // bin 0, not an index out of range. (Every candidate box of the root spans both ends, so no
+  // split has a finite cost: the root is split by count along x, which separates the ends, and
+  // the SAH splits below it.) 40,000 primitives: the parallel build
+  // bins the top nodes in chunks (from 32,768 on), and must still equal the serial build.
+  const Real big = Real(0.9) * std::numeric_limits<Real>::max();
+  std::vector<Aabb> prims;
+  for (int i = 0; i < 40000; ++i) {
+    const Real x = i % 2 ? big : -big, y = Real(i % 97), z = Real(i % 13);
+    prims.push_back({Vec3(x, y, z), Vec3(x, y + 1, z + 1)});
+  }
+  Bvh serial, parallel;
+  tbb::task_arena(1).execute([&] { serial = buildBvh(prims); });
+  tbb::task_arena(2).execute([&] { parallel = buildBvh(prims); });
+  checkBvh(serial, prims, {});
+  checkBvh(parallel, prims, {});
+  expectIdentical(serial, parallel);
+  std::vector<Vec3> vertices;
+  std::vector<TriangleIndices> triangles;
+  for (int i = 0; i < 64; ++i) {
+    const Real x = i % 2 ? big : -big;
+    const auto k = static_cast<std::uint32_t>(vertices.size());
+    vertices.insert(vertices.end(), {Vec3(x, Real(i), 0), Vec3(x, Real(i) + 1, 0), Vec3(x, Real(i), 1)});
+    triangles.push_back({k, k + 1, k + 2});
+  }
+  const Mesh mesh(vertices, triangles, "far apart");
+  EXPECT_EQ(mesh.bvh().primIndices.size(), 64u);
 }
 
 TEST(BvhParallel, ParallelBuildEqualsSerialBitForBit) {
