@@ -49,19 +49,19 @@ constexpr std::uint32_t kMaxBins = 256;
 using mesh_detail::Lanes;
 using mesh_detail::lanesMax;
 using mesh_detail::lanesMin;
+using mesh_detail::lanesOf;
+using mesh_detail::lanesSplat;
 /// Four bin indices (x, y, z, unused).
 using LaneIndex = std::int32_t __attribute__((vector_size(16)));
 
 constexpr Real kInf = std::numeric_limits<Real>::infinity();
 
-Lanes lanes(const Vec3& v) { return Lanes{v.x(), v.y(), v.z(), 0}; }
-Lanes broadcast(Real x) { return Lanes{x, x, x, x}; }
 Vec3 vec(const Lanes& l) { return Vec3(l[0], l[1], l[2]); }
 
 /// A box over lanes; the empty box has min = +inf, max = -inf.
 struct LaneBox {
-  Lanes min = broadcast(kInf);
-  Lanes max = broadcast(-kInf);
+  Lanes min = lanesSplat(kInf);
+  Lanes max = lanesSplat(-kInf);
   void grow(const Lanes& lo, const Lanes& hi) {
     min = lanesMin(min, lo);
     max = lanesMax(max, hi);
@@ -143,7 +143,7 @@ class Builder {
     tree_.primIndices.resize(n);
     for (std::uint32_t i = 0; i < n; ++i) {
       const Aabb box = boxOf(i);
-      prims_.push_back(BuildPrim{lanes(box.min), lanes(box.max)});
+      prims_.push_back(BuildPrim{lanesOf(box.min), lanesOf(box.max)});
       tree_.primIndices[i] = i;
     }
   }
@@ -313,7 +313,7 @@ class Builder {
                  Scratch& scratch, bool parallelBins) {
     const std::uint32_t bins = std::min(options_.bins, std::max(std::min(count, 4 + count / 20), 2u));
     Bin* bin[3] = {scratch.bins.data(), scratch.bins.data() + bins, scratch.bins.data() + 2 * bins};
-    Lanes scale = broadcast(0);
+    Lanes scale = lanesSplat(0);
     bool any = false;
     for (int a = 0; a < 3; ++a) {
       const Real extent = centroidBounds.max[a] - centroidBounds.min[a];
@@ -326,7 +326,7 @@ class Builder {
 
     const Lanes cmin = centroidBounds.min;
     const Real lastBin = Real(bins - 1);
-    const Lanes zero = broadcast(0), last = broadcast(lastBin);
+    const Lanes zero = lanesSplat(0), last = lanesSplat(lastBin);
     // The one binning formula, used by the binning pass and the partition below (so a primitive
     // goes to the side of the bin it was counted in): bin = min(floor((centroid - cmin) * scale),
     // bins - 1) per axis. On an unusable axis (scale 0) whose centroid extent overflowed,
@@ -372,7 +372,7 @@ class Builder {
     }
 
     LaneBox parent;
-    parent.grow(lanes(nodeBounds.min), lanes(nodeBounds.max));
+    parent.grow(lanesOf(nodeBounds.min), lanesOf(nodeBounds.max));
     const bool useLength = !(costMeasure(parent, false) > 0);
     Wide bestCost = std::numeric_limits<Wide>::infinity();
     int bestAxis = -1;

@@ -86,6 +86,12 @@ inline Lanes lanesMin(const Lanes& a, const Lanes& b) {
 /// Lane i of x in all four lanes.
 inline Lanes lanesBroadcast(const Lanes& x, int i) { return Lanes{x[i], x[i], x[i], x[i]}; }
 
+/// x in all four lanes.
+inline Lanes lanesSplat(Real x) { return Lanes{x, x, x, x}; }
+
+/// (v.x, v.y, v.z, 0): a point or vector as lanes, one coordinate per lane.
+inline Lanes lanesOf(const Vec3& v) { return Lanes{v.x(), v.y(), v.z(), 0}; }
+
 /// The sign bits of a comparison result's four lanes, lane i as bit i.
 inline unsigned laneMask(const LaneBits& m) {
 #if defined(__SSE2__) && !CRUX_DOUBLE_PRECISION_ENABLED

@@ -78,7 +78,7 @@ class RayBoxTest {
     const Real m = dir.cwiseAbs().maxCoeff();
     // Scaling by 2^k is exact (unless a component underflows); one multiplier when 2^k is finite.
     // The three axes are set up together, one per lane (lane 3 unused).
-    const Lanes raw = {dir.x(), dir.y(), dir.z(), 0};
+    const Lanes raw = lanesOf(dir);
     Lanes d;
     if (const Real f = reciprocalPowerOfTwo(m); f != 0) {  // the usual case, from the exponent bits
       d = raw * f;
@@ -94,7 +94,7 @@ class RayBoxTest {
                        std::numeric_limits<Real>::quiet_NaN(), std::numeric_limits<Real>::quiet_NaN()};
     inv = lanesSelect((raw != 0) & (lanesAbs(d) < std::numeric_limits<Real>::min()), nan, inv);
     const Lanes invNear = inv * (1 - kSlabRoundingPad), invFar = inv * (1 + kSlabRoundingPad);
-    const Lanes o = {origin.x(), origin.y(), origin.z(), 0};
+    const Lanes o = lanesOf(origin);
     const Lanes originNear = lanesSelect(negative, o - pad, o + pad);
     const Lanes originFar = lanesSelect(negative, o + pad, o - pad);
     const unsigned negativeAxes = laneMask(negative);

@@ -76,10 +76,10 @@ class RayLaneTest {
       // plane + margin (the same IEEE operation).
       near_[i] = ray.negative[i] ? 4 * (3 + i) : 4 * i;
       far_[i] = ray.negative[i] ? 4 * i : 4 * (3 + i);
-      nearMargin_[i] = ray.negative[i] ? splat(ray.margin) : splat(-ray.margin);
-      farMargin_[i] = ray.negative[i] ? splat(-ray.margin) : splat(ray.margin);
-      origin_[i] = splat(ray.origin[i]);
-      invDir_[i] = splat(ray.invDir[i]);
+      nearMargin_[i] = ray.negative[i] ? lanesSplat(ray.margin) : lanesSplat(-ray.margin);
+      farMargin_[i] = ray.negative[i] ? lanesSplat(-ray.margin) : lanesSplat(ray.margin);
+      origin_[i] = lanesSplat(ray.origin[i]);
+      invDir_[i] = lanesSplat(ray.invDir[i]);
     }
   }
 
@@ -87,7 +87,7 @@ class RayLaneTest {
     using namespace mesh_detail;
     if (parallel_) return enterParallel(node, maxT, entry);
     const Real* coords = node.minX;
-    Lanes tNear = {0, 0, 0, 0}, tFar = splat(maxT);
+    Lanes tNear = {0, 0, 0, 0}, tFar = lanesSplat(maxT);
     for (int i = 0; i < 3; ++i) {
       const Lanes t1 = ((lanesLoad(coords + near_[i]) + nearMargin_[i]) - origin_[i]) * invDir_[i];
       const Lanes t2 = ((lanesLoad(coords + far_[i]) + farMargin_[i]) - origin_[i]) * invDir_[i];
@@ -99,14 +99,12 @@ class RayLaneTest {
   }
 
  private:
-  static mesh_detail::Lanes splat(Real x) { return mesh_detail::Lanes{x, x, x, x}; }
-
   /// The general form (some axis parallel to the ray: containment on that axis).
   unsigned enterParallel(const WideBvhNode& node, Real maxT, Real (&entry)[4]) const {
     using namespace mesh_detail;
     const Real* mins[3] = {node.minX, node.minY, node.minZ};
     const Real* maxs[3] = {node.maxX, node.maxY, node.maxZ};
-    Lanes tNear = {0, 0, 0, 0}, tFar = splat(maxT);
+    Lanes tNear = {0, 0, 0, 0}, tFar = lanesSplat(maxT);
     LaneBits inside = {-1, -1, -1, -1};
     for (int i = 0; i < 3; ++i) {
       const Lanes lo = lanesLoad(mins[i]) - ray_.margin, hi = lanesLoad(maxs[i]) + ray_.margin;
