@@ -243,7 +243,6 @@ TEST(LimitsCoordinates, HugeCoordinatesGiveFiniteSymmetricAnswers) {
   }
 }
 
-
 // A mesh whose triangles sit at both ends of the range (x = ±0.9 of the largest Real): its
 // centroids are farther apart than the largest Real, so the BVH builder cannot bin along x (the
 // extent overflows; it used to write out of bounds there), and no split of the root has a finite
@@ -295,6 +294,7 @@ TEST(LimitsCoordinates, MeshesSpanningBothEndsOfTheRangeBuildAndAnswerAsBruteFor
   shifted.translation = Vec3(0, 2, 0);
   EXPECT_EQ(overlaps(mesh, Transform{}, other, shifted), overlaps(other, shifted, mesh, Transform{}));
 }
+
 // Placements that push a mesh past the largest Real: world coordinates would overflow to
 // infinity. The scene refuses them with InvalidInput and stays as it was: the hierarchy and the
 // broad phase agree and queries still work (src/scene/scene.cpp: boxes are checked before

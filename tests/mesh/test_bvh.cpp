@@ -666,8 +666,8 @@ TEST(Bvh, CentroidsFartherApartThanTheLargestRealAreBinnedInRange) {
   // binned (its scale is 0) and (centroid − min) · 0 is inf · 0 = NaN there; that must give
   // bin 0, not an index out of range. (Every candidate box of the root spans both ends, so no
   // split has a finite cost: the root is split by count along x, which separates the ends, and
-  // the SAH splits below it.) 40,000 primitives: the parallel build
-  // bins the top nodes in chunks (from 32,768 on), and must still equal the serial build.
+  // the SAH splits below it.) 40,000 primitives: the parallel build bins the top nodes in
+  // chunks (from 32,768 on), and must still equal the serial build.
   const Real big = Real(0.9) * std::numeric_limits<Real>::max();
   std::vector<Aabb> prims;
   for (int i = 0; i < 40000; ++i) {
