@@ -48,7 +48,11 @@ struct Bvh {
 /// Builds a BVH over primitives with the given bounds, top-down with the binned surface-area
 /// heuristic (Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies", 2007),
 /// splitting on centroids; leaves are made when SAH finds no cheaper split and the count is
-/// within maxLeafSize. Node bounds are fitted to their contents.
+/// within maxLeafSize. Node bounds are fitted to their contents. An axis whose centroids lie
+/// farther apart than the largest Real is not binned, and a node with no split of finite cost
+/// (or too deep for SAH, kBvhMaxDepth) is a leaf within maxLeafSize and else halved by count.
+/// Throws InvalidInput for bad options, too many primitives, or a primitive whose bounds are
+/// not finite or are empty (naming it).
 Bvh buildBvh(const std::vector<Aabb>& primBounds, const BvhBuildOptions& options = {});
 
 /// Refits every node's bounds bottom-up to new primitive bounds (same primitive count and
