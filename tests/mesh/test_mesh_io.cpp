@@ -5,6 +5,7 @@
 // (docs/limits.md). Crash inputs of assimp: tests/fuzz/test_fuzz_regressions.cpp.
 #include <crux/mesh/mesh_io.hpp>
 
+#include <crux/mesh/bvh.hpp>
 #include <crux/error.hpp>
 
 #include <gtest/gtest.h>
@@ -159,7 +160,18 @@ TEST(MeshMemoryEstimate, BoundsTheMeasuredPeakOfA1MTriangleBuild) {
               nv, nt, formatBytes(measured).c_str(), double(measured) / double(nt), formatBytes(e.peakBytes).c_str(),
               formatBytes(e.meshBytes).c_str(), formatBytes(mesh.memoryBytes()).c_str());
   EXPECT_GE(e.peakBytes, measured) << "the estimate is below the measured peak";
-  EXPECT_LE(double(e.peakBytes), 2.0 * double(measured)) << "the estimate is more than twice the measured peak";
+  // Nor a wild one: beyond the measured peak it holds only its allowance for the worst-case
+  // binary tree (2T − 1 nodes, in each of the two node arrays it counts, where this build made
+  // `actual`) and the rounding of the builder's two huge-page mappings (up to 2 MiB each,
+  // resident with transparent huge pages, not without them).
+  std::vector<Aabb> boxes;
+  boxes.reserve(nt);
+  for (std::size_t i = 0; i < nt; ++i) boxes.push_back(bounds(mesh.triangle(i)));
+  const std::size_t actual = buildBvh(boxes).nodes.size();
+  const std::size_t allowance = 2 * (2 * nt - 1 - actual) * sizeof(BvhNode) + 2 * (std::size_t(2) << 20);
+  std::printf("binary nodes %zu (%.2f per triangle): worst-case allowance %s\n", actual, double(actual) / double(nt),
+              formatBytes(allowance).c_str());
+  EXPECT_LE(e.peakBytes, measured + allowance) << "the estimate exceeds the measured peak by more than its allowance";
   EXPECT_LE(mesh.memoryBytes(), e.meshBytes);
 }
 
