@@ -143,8 +143,12 @@ std::string parseMessage(const std::string& what) {
 Answer errorAnswer(const Json& request, const std::string& message) {
   Answer answer = Answer::object();
   if (request.is_object()) {
-    if (const auto id = request.find("id"); id != request.end()) answer["id"] = Answer(*id);
-    if (const auto op = request.find("op"); op != request.end()) answer["op"] = Answer(*op);
+    // id and op are echoed as given when they are scalars. An array or object there is an error
+    // already (both must be strings) and is not echoed: the copy would recurse once per level of
+    // nesting, and a line of ~80,000 brackets overflowed the stack.
+    for (const char* key : {"id", "op"})
+      if (const auto field = request.find(key); field != request.end() && !field->is_structured())
+        answer[key] = Answer(*field);
   }
   answer["error"] = message;
   return answer;
@@ -183,6 +187,12 @@ ParsedLine parseLine(const std::string& rawLine) {
   Json::sax_parse(line.begin(), line.end(), &builder);
   parsed.request = std::move(builder.root);
   const Json& request = parsed.request;
+  // The parser takes a NUL byte for the end of its input and would ignore the rest of the line
+  // (within a string a NUL is a control character it reports itself).
+  if (const std::size_t nul = line.find('\0'); nul != std::string_view::npos && !builder.failure) {
+    parsed.answer = errorAnswer(request, "invalid JSON: NUL byte at column " + std::to_string(nul + 1));
+    return parsed;
+  }
   if (builder.failure) {
     const auto& f = *builder.failure;
     if (f.id == 406) {  // out_of_range.406: a number literal beyond double

@@ -66,7 +66,12 @@ std::uint32_t readIndex(const Json& value, const std::string& path, std::size_t 
     if (index >= vertexCount) fail(path, "index " + std::to_string(index) + range);
     return static_cast<std::uint32_t>(index);  // Mesh rejects more than 2^32 - 1 vertices
   }
-  if (value.is_number_integer()) fail(path, "index " + std::to_string(value.get<std::int64_t>()) + range);
+  if (value.is_number_integer()) {  // negative, or -0 (a signed integer 0)
+    const auto index = value.get<std::int64_t>();
+    if (index != 0) fail(path, "index " + std::to_string(index) + range);
+    if (vertexCount == 0) fail(path, "index 0" + range);
+    return 0;
+  }
   if (value.is_number()) fail(path, "expected an integer vertex index, got " + value.dump());
   fail(path, "expected an integer vertex index, " + got(value));
 }

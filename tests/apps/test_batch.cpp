@@ -325,6 +325,22 @@ TEST(BatchErrors, IdMustBeAString) {
             R"({"id":12,"op":"scene_pairs","error":"id: expected a string, got number"})");
 }
 
+TEST(BatchErrors, DeeplyNestedIdOrOpIsNamedNotEchoed) {
+  // Echoing a container copies it recursively: 100,000 levels overflowed the stack.
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  EXPECT_EQ(ask(R"({"id":)" + deep + R"(,"op":"scene_pairs"})").dump(),
+            R"({"op":"scene_pairs","error":"id: expected a string, got array"})");
+  EXPECT_EQ(ask(R"({"id":"d","op":)" + deep + "}").dump(), R"({"id":"d","error":"op: expected a string, got array"})");
+  EXPECT_EQ(errorOf(ask(R"({"id":)" + deep + ",")).rfind("invalid JSON: ", 0), 0u);
+}
+
+TEST(BatchErrors, NulByteEndsNothing) {
+  // The parser reads a NUL as the end of its input: what follows must not be ignored.
+  const Answer a = ask(std::string(R"({"id":"n","op":"scene_pairs"})") + '\0' + "this is not json");
+  EXPECT_EQ(a.dump(), R"({"id":"n","op":"scene_pairs","error":"invalid JSON: NUL byte at column 30"})");
+  EXPECT_EQ(errorOf(ask(std::string(R"({"id":"n)") + '\0' + R"("})")).rfind("invalid JSON: ", 0), 0u);  // in a string
+}
+
 TEST(BatchErrors, UnknownOp) {
   EXPECT_EQ(ask(R"({"id":"u","op":"triangle_cone"})").dump(),
             R"({"id":"u","op":"triangle_cone","error":"op: unknown op \"triangle_cone\""})");

@@ -151,6 +151,13 @@ TEST_F(MeshOps, DegenerateAndUnreferencedAreAccepted) {
   EXPECT_TRUE(answersHit(op("mesh_segment", R"("mesh":"seg","segment":{"start":[2.5,-1,0],"end":[2.5,1,0]})"), false));
 }
 
+TEST_F(MeshOps, IndexWrittenMinusZeroIsIndexZero) {
+  // JSON's -0 is an integer 0 (the parser reads it as a signed integer).
+  EXPECT_EQ(ask(op("mesh", R"("name":"m","vertices":[[0,0,0],[1,0,0],[0,1,0]],"triangles":[[-0,1,2]])")).dump(),
+            R"({"id":"q","op":"mesh","triangles":1})");
+  EXPECT_TRUE(answersHit(op("mesh_sphere", R"("mesh":"m","sphere":{"center":[0,0,0],"radius":0})"), true));
+}
+
 TEST_F(MeshOps, MeshErrorsNameTheField) {
   const std::string v = R"("vertices":)" + kCubeVertices;
   EXPECT_TRUE(errorStartsWith(op("mesh", R"("name":"m",)" + v + R"(,"triangles":[[0,1,2],[0,2,3],[4,5,6],[1,17,2]])"),
@@ -175,6 +182,8 @@ TEST_F(MeshOps, MeshErrorsNameTheField) {
                               "triangles: expected an array of [i, j, k], got object"));
   EXPECT_TRUE(errorStartsWith(op("mesh", R"("name":"m",)" + v), "triangles: missing field"));
   EXPECT_TRUE(errorStartsWith(op("mesh", R"("name":"m","vertices":[],"triangles":[[0,0,0]])"),
+                              "triangles[0][0]: index 0 out of range (0 vertices)"));
+  EXPECT_TRUE(errorStartsWith(op("mesh", R"("name":"m","vertices":[],"triangles":[[-0,0,0]])"),
                               "triangles[0][0]: index 0 out of range (0 vertices)"));
   EXPECT_TRUE(errorStartsWith(op("mesh", R"("name":"m","vertices":[[0,0,0],[1,0],[0,1,0]],"triangles":[[0,1,2]])"),
                               "vertices[1]: expected [x, y, z], got an array of 2 elements"));
