@@ -53,8 +53,9 @@ Answer toJson(const MeshReport& r) {
   j["bounds"] = Answer::object({{"min", vec3Json(r.stats.bounds.min)}, {"max", vec3Json(r.stats.bounds.max)}});
   j["degenerate_triangles"] = r.stats.degenerateTriangles;
   j["duplicate_triangles"] = r.stats.duplicateTriangles;
-  j["non_manifold_edges"] = r.stats.nonManifoldEdges;
-  j["boundary_edges"] = r.stats.boundaryEdges;
+  j["non_manifold_edges"] = r.stats.edges.nonManifoldEdges;
+  j["boundary_edges"] = r.stats.edges.boundaryEdges;
+  j["inconsistent_edges"] = r.stats.edges.inconsistentEdges;
   j["closed"] = r.stats.closed();
   j["load_seconds"] = r.loadSeconds;
   j["bvh_build_seconds"] = r.buildSeconds;
@@ -92,8 +93,9 @@ void writeText(std::ostream& out, const MeshReport& r) {
   row("bounds") << text(s.bounds.min) << " .. " << text(s.bounds.max) << '\n';
   row("degenerate triangles") << s.degenerateTriangles << '\n';
   row("duplicate triangles") << s.duplicateTriangles << '\n';
-  row("non-manifold edges") << s.nonManifoldEdges << '\n';
-  row("boundary edges") << s.boundaryEdges << '\n';
+  row("non-manifold edges") << s.edges.nonManifoldEdges << '\n';
+  row("boundary edges") << s.edges.boundaryEdges << '\n';
+  row("inconsistent edges") << s.edges.inconsistentEdges << '\n';
   row("closed") << (s.closed() ? "yes" : "no") << '\n';
   out << std::fixed << std::setprecision(6);
   row("load time") << r.loadSeconds << " s (BVH build " << r.buildSeconds << " s)\n";

@@ -349,14 +349,16 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
             d["vertices"] = st.vertices;
             d["degenerate_triangles"] = st.degenerateTriangles;
             d["duplicate_triangles"] = st.duplicateTriangles;
-            d["boundary_edges"] = st.boundaryEdges;
-            d["non_manifold_edges"] = st.nonManifoldEdges;
+            d["boundary_edges"] = st.edges.boundaryEdges;
+            d["non_manifold_edges"] = st.edges.nonManifoldEdges;
+            d["inconsistent_edges"] = st.edges.inconsistentEdges;
             d["closed"] = s.closed();
             d["bytes"] = s.mesh().memoryBytes();
             return d;
           },
           "Counts: triangles, vertices, degenerate_triangles (zero area, exact test), duplicate_triangles,\n"
-          "boundary_edges, non_manifold_edges, closed (as the closed property), bytes (vertex, index and\n"
+          "boundary_edges, non_manifold_edges, inconsistent_edges (used twice in one direction), closed (as\n"
+          "the closed property), bytes (vertex, index and\n"
           "BVH arrays).")
       .def("__len__", [](const PyMesh& s) { return s.mesh().triangleCount(); }, "Number of triangles.")
       .def("__repr__",

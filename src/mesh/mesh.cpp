@@ -182,29 +182,78 @@ MeshStats Mesh::stats() const {
 
   std::unordered_set<TriangleIndices, SortedTriangleHash> seen;
   seen.reserve(triangles_.size());
-  std::vector<std::uint64_t> edges;  // undirected edge keys (lo << 32 | hi), one per use
-  edges.reserve(3 * triangles_.size());
   for (const TriangleIndices& t : triangles_) {
     if (hasZeroArea(vertices_[t[0]], vertices_[t[1]], vertices_[t[2]])) ++s.degenerateTriangles;
     TriangleIndices sorted = t;
     std::sort(sorted.begin(), sorted.end());
     if (!seen.insert(sorted).second) ++s.duplicateTriangles;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t i = t[k], j = t[(k + 1) % 3];
-      if (i == j) continue;  // a repeated corner spans no edge
-      edges.push_back(std::uint64_t(std::min(i, j)) << 32 | std::max(i, j));
-    }
   }
-  std::sort(edges.begin(), edges.end());
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i + 1;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) ++s.boundaryEdges;
-    if (j - i > 2) ++s.nonManifoldEdges;
-    i = j;
-  }
+  s.edges = closedness(*this);
   return s;
 }
+
+// ---- closedness ------------------------------------------------------------------------------
+
+std::string MeshClosedness::reason(const std::string& meshName) const {
+  if (closed()) return {};
+  std::string head = "mesh \"" + meshName + "\" is not closed: ";
+  if (effectiveTriangles == 0) return head + "it has no triangle with three distinct vertex indices";
+  std::string why = "edge (" + std::to_string(edgeI) + "," + std::to_string(edgeJ) + ") is used ";
+  if (edgeSameDirection)
+    why += "twice in the same direction (inconsistent orientation)";
+  else
+    why += "by " + std::to_string(edgeUses) + (edgeUses == 1 ? " triangle" : " triangles");
+  return head + why + " (" + std::to_string(boundaryEdges) + " boundary, " + std::to_string(nonManifoldEdges) +
+         " non-manifold, " + std::to_string(inconsistentEdges) + " inconsistently oriented edges)";
+}
+
+MeshClosedness closedness(const Mesh& mesh) {
+  struct DirectedEdge {
+    std::uint32_t lo, hi;
+    bool forward;  // lo -> hi in the triangle's order
+  };
+  MeshClosedness c;
+  std::vector<DirectedEdge> edges;
+  edges.reserve(mesh.triangleCount() * 3);
+  for (const TriangleIndices& t : mesh.triangles()) {
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
+      ++c.skippedTriangles;
+      continue;
+    }
+    ++c.effectiveTriangles;
+    for (int e = 0; e < 3; ++e) {
+      const std::uint32_t i = t[e], j = t[(e + 1) % 3];
+      edges.push_back(i < j ? DirectedEdge{i, j, true} : DirectedEdge{j, i, false});
+    }
+  }
+  std::sort(edges.begin(), edges.end(), [](const DirectedEdge& a, const DirectedEdge& b) {
+    return a.lo != b.lo ? a.lo < b.lo : a.hi < b.hi;
+  });
+  bool recorded = false;
+  for (std::size_t g = 0; g < edges.size();) {
+    std::size_t e = g, forward = 0;
+    while (e < edges.size() && edges[e].lo == edges[g].lo && edges[e].hi == edges[g].hi) forward += edges[e++].forward;
+    const std::size_t uses = e - g;
+    bool bad = true;
+    if (uses == 1)
+      ++c.boundaryEdges;
+    else if (uses > 2)
+      ++c.nonManifoldEdges;
+    else if (forward != 1)
+      ++c.inconsistentEdges;
+    else
+      bad = false;
+    if (bad && !recorded) {
+      recorded = true;
+      c.edgeI = edges[g].lo, c.edgeJ = edges[g].hi, c.edgeUses = uses;
+      c.edgeSameDirection = uses == 2;
+    }
+    g = e;
+  }
+  return c;
+}
+
+bool isClosed(const Mesh& mesh) { return closedness(mesh).closed(); }
 
 std::size_t Mesh::memoryBytes() const {
   return vertices_.capacity() * sizeof(Vec3) + (triangles_.capacity() + slotTriangles_.capacity()) * sizeof(TriangleIndices) +

@@ -170,6 +170,22 @@ TEST(Info, OpenDuplicateAndDegenerateTriangles) {
   EXPECT_EQ(lines[2]["closed"], false);
 }
 
+TEST(Info, ClosedMeansWhatTheVolumeOpsRequire) {
+  // Only a triangle repeating an index: no open edge, but no surface (point_inside refuses it).
+  const TempOff collapsed("collapsed", {"0 0 0", "1 0 0", "0 1 0"}, {"0 0 1"});
+  std::vector<std::string> flipped = kCubeFaces;
+  flipped[0] = "0 1 2";  // triangle 0 reversed: its edges are used twice in one direction
+  const TempOff cube("flipped", kCubeVertices, flipped);
+  const auto [status, lines] = infoJson({collapsed.path(), cube.path()});
+  ASSERT_EQ(status, 0);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0]["boundary_edges"], 0);
+  EXPECT_EQ(lines[0]["closed"], false);
+  EXPECT_EQ(lines[1]["boundary_edges"], 0);
+  EXPECT_EQ(lines[1]["inconsistent_edges"], 3);
+  EXPECT_EQ(lines[1]["closed"], false);
+}
+
 TEST(Info, TextReport) {
   const TempOff cube("cube_text", kCubeVertices, kCubeFaces);
   std::ostringstream out, err;

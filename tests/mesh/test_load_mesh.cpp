@@ -158,8 +158,8 @@ TEST(LoadMeshData, CgalPolygonMeshTriangulatesLikeItsTriangulatedTwin) {
   const MeshStats tri = loadMesh((kMeshData / "mpi_triang.off").string()).stats();
   EXPECT_EQ(poly.triangles, tri.triangles);
   EXPECT_EQ(poly.vertices, tri.vertices);
-  EXPECT_EQ(poly.boundaryEdges, tri.boundaryEdges);
-  EXPECT_EQ(poly.nonManifoldEdges, tri.nonManifoldEdges);
+  EXPECT_EQ(poly.edges.boundaryEdges, tri.edges.boundaryEdges);
+  EXPECT_EQ(poly.edges.nonManifoldEdges, tri.edges.nonManifoldEdges);
 }
 
 TEST(LoadMeshData, CgalQuadCubeIsClosed) {
@@ -210,7 +210,7 @@ TEST(LoadMeshAssimp, WusonIsTheSameInEveryFormat) {
     const MeshStats s = loadMesh((kAssimpModels / name).string()).stats();
     EXPECT_EQ(s.triangles, off.triangles);
     EXPECT_EQ(s.vertices, off.vertices);  // STL and PLY repeat vertices per face/normal: merged
-    EXPECT_EQ(s.boundaryEdges, off.boundaryEdges);
+    EXPECT_EQ(s.edges.boundaryEdges, off.edges.boundaryEdges);
     EXPECT_TRUE(s.bounds.min.isApprox(off.bounds.min, Real(1e-4)));
     EXPECT_TRUE(s.bounds.max.isApprox(off.bounds.max, Real(1e-4)));
   }
@@ -247,7 +247,7 @@ TEST(LoadMeshAssimp, EveryInvalidModelIsRejected) {
       const MeshStats s = loadMesh(path.string()).stats();
       EXPECT_EQ(s.triangles, 10u);
       EXPECT_EQ(s.vertices, 8u);
-      EXPECT_EQ(s.boundaryEdges, 4u);
+      EXPECT_EQ(s.edges.boundaryEdges, 4u);
       continue;
     }
     const std::string name = path.filename().string();
@@ -305,7 +305,7 @@ TEST_F(LoadMeshFiles, OffWithCommentsColoursAndKeywordOnCountLine) {
   const MeshStats s = loadMesh(p.string()).stats();
   EXPECT_EQ(s.triangles, 2u);
   EXPECT_EQ(s.vertices, 4u);
-  EXPECT_EQ(s.boundaryEdges, 4u);
+  EXPECT_EQ(s.edges.boundaryEdges, 4u);
 }
 
 TEST_F(LoadMeshFiles, OffWithoutKeywordAndWithoutExtensionIsDetected) {
@@ -367,8 +367,8 @@ TEST_F(LoadMeshFiles, IdenticalVerticesAreMergedAndDegenerateTrianglesKept) {
   EXPECT_EQ(s.triangles, 3u);
   EXPECT_EQ(s.vertices, 5u);
   EXPECT_EQ(s.degenerateTriangles, 1u);
-  EXPECT_EQ(s.nonManifoldEdges, 1u);
-  EXPECT_EQ(s.boundaryEdges, 4u + 2u);  // the square's sides + the sliver's two half-diagonals
+  EXPECT_EQ(s.edges.nonManifoldEdges, 1u);
+  EXPECT_EQ(s.edges.boundaryEdges, 4u + 2u);  // the square's sides + the sliver's two half-diagonals
 }
 
 TEST_F(LoadMeshFiles, ObjDegenerateTrianglesAreKept) {

@@ -160,8 +160,8 @@ TEST(MeshStats, ClosedCubeHasNoBoundaryEdges) {
   const MeshStats s = mesh.stats();
   EXPECT_EQ(s.triangles, 12u);
   EXPECT_EQ(s.vertices, 8u);
-  EXPECT_EQ(s.boundaryEdges, 0u);
-  EXPECT_EQ(s.nonManifoldEdges, 0u);
+  EXPECT_EQ(s.edges.boundaryEdges, 0u);
+  EXPECT_EQ(s.edges.nonManifoldEdges, 0u);
   EXPECT_EQ(s.degenerateTriangles, 0u);
   EXPECT_EQ(s.duplicateTriangles, 0u);
   EXPECT_TRUE(s.closed());
@@ -173,8 +173,8 @@ TEST(MeshStats, CubeMissingOneFaceHasFourBoundaryEdges) {
   std::vector<TriangleIndices> t = cubeTriangles();
   t.erase(t.begin(), t.begin() + 2);  // the z = -1 face
   const MeshStats s = Mesh(cubeVertices(), t, "open cube").stats();
-  EXPECT_EQ(s.boundaryEdges, 4u);
-  EXPECT_EQ(s.nonManifoldEdges, 0u);
+  EXPECT_EQ(s.edges.boundaryEdges, 4u);
+  EXPECT_EQ(s.edges.nonManifoldEdges, 0u);
   EXPECT_FALSE(s.closed());
 }
 
@@ -182,8 +182,8 @@ TEST(MeshStats, OpenQuadHasFourBoundaryEdges) {
   const std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
   const MeshStats s = Mesh(v, {{0, 1, 2}, {0, 2, 3}}, "quad").stats();
   EXPECT_EQ(s.triangles, 2u);
-  EXPECT_EQ(s.boundaryEdges, 4u);  // the diagonal 0-2 is shared
-  EXPECT_EQ(s.nonManifoldEdges, 0u);
+  EXPECT_EQ(s.edges.boundaryEdges, 4u);  // the diagonal 0-2 is shared
+  EXPECT_EQ(s.edges.nonManifoldEdges, 0u);
   EXPECT_FALSE(s.closed());
 }
 
@@ -191,8 +191,8 @@ TEST(MeshStats, NonManifoldFanOfThreeTrianglesOnOneEdge) {
   // Three fins on the edge (0,0,0)-(0,0,1).
   const std::vector<Vec3> v = {{0, 0, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {-1, -1, 0}};
   const MeshStats s = Mesh(v, {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}}, "fan").stats();
-  EXPECT_EQ(s.nonManifoldEdges, 1u);
-  EXPECT_EQ(s.boundaryEdges, 6u);
+  EXPECT_EQ(s.edges.nonManifoldEdges, 1u);
+  EXPECT_EQ(s.edges.boundaryEdges, 6u);
   EXPECT_FALSE(s.closed());
 }
 
@@ -201,7 +201,7 @@ TEST(MeshStats, ClosedCubeWithADuplicatedTriangleIsNotClosed) {
   t.push_back({3, 0, 2});  // triangle 0 again, rotated
   const MeshStats s = Mesh(cubeVertices(), t, "cube").stats();
   EXPECT_EQ(s.duplicateTriangles, 1u);
-  EXPECT_EQ(s.nonManifoldEdges, 3u);  // its three edges now have three triangles each
+  EXPECT_EQ(s.edges.nonManifoldEdges, 3u);  // its three edges now have three triangles each
   EXPECT_FALSE(s.closed());
 }
 
@@ -220,6 +220,35 @@ TEST(MeshStats, DegenerateAndDuplicateTrianglesAreCounted) {
   const MeshStats s = Mesh(v, t, "degenerate").stats();
   EXPECT_EQ(s.degenerateTriangles, 4u);  // 1, 2, 3 and 6
   EXPECT_EQ(s.duplicateTriangles, 3u);   // 4, 5 and 6
+}
+
+TEST(MeshStats, TrianglesRepeatingAnIndexSpanNoSurfaceAndCloseNothing) {
+  // Only repeated-index triangles (a segment and a point): no edge is left open, but there is no
+  // surface either. Not closed, as MeshVolume refuses it.
+  const std::vector<Vec3> v = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  const Mesh mesh(v, {{0, 0, 1}, {2, 2, 2}}, "collapsed");
+  const MeshStats s = mesh.stats();
+  EXPECT_EQ(s.edges.effectiveTriangles, 0u);
+  EXPECT_EQ(s.edges.skippedTriangles, 2u);
+  EXPECT_EQ(s.edges.boundaryEdges, 0u);
+  EXPECT_FALSE(s.closed());
+  EXPECT_FALSE(isClosed(mesh));
+  // Added to a closed cube, (0, 0, 1) on the cube's edge 0-1 is skipped: the cube stays closed.
+  std::vector<TriangleIndices> t = cubeTriangles();
+  t.push_back({t[0][0], t[0][0], t[0][1]});
+  const MeshStats cube = Mesh(cubeVertices(), t, "cube").stats();
+  EXPECT_EQ(cube.edges.nonManifoldEdges, 0u);
+  EXPECT_TRUE(cube.closed());
+}
+
+TEST(MeshStats, InconsistentlyOrientedCubeIsNotClosed) {
+  std::vector<TriangleIndices> t = cubeTriangles();
+  std::swap(t[0][1], t[0][2]);  // one triangle flipped: its three edges are used twice in one direction
+  const MeshStats s = Mesh(cubeVertices(), t, "flipped").stats();
+  EXPECT_EQ(s.edges.boundaryEdges, 0u);
+  EXPECT_EQ(s.edges.nonManifoldEdges, 0u);
+  EXPECT_EQ(s.edges.inconsistentEdges, 3u);
+  EXPECT_FALSE(s.closed());
 }
 
 TEST(MeshStats, NearlyCollinearTriangleIsNotDegenerate) {
@@ -314,24 +343,31 @@ TEST(MeshStatsProperty, DegenerateCountMatchesCgalInGeneralPosition) {
 }
 #endif
 
-/// Reference for the topological counts: quadratic duplicate search and a std::map of edges.
+/// Reference for the topological counts: quadratic duplicate search and a std::map of edges
+/// (uses, and uses from the lower index to the higher) over the triangles with three distinct
+/// indices.
 MeshStats referenceTopology(const std::vector<TriangleIndices>& t) {
   MeshStats s;
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<int, int>> uses;
   for (std::size_t i = 0; i < t.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j)
       if (std::is_permutation(t[i].begin(), t[i].end(), t[j].begin())) {
         ++s.duplicateTriangles;
         break;
       }
+    if (t[i][0] == t[i][1] || t[i][1] == t[i][2] || t[i][2] == t[i][0]) continue;
+    ++s.edges.effectiveTriangles;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t p = t[i][k], q = t[i][(k + 1) % 3];
-      if (p != q) ++uses[{std::min(p, q), std::max(p, q)}];
+      auto& [count, forward] = uses[{std::min(p, q), std::max(p, q)}];
+      ++count;
+      forward += p < q;
     }
   }
-  for (const auto& [edge, count] : uses) {
-    s.boundaryEdges += count == 1;
-    s.nonManifoldEdges += count > 2;
+  for (const auto& [edge, use] : uses) {
+    s.edges.boundaryEdges += use.first == 1;
+    s.edges.nonManifoldEdges += use.first > 2;
+    s.edges.inconsistentEdges += use.first == 2 && use.second != 1;
   }
   return s;
 }
@@ -355,10 +391,12 @@ TEST(MeshStatsProperty, TopologyCountsMatchReferenceOnRandomIndexSoups) {
     for (const TriangleIndices& tri : t)
       dump += " (" + std::to_string(tri[0]) + "," + std::to_string(tri[1]) + "," + std::to_string(tri[2]) + ")";
     ASSERT_EQ(s.duplicateTriangles, expected.duplicateTriangles) << "case " << n << ":" << dump;
-    ASSERT_EQ(s.boundaryEdges, expected.boundaryEdges) << "case " << n << ":" << dump;
-    ASSERT_EQ(s.nonManifoldEdges, expected.nonManifoldEdges) << "case " << n << ":" << dump;
+    ASSERT_EQ(s.edges.boundaryEdges, expected.edges.boundaryEdges) << "case " << n << ":" << dump;
+    ASSERT_EQ(s.edges.nonManifoldEdges, expected.edges.nonManifoldEdges) << "case " << n << ":" << dump;
+    ASSERT_EQ(s.edges.inconsistentEdges, expected.edges.inconsistentEdges) << "case " << n << ":" << dump;
+    ASSERT_EQ(s.closed(), expected.closed()) << "case " << n << ":" << dump;
     withDuplicates += s.duplicateTriangles > 0;
-    withNonManifold += s.nonManifoldEdges > 0;
+    withNonManifold += s.edges.nonManifoldEdges > 0;
     closed += s.closed();
   }
   std::printf("%d cases: %.1f%% with duplicates, %.1f%% with non-manifold edges, %d closed\n", cases,

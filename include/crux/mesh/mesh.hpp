@@ -19,6 +19,29 @@ namespace crux {
 /// Three vertex indices of a triangle.
 using TriangleIndices = std::array<std::uint32_t, 3>;
 
+/// Watertightness report of a mesh (closedness()): every undirected edge of its triangles with
+/// three distinct vertex indices must be used by exactly two of them, once in each direction
+/// (consistently oriented). Triangles repeating a vertex index span no surface and are skipped
+/// (their edges would cancel in pairs).
+struct MeshClosedness {
+  std::size_t boundaryEdges = 0;      ///< undirected edges used by exactly one triangle
+  std::size_t nonManifoldEdges = 0;   ///< undirected edges used by more than two triangles
+  std::size_t inconsistentEdges = 0;  ///< edges used twice in the same direction
+  std::size_t skippedTriangles = 0;   ///< triangles repeating a vertex index (ignored)
+  std::size_t effectiveTriangles = 0; ///< triangles with three distinct vertex indices
+  /// First offending edge (smallest (i, j), i < j) and how many triangles use it; valid when
+  /// !closed().
+  std::uint32_t edgeI = 0, edgeJ = 0;
+  std::size_t edgeUses = 0;
+  bool edgeSameDirection = false;  ///< the offending edge is used twice in one direction
+  /// Closed: at least one effective triangle, and every edge paired once in each direction.
+  bool closed() const {
+    return effectiveTriangles > 0 && boundaryEdges == 0 && nonManifoldEdges == 0 && inconsistentEdges == 0;
+  }
+  /// Human-readable reason for !closed() (empty when closed), naming the first offending edge.
+  std::string reason(const std::string& meshName) const;
+};
+
 /// What a mesh is made of, for `crux info` and sanity checks.
 struct MeshStats {
   std::size_t triangles = 0;
@@ -26,10 +49,9 @@ struct MeshStats {
   Aabb bounds = Aabb::empty();
   std::size_t degenerateTriangles = 0;  ///< zero area (collinear or repeated corners), exact test
   std::size_t duplicateTriangles = 0;   ///< same vertex set as an earlier triangle (any order)
-  std::size_t nonManifoldEdges = 0;     ///< undirected edges used by more than two triangles
-  std::size_t boundaryEdges = 0;        ///< undirected edges used by exactly one triangle
-  /// Watertight: every edge shared by exactly two triangles.
-  bool closed() const { return triangles > 0 && boundaryEdges == 0 && nonManifoldEdges == 0; }
+  MeshClosedness edges;                 ///< the edge census of closedness()
+  /// Closed as MeshVolume requires it (edges.closed()).
+  bool closed() const { return edges.closed(); }
 };
 
 /// An indexed triangle mesh with flat arrays and a BVH over its triangles.
@@ -115,5 +137,11 @@ Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
 /// (or a copy) and no setVertices has moved its vertices since. `object` names the object in the
 /// message, which also names the mesh and says to rebuild it. No allocation unless it throws.
 void requireCurrentGeometry(const Mesh& mesh, std::uint64_t builtFrom, const char* object);
+
+/// Directed-edge census of the mesh's topology (sort-based, O(n log n)): the one rule of what
+/// "closed" means, for Mesh::stats, MeshVolume and `crux info`.
+MeshClosedness closedness(const Mesh& mesh);
+/// closedness(mesh).closed().
+bool isClosed(const Mesh& mesh);
 
 }  // namespace crux

@@ -39,30 +39,7 @@
 
 namespace crux {
 
-/// Watertightness report of a mesh: every undirected edge must be used by exactly two
-/// triangles, once in each direction (consistently oriented).
-struct MeshClosedness {
-  std::size_t boundaryEdges = 0;      ///< undirected edges used by exactly one triangle
-  std::size_t nonManifoldEdges = 0;   ///< undirected edges used by more than two triangles
-  std::size_t inconsistentEdges = 0;  ///< edges used twice in the same direction
-  std::size_t skippedTriangles = 0;   ///< triangles repeating a vertex index (ignored)
-  std::size_t effectiveTriangles = 0; ///< triangles with three distinct vertex indices
-  /// First offending edge (smallest (i, j), i < j) and how many triangles use it; valid when
-  /// !closed().
-  std::uint32_t edgeI = 0, edgeJ = 0;
-  std::size_t edgeUses = 0;
-  bool edgeSameDirection = false;  ///< the offending edge is used twice in one direction
-  bool closed() const {
-    return effectiveTriangles > 0 && boundaryEdges == 0 && nonManifoldEdges == 0 && inconsistentEdges == 0;
-  }
-  /// Human-readable reason for !closed() (empty when closed), naming the first offending edge.
-  std::string reason(const std::string& meshName) const;
-};
-
-/// Directed-edge census of the mesh (sort-based, O(n log n)).
-MeshClosedness closedness(const Mesh& mesh);
-/// closedness(mesh).closed().
-bool isClosed(const Mesh& mesh);
+// MeshClosedness, closedness() and isClosed() are declared in mesh.hpp.
 
 /// A closed mesh viewed as a solid. The constructor checks closedness once (throws
 /// InvalidInput: `mesh "name" is not closed: edge (i,j) is used by 1 triangle`); queries then
