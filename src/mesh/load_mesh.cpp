@@ -216,13 +216,24 @@ bool parseInteger(std::string_view token, Int& value) {
   return ec == std::errc() && ptr == end;
 }
 
-/// Parses a real number; out-of-range values (e.g. 1e50 in a float build) are errors,
-/// "nan"/"inf" parse and are rejected later as non-finite.
+/// Parses a real number; values beyond the largest Real (e.g. 1e50 in a float build) are errors,
+/// values below the smallest (1e-50 in a float build) read as the nearest Real (±0 or a
+/// subnormal), as the batch protocol reads them; "nan"/"inf" parse and are rejected later as
+/// non-finite.
 bool parseReal(std::string_view token, Real& value) {
   if (!token.empty() && token.front() == '+') token.remove_prefix(1);
   const char* end = token.data() + token.size();
   const auto [ptr, ec] = std::from_chars(token.data(), end, value);
-  return ec == std::errc() && ptr == end;
+  if (ptr != end) return false;
+  if (ec == std::errc()) return true;
+  if (ec != std::errc::result_out_of_range) return false;
+  // from_chars leaves value unset out of range: overflow or underflow? strtold answers with its
+  // own range (HUGE_VALL beyond it, a tiny value or 0 below it).
+  const std::string text(token);
+  const long double wide = std::strtold(text.c_str(), nullptr);
+  if (!(std::fabs(wide) < 1)) return false;  // overflow
+  value = Real(wide);
+  return true;
 }
 
 /// Ear clipping of polygon `poly` (vertex indices) projected along its Newell normal's

@@ -308,6 +308,15 @@ TEST_F(LoadMeshFiles, OffWithCommentsColoursAndKeywordOnCountLine) {
   EXPECT_EQ(s.edges.boundaryEdges, 4u);
 }
 
+TEST_F(LoadMeshFiles, OffCoordinatesBelowTheSmallestRealReadAsZeroAndAboveTheLargestAreRejected) {
+  // As the batch protocol reads numbers: underflow is not an error, overflow is.
+  const fs::path tiny = write("tiny.off", "OFF\n3 1 0\n1e-5000 -1e-400 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const Mesh mesh = loadMesh(tiny.string());
+  EXPECT_EQ(mesh.vertices()[0], Vec3(0, 0, 0));
+  expectRejected(write("huge.off", "OFF\n3 1 0\n1e5000 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                 "vertex 0: '1e5000' is not a number in range");
+}
+
 TEST_F(LoadMeshFiles, OffWithoutKeywordAndWithoutExtensionIsDetected) {
   // The keyword is optional in OFF; detection by content needs it, so the second file has it.
   EXPECT_EQ(loadMesh(write("nokeyword.off", "3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").string()).triangleCount(), 1u);
