@@ -42,6 +42,15 @@ const char* realName() { return std::is_same_v<Real, float> ? "float32" : "float
 
 }  // namespace
 
+py::array_t<std::int64_t> asIntegerArray(py::handle obj, const char* name, const char* shape) {
+  using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+  const py::array raw = py::array::ensure(obj);
+  if (raw && (raw.size() == 0 || raw.dtype().kind() == 'i' || raw.dtype().kind() == 'u'))
+    if (IndexArray out = IndexArray::ensure(raw)) return out;
+  PyErr_Clear();
+  throw InvalidInput(std::string(name) + ": expected " + shape);
+}
+
 Rows asRows(py::handle obj, std::size_t width, const char* name) {
   Rows rows;
   rows.name = name;

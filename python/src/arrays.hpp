@@ -51,6 +51,11 @@ struct Rows {
 /// cannot be converted to Real or its last dimension is not `width`.
 Rows asRows(py::handle obj, std::size_t width, const char* name);
 
+/// An array of integers (numpy kind 'i' or 'u', or an empty array) as C-contiguous int64; anything
+/// else (floats, bools, objects) raises ValueError "<name>: expected <shape>" rather than being
+/// truncated to integers.
+py::array_t<std::int64_t> asIntegerArray(py::handle obj, const char* name, const char* shape);
+
 /// Whether crux's queryable(T) accepts exactly the T that validate(T) accepts (shapes.hpp): so for
 /// rays, spheres and AABBs; validate(Obb) also checks the axes, which queryable does not.
 template <class T>

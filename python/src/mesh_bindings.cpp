@@ -227,17 +227,9 @@ py::array overlapBatch(const PyMesh& self, py::handle shapesIn, std::size_t widt
 std::shared_ptr<PyMesh> makeMesh(py::handle verticesIn, py::handle trianglesIn, const std::string& name) {
   const Rows v = asRows(verticesIn, 3, "vertices");
   if (v.lead.size() != 1) throw InvalidInput("vertices: expected shape (n, 3)");
-  using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-  const py::array raw = py::array::ensure(trianglesIn);
-  if (!raw || (raw.size() > 0 && raw.dtype().kind() != 'i' && raw.dtype().kind() != 'u')) {
-    PyErr_Clear();
-    throw InvalidInput("triangles: expected an integer array of shape (m, 3)");
-  }
-  const IndexArray t = IndexArray::ensure(raw);
-  if (!t || t.ndim() != 2 || t.shape(1) != 3) {
-    PyErr_Clear();
-    throw InvalidInput("triangles: expected an integer array of shape (m, 3)");
-  }
+  constexpr const char* kShape = "an integer array of shape (m, 3)";
+  const py::array_t<std::int64_t> t = asIntegerArray(trianglesIn, "triangles", kShape);
+  if (t.ndim() != 2 || t.shape(1) != 3) throw InvalidInput(std::string("triangles: expected ") + kShape);
   std::vector<Vec3> vertices(v.as<Vec3>(), v.as<Vec3>() + v.count);
   std::vector<TriangleIndices> triangles(std::size_t(t.shape(0)));
   const std::int64_t* ip = t.data();
@@ -417,21 +409,18 @@ Pickles (vertices, triangles, name); the BVH is rebuilt on load.
           "obbs"_a, "volume"_a = false, "threads"_a = 0,
           "As overlaps_spheres for oriented boxes (..., 15) = center (3), half extents (3), then the box's\n"
           "local x, y, z axes as world unit vectors (3 each, orthonormal).")
-      .def(py::pickle(
-          [](py::object self) {
-            const Mesh& mm = self.cast<const PyMesh&>().mesh();
-            py::array_t<Real> v({py::ssize_t(mm.vertexCount()), py::ssize_t(3)});
-            std::copy(mm.vertices().front().data(), mm.vertices().front().data() + 3 * mm.vertexCount(),
-                      v.mutable_data());
-            py::array_t<std::uint32_t> t({py::ssize_t(mm.triangleCount()), py::ssize_t(3)});
-            std::copy(mm.triangles().front().data(), mm.triangles().front().data() + 3 * mm.triangleCount(),
-                      t.mutable_data());
-            return py::make_tuple(v, t, mm.name());
-          },
-          [](const py::tuple& state) {
-            if (state.size() != 3) throw InvalidInput("Mesh pickle: expected (vertices, triangles, name)");
-            return makeMesh(state[0], state[1], state[2].cast<std::string>());
-          }));
+      // Pickled by __reduce__, the class called on (vertices, triangles, name), which every pickle
+      // protocol honours (pybind11's py::pickle needs protocol 2 or later; 0 and 1 aborted the
+      // interpreter).
+      .def("__reduce__", [](py::object self) {
+        const Mesh& mm = self.cast<const PyMesh&>().mesh();
+        py::array_t<Real> v({py::ssize_t(mm.vertexCount()), py::ssize_t(3)});
+        std::copy(mm.vertices().front().data(), mm.vertices().front().data() + 3 * mm.vertexCount(), v.mutable_data());
+        py::array_t<std::uint32_t> t({py::ssize_t(mm.triangleCount()), py::ssize_t(3)});
+        std::copy(mm.triangles().front().data(), mm.triangles().front().data() + 3 * mm.triangleCount(),
+                  t.mutable_data());
+        return py::make_tuple(self.attr("__class__"), py::make_tuple(v, t, mm.name()));
+      });
 
   m.def(
       "mesh_overlap",

@@ -35,11 +35,26 @@ py::array_t<Real> poseRow(const Transform& t) {
   return row;
 }
 
+/// A model id argument: None (no model) or an integer (int, numpy integer: anything with
+/// __index__ but bool). Other types raise TypeError, integers that are no model id ValueError.
 ModelId modelId(py::handle obj, const char* name) {
   if (obj.is_none()) return kNoModel;
-  const long long id = obj.cast<long long>();
-  if (id < 0 || id >= (long long)kNoModel) throw InvalidInput(std::string(name) + ": no model " + std::to_string(id));
+  if (PyBool_Check(obj.ptr()) || !PyIndex_Check(obj.ptr()))
+    throw py::type_error(std::string(name) + ": expected an int model id, got " +
+                         py::str(py::type::handle_of(obj).attr("__name__")).cast<std::string>());
+  const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(obj.ptr()));
+  if (!index) throw py::error_already_set();
+  int overflow = 0;
+  const long long id = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+  if (overflow != 0 || id < 0 || id >= (long long)kNoModel)
+    throw InvalidInput(std::string(name) + ": no model " + py::str(index).cast<std::string>());
   return ModelId(id);
+}
+
+/// A pickled model's mesh: a crux.Mesh, never None.
+std::shared_ptr<PyMesh> pickledMesh(py::handle obj) {
+  if (!py::isinstance<PyMesh>(obj)) throw InvalidInput("Scene pickle: a model's mesh is not a crux.Mesh");
+  return obj.cast<std::shared_ptr<PyMesh>>();
 }
 
 template <class Shape>
@@ -99,7 +114,7 @@ Pickles its models (ids, meshes, poses, parents).
             s.given[id] = t;
             return id;
           },
-          "mesh"_a, "pose"_a = py::none(), "parent"_a = py::none(),
+          py::arg("mesh").none(false), "pose"_a = py::none(), "parent"_a = py::none(),
           "Adds a model of `mesh` (shared, not copied) at `pose` relative to `parent` (None: the world);\n"
           "returns its id.")
       .def(
@@ -129,12 +144,8 @@ Pickles its models (ids, meshes, poses, parents).
       .def(
           "set_transforms",
           [](PyScene& s, py::handle idsIn, py::handle posesIn) {
-            using IdArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
-            const IdArray ids = IdArray::ensure(idsIn);
-            if (!ids || ids.ndim() != 1) {
-              PyErr_Clear();
-              throw InvalidInput("ids: expected a 1-D integer array");
-            }
+            const py::array_t<std::int64_t> ids = asIntegerArray(idsIn, "ids", "a 1-D integer array");
+            if (ids.ndim() != 1) throw InvalidInput("ids: expected a 1-D integer array");
             const std::vector<Transform> poses = asTransforms(posesIn, {ids.shape(0)}, "poses");
             std::vector<std::pair<ModelId, Transform>> moves;
             moves.reserve(poses.size());
@@ -272,20 +283,28 @@ Pickles its models (ids, meshes, poses, parents).
           "bounds_only"_a = false,
           "Every pair (a < b) of models whose surfaces touch (bounds_only=True: whose boxes overlap), as a\n"
           "(K, 2) int64 array, sorted. Parent/child pairs included.")
-      .def(py::pickle(
-          [](const PyScene& s) {
-            std::shared_lock<std::shared_mutex> guard(s.lock);
-            py::list models;
-            for (const ModelId id : s.scene.models().ids()) {
-              const ModelId parent = s.scene.models().parent(id);
-              const auto given = s.given.find(id);
-              const Transform& pose = given != s.given.end() ? given->second : s.scene.models().local(id);
-              models.append(py::make_tuple(id, s.meshes.at(id), poseRow(pose),
-                                           parent == kNoModel ? py::object(py::none()) : py::object(py::int_(parent))));
-            }
-            return py::make_tuple(models);
-          },
-          [](const py::tuple& state) {
+      // Pickled by __reduce__ as (Scene, ((models,),)): pickle calls Scene(state), under every
+      // protocol (pybind11's py::pickle needs protocol 2 or later; 0 and 1 aborted the
+      // interpreter; and pybind11 treats a method named __setstate__ as a constructor).
+      .def("__reduce__",
+           [](py::object self) {
+             const PyScene& s = self.cast<const PyScene&>();
+             const py::tuple state = [&] {
+               std::shared_lock<std::shared_mutex> guard(s.lock);
+               py::list models;
+               for (const ModelId id : s.scene.models().ids()) {
+                 const ModelId parent = s.scene.models().parent(id);
+                 const auto given = s.given.find(id);
+                 const Transform& pose = given != s.given.end() ? given->second : s.scene.models().local(id);
+                 models.append(py::make_tuple(id, s.meshes.at(id), poseRow(pose),
+                                              parent == kNoModel ? py::object(py::none()) : py::object(py::int_(parent))));
+               }
+               return py::make_tuple(models);
+             }();
+             return py::make_tuple(self.attr("__class__"), py::make_tuple(state));
+           })
+      .def(
+          py::init([](const py::tuple& state) {
             if (state.size() != 1) throw InvalidInput("Scene pickle: expected (models,)");
             auto s = std::make_unique<PyScene>();
             const py::list models = state[0].cast<py::list>();
@@ -294,14 +313,15 @@ Pickles its models (ids, meshes, poses, parents).
             std::map<ModelId, py::tuple> byId;
             for (py::handle m : models) {
               const py::tuple t = m.cast<py::tuple>();
+              if (t.size() != 4) throw InvalidInput("Scene pickle: a model is (id, mesh, pose, parent)");
               byId[t[0].cast<ModelId>()] = t;
             }
             if (byId.empty()) return s;
-            const std::shared_ptr<PyMesh> any = byId.begin()->second[1].cast<std::shared_ptr<PyMesh>>();
+            const std::shared_ptr<PyMesh> any = pickledMesh(byId.begin()->second[1]);
             const ModelId last = byId.rbegin()->first;
             for (ModelId id = 0; id <= last; ++id) {
               const auto it = byId.find(id);
-              const std::shared_ptr<PyMesh> mesh = it == byId.end() ? any : it->second[1].cast<std::shared_ptr<PyMesh>>();
+              const std::shared_ptr<PyMesh> mesh = it == byId.end() ? any : pickledMesh(it->second[1]);
               if (s->scene.add(mesh->shared()) != id) throw InvalidInput("Scene pickle: model ids out of order");
               s->meshes[id] = mesh;
             }
@@ -324,7 +344,8 @@ Pickles its models (ids, meshes, poses, parents).
               s->given[id] = pose;
             }
             return s;
-          }));
+          }),
+          "state"_a, "Rebuilds a pickled Scene from its state (what __reduce__ gives).");
 }
 
 }  // namespace crux::python

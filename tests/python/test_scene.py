@@ -118,3 +118,42 @@ def test_scene_pickle_round_trip_in_a_child_process():
     np.testing.assert_array_equal(out["poses"], np.stack([s.world_pose(i) for i in s.ids()]))
     np.testing.assert_array_equal(out["pairs"], s.overlapping_pairs())
     assert (h.model == d).any()
+
+
+def test_model_ids_of_the_wrong_type_raise_type_error():
+    s, cube, (a, b, c) = scene_of_cubes()
+    for bad in (1.0, "0", np.float64(1), True, [0]):
+        with pytest.raises(TypeError):
+            s.pose(bad)
+        with pytest.raises(TypeError):
+            s.remove(bad)
+        with pytest.raises(TypeError):
+            s.add(cube, parent=bad)
+    with pytest.raises(ValueError):
+        s.world_pose(2**64)  # an int, but no model
+    assert s.pose(np.int64(a)).shape == (4, 4)  # numpy integers are ids
+    with pytest.raises(TypeError):
+        s.add(None)  # segfaulted
+    assert len(s) == 3
+
+
+def test_set_transforms_refuses_ids_that_are_not_integers():
+    s, cube, (a, b, c) = scene_of_cubes()
+    before = [s.world_pose(i) for i in (a, b, c)]
+    pose = [[1.0, 0, 0, 0, 50, 0, 0]]
+    for bad in ([0.9], np.array([True]), np.array(["0"])):
+        with pytest.raises(ValueError, match="ids: expected a 1-D integer array"):
+            s.set_transforms(bad, pose)
+    for i, p in zip((a, b, c), before):
+        np.testing.assert_array_equal(s.world_pose(i), p)
+
+
+def test_a_malformed_scene_pickle_raises():
+    s, cube, _ = scene_of_cubes()
+    cls, (state,) = s.__reduce__()
+    assert len(cls(state)) == len(s)
+    pose = state[0][0][2]
+    for bad in ([(0, None, pose, None)], [(0, "not a mesh", pose, None)], [(0, cube)]):
+        with pytest.raises(ValueError):
+            cls((bad,))  # None as the mesh segfaulted
+
