@@ -4,7 +4,9 @@
 #include <crux/geometry/cast.hpp>
 #include <crux/precondition.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "geometry/gjk_internal.hpp"
 
@@ -33,13 +35,23 @@ Placed shifted(const Placed& p, const V3& s) {
   return q;
 }
 
+/// The least s >= 0 at which a gap g > 0 can have closed when the approach speed is at most
+/// a + b·s (b >= 0): the root of a·s + b·s²/2 = g, written without cancellation; +inf when it
+/// never closes (b = 0 and a <= 0: a plane separates the shapes for the rest of the motion).
+double closingTime(double a, double b, double g) {
+  if (!(b > 0)) return a > 0 ? g / a : std::numeric_limits<double>::infinity();
+  const double root = std::sqrt(a * a + 2 * b * g);
+  return a >= 0 ? 2 * g / (a + root) : (root - a) / b;
+}
+
 /// Pure translation: A(t) = A(0) shifted by t·v; approach speed along -n is -n·v.
 class LinearMover {
  public:
   LinearMover(const ConvexShape& a, const Transform& ta, const Vec3& motion)
       : start_(a, ta), v_(motion.cast<double>()) {}
   Placed at(double t) const { return t == 0 ? start_ : shifted(start_, t * v_); }
-  double bound(const V3& n) const { return -n.dot(v_); }
+  /// How long A may move from `at` before it can have closed a gap g along the B→A normal n.
+  double step(const Placed& /*at*/, const V3& n, double gap) const { return closingTime(-n.dot(v_), 0, gap); }
   double length() const { return v_.norm(); }
   const Placed& start() const { return start_; }
 
@@ -72,9 +84,25 @@ class RigidMover {
     const V3 c = (1 - t) * motion_.start.translation.cast<double>() + t * motion_.end.translation.cast<double>();
     return Placed(shape_, q.toRotationMatrix(), c);
   }
-  /// A point r (from the origin) turns at θ·u × r, whose component along n is θ·r·(n × u):
-  /// at most θ·|n × u|·r_max.
-  double bound(const V3& n) const { return -n.dot(v_) + theta_ * n.cross(axis_).norm() * rmax_; }
+  /// How long A may move from `at` (A at its time t) before it can have closed a gap g along the
+  /// B→A normal n. A point at offset r from A's origin approaches along −n at −n·v + θ·r·w
+  /// (w = u × n; its turning velocity is θ·u × r). Two bounds, the larger time wins:
+  ///   - r·w <= |w|·r_max always (the bound of FCL's conservative advancement): the speed is at
+  ///     most a0 = −n·v + θ·|w|·r_max, constant;
+  ///   - r turns about the fixed axis u, so r·w (w ⊥ u) changes by at most θ·|w|·r_max per unit
+  ///     time: from h = max over A of r·w at t (A's support point along w), the speed at t + s is
+  ///     at most a + b·s, a = −n·v + θ·h, b = θ²·|w|·r_max.
+  /// The second is what lets a shape far from its origin that turns past B without approaching
+  /// it (its points move across n, not along it) advance in long steps; with the first alone such
+  /// a cast needed about θ·r_max / gap steps and could reach kCastMaxIterations.
+  double step(const Placed& at, const V3& n, double gap) const {
+    const V3 w = axis_.cross(n);
+    const double wn = w.norm();
+    int index = 0;
+    const double h = (at.support(w, &index) - at.t).dot(w) + at.radius * wn;
+    const double constant = closingTime(-n.dot(v_) + theta_ * wn * rmax_, 0, gap);
+    return std::max(constant, closingTime(-n.dot(v_) + theta_ * h, theta_ * theta_ * wn * rmax_, gap));
+  }
   double length() const { return v_.norm() + theta_ * rmax_; }
   const Placed& start() const { return start_; }
 
@@ -95,19 +123,46 @@ Real roundDown(double t) {
   return r;
 }
 
+/// Grows the box [lo, hi] by a placed shape (its core vertices, grown by its radius).
+void growBox(const Placed& p, V3& lo, V3& hi) {
+  for (int i = 0; i < p.vertexCount(); ++i) {
+    const V3 v = p.vertex(i);
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  lo.array() -= p.radius;
+  hi.array() += p.radius;
+}
+
+/// The contact tolerance δ of a cast of A (at its start) against B over a motion of the given
+/// length (cast.hpp): kCastRelativeTolerance × (the diagonal of the box holding both shapes, plus
+/// the motion's length), so that it depends on the pair alone and not on where the pair lies;
+/// but at least twice GJK's absolute tolerance over the motion (kGjkScaleTolerance × (pairScale +
+/// length), whose pairScale grows with the distance from the origin), which keeps the advancement
+/// short of the contact despite GJK's rounding; and at most kCastRelativeTolerance × (pairScale +
+/// length), the bound the mesh and scene casts' pads assume.
+double castTolerance(const Placed& a, const Placed& b, double length) {
+  V3 lo = V3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  growBox(a, lo, hi);
+  growBox(b, lo, hi);
+  const double scale = detail::pairScale(a, b) + length;
+  const double gjkFloor = 2 * kGjkScaleTolerance * scale;
+  return std::min(kCastRelativeTolerance * scale, kCastRelativeTolerance * ((hi - lo).norm() + length) + gjkFloor);
+}
+
 /// The advancement loop shared by every cast (cast.hpp).
 template <class Mover>
 CastResult advance(const Mover& mover, const ConvexShape& b, const Transform& tb, const CastOptions& options) {
   const Placed B(b, tb);
   const Placed& A0 = mover.start();
-  const double scale = detail::pairScale(A0, B) + mover.length();
-  const double delta = kCastRelativeTolerance * scale;
+  const double delta = castTolerance(A0, B, mover.length());
   CastResult out;
   out.t = 1;
   double t = 0;
   for (int it = 1; it <= kCastMaxIterations; ++it) {
     out.iterations = it;
-    const detail::WideDistance d = detail::coreQueryWide(mover.at(t), B);
+    const Placed placed = mover.at(t);
+    const detail::WideDistance d = detail::coreQueryWide(placed, B);
     const double dist = d.distance;
     if (dist <= delta || it == kCastMaxIterations) {
       out.hit = true;
@@ -123,10 +178,10 @@ CastResult advance(const Mover& mover, const ConvexShape& b, const Transform& tb
       return out;
     }
     if (t >= 1) break;
-    const double mu = mover.bound(d.normal);
-    if (!(mu > 0)) break;  // a plane separates A from B for the rest of the motion
+    const double step = mover.step(placed, d.normal, dist - delta / 2);
+    if (!(step < std::numeric_limits<double>::infinity())) break;  // never closes
     // past the end: check the end itself (within δ there: a hit)
-    const double next = std::min(t + (dist - delta / 2) / mu, 1.0);
+    const double next = std::min(t + step, 1.0);
     if (roundDown(next) > options.earlyOut) break;
     t = next;
   }

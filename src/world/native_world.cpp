@@ -59,6 +59,7 @@ WorldCast toWorld(const CastResult& r) {
   w.normal = r.normal.cast<double>();
   w.startsOverlapping = r.startsOverlapping;
   w.depth = double(r.depth);
+  w.capped = r.capped;
   return w;
 }
 

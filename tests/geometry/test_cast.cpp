@@ -12,6 +12,7 @@
 
 #include "support/bad_inputs.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -150,6 +151,24 @@ TEST(CastClosedForm, RotatingSegmentSweepsIntoAPointAtTheSlerpAngle) {
   }
 }
 
+TEST(CastClosedForm, ShapeTurningPastBWithoutApproachingItMissesInFewSteps) {
+  // A unit ball 1000 from its origin turns 2 rad about z around a ball of radius 998: always 1
+  // apart. The bound θ·|u × n|·r_max alone (2,002 per unit time against a gap of 1) needed ~2,000
+  // steps and stopped at the cap, reported as a hit; the support bound sees it move across n.
+  const Sphere orbiting{Vec3(1000, 0, 0), 1};
+  const Sphere centre{Vec3::Zero(), 998};
+  RigidMotion motion;
+  motion.end.rotation = Quat(Eigen::AngleAxis<Real>(2, Vec3::UnitZ()));
+  const CastResult res = cast(orbiting, motion, centre, Transform{});
+  EXPECT_FALSE(res.hit) << "t " << res.t << ", iterations " << res.iterations << ", capped " << res.capped;
+  EXPECT_LT(res.iterations, 200);
+  // Against a ball of radius 999 it touches from the start.
+  const CastResult touching = cast(orbiting, motion, Sphere{Vec3::Zero(), 999}, Transform{});
+  EXPECT_TRUE(touching.hit);
+  EXPECT_EQ(touching.t, 0);
+  EXPECT_FALSE(touching.capped);
+}
+
 // ---- semantics ----------------------------------------------------------------------------------
 
 TEST(CastSemantics, StartingInContactHitsAtZeroWithTheDepth) {
@@ -241,6 +260,50 @@ TEST(CastSemantics, DegenerateTrianglesAreTheirSegmentsAndPoints) {
   const double tRef = (3 - std::sqrt(0.25 - 0.09)) / 6;
   EXPECT_LE(double(res.t), tRef + 1e-6);
   EXPECT_GE(double(res.t), tRef - 1e-4);
+}
+
+TEST(CastSemantics, GridPairsFarFromTheOriginDecideAsAtTheOrigin) {
+  // Integer-grid pairs translated by 2^22 (exact in float: the ulp there is 1/2). The contact
+  // tolerance grew with the distance from the origin (1.5e-3 here), so segments 4e-4 apart read
+  // as touching; it now depends on the pair's extent, with GJK's own tolerance as its floor.
+  const Real far = Real(1 << 22);
+  const auto at = [](const Vec3& offset, const std::array<std::array<int, 3>, 3>& corners) {
+    Triangle t;
+    Vec3* v[3] = {&t.a, &t.b, &t.c};
+    for (int i = 0; i < 3; ++i) *v[i] = offset + Vec3(Real(corners[i][0]), Real(corners[i][1]), Real(corners[i][2]));
+    return ConvexShape(t);
+  };
+  const Transform id = Transform::identity();
+  for (const Vec3& offset : {Vec3(0, 0, 0), Vec3(far, far, far)}) {
+    // two segments 4.0e-4 apart, zero motion
+    const ConvexShape a = at(offset, {{{0, 0, 0}, {-36, -31, -30}, {-36, -31, -30}}});
+    const ConvexShape b = at(offset, {{{-5, -19, -2}, {-43, -2, -41}, {-43, -2, -41}}});
+    EXPECT_FALSE(cast(a, id, Vec3::Zero(), b, id).hit) << offset.transpose();
+    // a point passing that segment 4.0e-4 away
+    const ConvexShape point = at(offset, {{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}});
+    EXPECT_FALSE(cast(point, id, Vec3(-36, -31, -30), b, id).hit) << offset.transpose();
+  }
+  std::mt19937_64 rng(0x5eed0c57);
+  std::uniform_int_distribution<int> coordinate(-32, 32), pick(0, 3);
+  const auto corners = [&] {
+    std::array<std::array<int, 3>, 3> c{};
+    for (auto& v : c)
+      for (int& x : v) x = coordinate(rng);
+    if (pick(rng) == 0) c[2] = c[1];  // a segment
+    return c;
+  };
+  int hits = 0;
+  const int cases = 3000;
+  for (int i = 0; i < cases; ++i) {
+    const auto ca = corners(), cb = corners();
+    const Vec3 motion(Real(coordinate(rng)), Real(coordinate(rng)), Real(coordinate(rng)));
+    const CastResult near = cast(at(Vec3::Zero(), ca), id, motion, at(Vec3::Zero(), cb), id);
+    const CastResult farAway = cast(at(Vec3(far, far, far), ca), id, motion, at(Vec3(far, far, far), cb), id);
+    ASSERT_EQ(near.hit, farAway.hit) << "case " << i;
+    hits += near.hit;
+  }
+  EXPECT_GT(hits, cases / 10);
+  EXPECT_LT(hits, cases * 9 / 10);
 }
 
 TEST(CastValidation, BadInputNamesTheField) {

@@ -318,6 +318,9 @@ struct WorldCast {
   Vec3d normal = Vec3d::UnitZ();  ///< unit, from B to A
   bool startsOverlapping = false;
   double depth = 0;               ///< penetration depth at t = 0 (startsOverlapping)
+  /// The native advancement reached its iteration cap (CastResult::capped): nothing touches
+  /// before t, but the shapes were not shown to touch at t.
+  bool capped = false;
   std::optional<std::uint32_t> triangleB;  ///< the mesh triangle hit (b a mesh or a model)
   ModelHandle model;              ///< the model hit (scene casts)
 };
