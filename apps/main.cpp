@@ -11,7 +11,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <limits>
 #include <string>
@@ -75,7 +78,15 @@ int main(int argc, char** argv) {
                    "answered in parallel on native; fcl, bullet and exact answer serially. The output "
                    "is identical for every N.")
       ->capture_default_str()
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()));
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            char* end = nullptr;
+            errno = 0;
+            const long n = std::strtol(text.c_str(), &end, 10);
+            const bool ok = !text.empty() && *end == '\0' && errno == 0 && n >= 1 && n <= std::numeric_limits<int>::max();
+            return ok ? std::string() : "expected a whole number of threads >= 1, got '" + text + "'";
+          },
+          "N>=1", "threads"));
   double batchTimeout = 30;
   bool batchWorker = false, batchInProcess = false;
   batch
@@ -84,7 +95,14 @@ int main(int argc, char** argv) {
                    "line that takes longer gets \"<backend> failed on <op>: timeout ...\" and the worker is "
                    "restarted")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            char* end = nullptr;
+            const double seconds = std::strtod(text.c_str(), &end);
+            const bool ok = !text.empty() && *end == '\0' && std::isfinite(seconds) && seconds > 0;
+            return ok ? std::string() : "expected a finite number of seconds > 0, got '" + text + "'";
+          },
+          "SECONDS>0", "timeout"));
   batch->add_flag("--in-process", batchInProcess,
                   "Answer fcl and bullet in this process (no worker): faster to start, but a peer library "
                   "that aborts or hangs takes the whole run down");

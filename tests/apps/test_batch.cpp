@@ -22,6 +22,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <fcntl.h>
@@ -774,6 +775,18 @@ TEST(BatchExecutable, CommandLine) {
   EXPECT_NE(badOut.find("unknown backend 'cuda'"), std::string::npos) << badOut;
   const auto [badThreads, threadsOut] = run("echo '{}' | '" + crux + "' batch --threads 0 2>&1");
   EXPECT_NE(badThreads, 0) << threadsOut;
+  // Option values are refused naming what is expected, with the value as given.
+  for (const auto& [option, message] :
+       std::vector<std::pair<std::string, std::string>>{{"--threads abc", "expected a whole number of threads >= 1, got 'abc'"},
+                                                        {"--threads 2.5", "expected a whole number of threads >= 1, got '2.5'"},
+                                                        {"--timeout 0", "expected a finite number of seconds > 0, got '0'"},
+                                                        {"--timeout nan", "expected a finite number of seconds > 0, got 'nan'"},
+                                                        {"--timeout inf", "expected a finite number of seconds > 0, got 'inf'"}}) {
+    const auto [badStatus, badText] = run("echo '{}' | '" + crux + "' batch " + option + " 2>&1");
+    EXPECT_NE(badStatus, 0) << option;
+    EXPECT_NE(badText.find(message), std::string::npos) << option << ": " << badText;
+    EXPECT_LT(badText.size(), 400u) << option << ": " << badText;
+  }
 
   const std::string request = R"({"id":"p","op":"triangle_plane","triangle":[[0,0,0],[1,0,0],[0,1,0]],"plane":{"normal":[0,0,1],"d":0}})";
   const auto [status, out] = run("printf '%s\\n\\n%s' '" + request + "' '" + request + "' | '" + crux +
