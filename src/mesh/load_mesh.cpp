@@ -57,6 +57,7 @@
 #if defined(__unix__)
 #define CRUX_POSIX_IMPORT 1
 #include <fcntl.h>
+#include <locale.h>
 #include <poll.h>
 #include <spawn.h>
 #include <sys/resource.h>
@@ -228,9 +229,15 @@ bool parseReal(std::string_view token, Real& value) {
   if (ec == std::errc()) return true;
   if (ec != std::errc::result_out_of_range) return false;
   // from_chars leaves value unset out of range: overflow or underflow? strtold answers with its
-  // own range (HUGE_VALL beyond it, a tiny value or 0 below it).
+  // own range (HUGE_VALL beyond it, a tiny value or 0 below it), in the C locale (as from_chars
+  // reads: a decimal point, whatever the process's locale).
   const std::string text(token);
+#if defined(__unix__)
+  static const locale_t cLocale = newlocale(LC_ALL_MASK, "C", locale_t(0));
+  const long double wide = cLocale ? strtold_l(text.c_str(), nullptr, cLocale) : std::strtold(text.c_str(), nullptr);
+#else
   const long double wide = std::strtold(text.c_str(), nullptr);
+#endif
   if (!(std::fabs(wide) < 1)) return false;  // overflow
   value = Real(wide);
   return true;
