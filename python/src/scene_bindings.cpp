@@ -307,14 +307,19 @@ Pickles its models (ids, meshes, poses, parents).
           py::init([](const py::tuple& state) {
             if (state.size() != 1) throw InvalidInput("Scene pickle: expected (models,)");
             auto s = std::make_unique<PyScene>();
+            if (!py::isinstance<py::list>(state[0])) throw InvalidInput("Scene pickle: expected (models,), models a list");
             const py::list models = state[0].cast<py::list>();
             // Ids are kept: every id up to the largest is added (a placeholder where the original
             // had none, removed afterwards), as roots at the identity; then parents, then poses.
+            // (A restored scene holds one slot per id up to the largest, as the original did.)
             std::map<ModelId, py::tuple> byId;
             for (py::handle m : models) {
+              if (!py::isinstance<py::tuple>(m) || py::len(m) != 4)
+                throw InvalidInput("Scene pickle: a model is (id, mesh, pose, parent)");
               const py::tuple t = m.cast<py::tuple>();
-              if (t.size() != 4) throw InvalidInput("Scene pickle: a model is (id, mesh, pose, parent)");
-              byId[t[0].cast<ModelId>()] = t;
+              const ModelId id = modelId(t[0], "Scene pickle: id");
+              if (id == kNoModel || !byId.emplace(id, t).second)
+                throw InvalidInput("Scene pickle: model ids must be distinct ints");
             }
             if (byId.empty()) return s;
             const std::shared_ptr<PyMesh> any = pickledMesh(byId.begin()->second[1]);
@@ -331,7 +336,7 @@ Pickles its models (ids, meshes, poses, parents).
                 s->meshes.erase(id);
               }
             for (const auto& [id, t] : byId)
-              if (!t[3].is_none()) s->scene.setParent(id, t[3].cast<ModelId>());
+              if (!t[3].is_none()) s->scene.setParent(id, modelId(t[3], "Scene pickle: parent"));
             for (const auto& [id, t] : byId) {
               const RealArray row = RealArray::ensure(t[2]);
               if (!row || row.size() != 7) throw InvalidInput("Scene pickle: a pose is 7 numbers");

@@ -153,7 +153,14 @@ def test_a_malformed_scene_pickle_raises():
     cls, (state,) = s.__reduce__()
     assert len(cls(state)) == len(s)
     pose = state[0][0][2]
-    for bad in ([(0, None, pose, None)], [(0, "not a mesh", pose, None)], [(0, cube)]):
+    for bad in ([(0, None, pose, None)], [(0, "not a mesh", pose, None)], [(0, cube)], [[0, cube, pose, None]],
+                [(-1, cube, pose, None)], [(2**32 - 1, cube, pose, None)], [(0, cube, pose, None)] * 2,
+                [(0, cube, pose, 7)]):
         with pytest.raises(ValueError):
-            cls((bad,))  # None as the mesh segfaulted
+            cls((bad,))  # None as the mesh segfaulted; 2**32 - 1 never ended
+    for bad in ([(0.5, cube, pose, None)], [(0, cube, pose, "0")]):
+        with pytest.raises(TypeError):
+            cls((bad,))
+    with pytest.raises(ValueError):
+        cls((tuple(state[0]),))  # models must be a list
 
