@@ -192,69 +192,6 @@ MeshStats Mesh::stats() const {
   return s;
 }
 
-// ---- closedness ------------------------------------------------------------------------------
-
-std::string MeshClosedness::reason(const std::string& meshName) const {
-  if (closed()) return {};
-  std::string head = "mesh \"" + meshName + "\" is not closed: ";
-  if (effectiveTriangles == 0) return head + "it has no triangle with three distinct vertex indices";
-  std::string why = "edge (" + std::to_string(edgeI) + "," + std::to_string(edgeJ) + ") is used ";
-  if (edgeSameDirection)
-    why += "twice in the same direction (inconsistent orientation)";
-  else
-    why += "by " + std::to_string(edgeUses) + (edgeUses == 1 ? " triangle" : " triangles");
-  return head + why + " (" + std::to_string(boundaryEdges) + " boundary, " + std::to_string(nonManifoldEdges) +
-         " non-manifold, " + std::to_string(inconsistentEdges) + " inconsistently oriented edges)";
-}
-
-MeshClosedness closedness(const Mesh& mesh) {
-  struct DirectedEdge {
-    std::uint32_t lo, hi;
-    bool forward;  // lo -> hi in the triangle's order
-  };
-  MeshClosedness c;
-  std::vector<DirectedEdge> edges;
-  edges.reserve(mesh.triangleCount() * 3);
-  for (const TriangleIndices& t : mesh.triangles()) {
-    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) {
-      ++c.skippedTriangles;
-      continue;
-    }
-    ++c.effectiveTriangles;
-    for (int e = 0; e < 3; ++e) {
-      const std::uint32_t i = t[e], j = t[(e + 1) % 3];
-      edges.push_back(i < j ? DirectedEdge{i, j, true} : DirectedEdge{j, i, false});
-    }
-  }
-  std::sort(edges.begin(), edges.end(), [](const DirectedEdge& a, const DirectedEdge& b) {
-    return a.lo != b.lo ? a.lo < b.lo : a.hi < b.hi;
-  });
-  bool recorded = false;
-  for (std::size_t g = 0; g < edges.size();) {
-    std::size_t e = g, forward = 0;
-    while (e < edges.size() && edges[e].lo == edges[g].lo && edges[e].hi == edges[g].hi) forward += edges[e++].forward;
-    const std::size_t uses = e - g;
-    bool bad = true;
-    if (uses == 1)
-      ++c.boundaryEdges;
-    else if (uses > 2)
-      ++c.nonManifoldEdges;
-    else if (forward != 1)
-      ++c.inconsistentEdges;
-    else
-      bad = false;
-    if (bad && !recorded) {
-      recorded = true;
-      c.edgeI = edges[g].lo, c.edgeJ = edges[g].hi, c.edgeUses = uses;
-      c.edgeSameDirection = uses == 2;
-    }
-    g = e;
-  }
-  return c;
-}
-
-bool isClosed(const Mesh& mesh) { return closedness(mesh).closed(); }
-
 std::size_t Mesh::memoryBytes() const {
   return vertices_.capacity() * sizeof(Vec3) + (triangles_.capacity() + slotTriangles_.capacity()) * sizeof(TriangleIndices) +
          bvh_.memoryBytes();

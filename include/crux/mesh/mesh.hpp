@@ -139,7 +139,8 @@ Mesh loadMesh(const std::string& path, const BvhBuildOptions& options = {});
 void requireCurrentGeometry(const Mesh& mesh, std::uint64_t builtFrom, const char* object);
 
 /// Directed-edge census of the mesh's topology (sort-based, O(n log n)): the one rule of what
-/// "closed" means, for Mesh::stats, MeshVolume and `crux info`.
+/// "closed" means, for Mesh::stats, MeshVolume and `crux info` (defined in mesh_volume.cpp,
+/// beside the volume queries that require it).
 MeshClosedness closedness(const Mesh& mesh);
 /// closedness(mesh).closed().
 bool isClosed(const Mesh& mesh);

@@ -39,8 +39,6 @@
 
 namespace crux {
 
-// MeshClosedness, closedness() and isClosed() are declared in mesh.hpp.
-
 /// A closed mesh viewed as a solid. The constructor checks closedness once (throws
 /// InvalidInput: `mesh "name" is not closed: edge (i,j) is used by 1 triangle`); queries then
 /// neither allocate nor throw. Holds a reference: the mesh must outlive it and keep its
