@@ -158,11 +158,12 @@ CastFind readCastFind(const Json& request) {
   return it->get<bool>() ? CastFind::Any : CastFind::Closest;
 }
 
-/// "hit"; when hit and known "t", then (when the backend reports them) "point_a", "point_b",
-/// "normal", "starts_overlapping", "depth", "capped" (only when true), and "triangle" / "model"
-/// when known.
+/// "hit", "capped" (only when true); when hit and known "t", then (when the backend reports them)
+/// "point_a", "point_b", "normal", "starts_overlapping", "depth", and "triangle" / "model" when
+/// known.
 void writeCast(Answer& answer, const WorldCast& c, const BatchState& state, WorldOp op) {
   answer["hit"] = c.hit;
+  if (c.capped) answer["capped"] = true;
   if (!c.hit || !c.timeKnown) {
     if (c.hit) answer["t"] = nullptr;
     return;
@@ -175,7 +176,6 @@ void writeCast(Answer& answer, const WorldCast& c, const BatchState& state, Worl
   }
   answer["starts_overlapping"] = c.startsOverlapping;
   if (c.witnessKnown) answer["depth"] = writeDouble(c.depth, "depth");
-  if (c.capped) answer["capped"] = true;
   if (c.triangleB) answer["triangle"] = *c.triangleB;
   if (c.model.valid()) answer["model"] = state.modelName(c.model, op);
 }

@@ -60,8 +60,8 @@ class LinearMover {
   V3 v_;
 };
 
-/// Rigid motion: A(t) at poseAt(motion, t); approach speed along -n at most
-/// -n·(t1 - t0) + θ·r_max (θ the rotation angle, r_max the shape's size about its origin).
+/// Rigid motion: A(t) at poseAt(motion, t) (slerp about the fixed world axis u, θ the rotation
+/// angle, r_max the shape's size about its origin); its steps: step() below.
 class RigidMover {
  public:
   RigidMover(const ConvexShape& a, const RigidMotion& m)

@@ -335,7 +335,7 @@ TEST(BatchErrors, DeeplyNestedIdOrOpIsNamedNotEchoed) {
   EXPECT_EQ(errorOf(ask(R"({"id":)" + deep + ",")).rfind("invalid JSON: ", 0), 0u);
 }
 
-TEST(BatchErrors, NulByteEndsNothing) {
+TEST(BatchErrors, NulByteOutsideAStringIsInvalidJson) {
   // The parser reads a NUL as the end of its input: what follows must not be ignored.
   const Answer a = ask(std::string(R"({"id":"n","op":"scene_pairs"})") + '\0' + "this is not json");
   EXPECT_EQ(a.dump(), R"({"id":"n","op":"scene_pairs","error":"invalid JSON: NUL byte at column 30"})");

@@ -153,8 +153,8 @@ TEST(CastClosedForm, RotatingSegmentSweepsIntoAPointAtTheSlerpAngle) {
 
 TEST(CastClosedForm, ShapeTurningPastBWithoutApproachingItMissesInFewSteps) {
   // A unit ball 1000 from its origin turns 2 rad about z around a ball of radius 998: always 1
-  // apart. The bound θ·|u × n|·r_max alone (2,002 per unit time against a gap of 1) needed ~2,000
-  // steps and stopped at the cap, reported as a hit; the support bound sees it move across n.
+  // apart. The bound θ·|u × n|·r_max (2,002 per unit time against a gap of 1) would take ~2,000
+  // steps, beyond the cap; the support bound sees the ball move across n.
   const Sphere orbiting{Vec3(1000, 0, 0), 1};
   const Sphere centre{Vec3::Zero(), 998};
   RigidMotion motion;
@@ -264,8 +264,8 @@ TEST(CastSemantics, DegenerateTrianglesAreTheirSegmentsAndPoints) {
 
 TEST(CastSemantics, GridPairsFarFromTheOriginDecideAsAtTheOrigin) {
   // Integer-grid pairs translated by 2^22 (exact in float: the ulp there is 1/2). The contact
-  // tolerance grew with the distance from the origin (1.5e-3 here), so segments 4e-4 apart read
-  // as touching; it now depends on the pair's extent, with GJK's own tolerance as its floor.
+  // tolerance follows the pair's extent, floored at twice GJK's tolerance (6.5e-6 here, below
+  // the grid's clearances), so segments 4e-4 apart do not touch there, as at the origin.
   const Real far = Real(1 << 22);
   const auto at = [](const Vec3& offset, const std::array<std::array<int, 3>, 3>& corners) {
     Triangle t;

@@ -24,16 +24,18 @@
 /// linearly (the gap halves per step).
 ///
 /// Contact tolerance δ = kCastRelativeTolerance × S, S = the pair's extent (the diagonal of the
-/// box holding both shapes at the start) plus the length of the motion, so that a pair far from
-/// the origin gets the δ of the same pair at the origin; but at least twice GJK's absolute
-/// tolerance, 2 × kGjkScaleTolerance × (the shapes' sizes about their origins, the distance
-/// between the origins and the motion's length), which keeps every step short of the contact
-/// despite GJK's rounding; and at most kCastRelativeTolerance × that same sum. A pair whose
+/// box holding both shapes at the start) plus the length of the motion; but at least twice GJK's
+/// absolute tolerance, 2 × kGjkScaleTolerance × (the shapes' sizes about their origins, the
+/// distance between the origins and the motion's length), which keeps every step short of the
+/// contact despite GJK's rounding; and at most kCastRelativeTolerance × that same sum. So δ
+/// follows the pair's own size near the origin; far from it the floor, which grows with the
+/// distance from the origin, takes over (6.5e-6 for a pair of size 64 at 2^22, against 1.6e-8
+/// at the origin). A pair whose
 /// closest approach along the motion is within δ is a hit (grazing counts: shapes are closed
 /// sets). On integer-grid inputs (|coordinates| <= 64, integer motions, axis-aligned rotations) a
 /// miss keeps a clearance far larger than δ, so hit or miss is exactly right there (tested against
-/// the exact backend), also for such a grid translated by 2^22 (tested: the same answers as at the
-/// origin).
+/// the exact backend); translated by 2^22 the grid's smallest clearances (~1.6e-5) still exceed
+/// the floored δ (6.5e-6), so it decides as at the origin there (tested), but not beyond ~2^24.
 ///
 /// Semantics: zero motion is an overlap test (t = 0 on a hit); a cast that starts touching or
 /// overlapping hits at t = 0 with startsOverlapping set and the penetration depth (EPA; 0 when
@@ -54,8 +56,7 @@
 /// wins: r·(u × n) is at most h, A's support along u × n at t, and changes by at most
 /// θ·|u × n|·r_max per unit time as r turns about u, so the speed s after t is at most
 /// −n·(t1 − t0) + θ·h + θ²·|u × n|·r_max·s and the step solves the quadratic for the gap. A shape
-/// far from its origin turning past B without approaching it then advances in long steps, where
-/// the first bound alone needed ~θ·r_max / gap of them.
+/// far from its origin turning past B without approaching it advances in long steps.
 
 #include <crux/geometry/gjk.hpp>
 
