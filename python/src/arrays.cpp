@@ -6,6 +6,8 @@
 #include <crux/model/model_query.hpp>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <type_traits>
 
 namespace crux::python {
@@ -45,6 +47,14 @@ const char* realName() { return std::is_same_v<Real, float> ? "float32" : "float
 py::array_t<std::int64_t> asIntegerArray(py::handle obj, const char* name, const char* shape) {
   using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
   const py::array raw = py::array::ensure(obj);
+  if (raw && raw.dtype().kind() == 'u' && raw.dtype().itemsize() >= 8) {
+    // unsigned values past the int64 range would wrap to negative ones in the conversion
+    using WideArray = py::array_t<std::uint64_t, py::array::c_style | py::array::forcecast>;
+    if (const WideArray u = WideArray::ensure(raw))
+      for (py::ssize_t i = 0; i < u.size(); ++i)
+        if (u.data()[i] > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+          throw InvalidInput(std::string(name) + ": " + std::to_string(u.data()[i]) + " is beyond the int64 range");
+  }
   if (raw && (raw.size() == 0 || raw.dtype().kind() == 'i' || raw.dtype().kind() == 'u'))
     if (IndexArray out = IndexArray::ensure(raw)) return out;
   PyErr_Clear();

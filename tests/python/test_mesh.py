@@ -257,3 +257,10 @@ def test_stats_closed_is_the_volume_rule():
     st = crux.Mesh(cube.vertices, flipped).stats()
     assert st["inconsistent_edges"] == 3 and not st["closed"]
 
+
+def test_unsigned_indices_beyond_int64_are_named_not_wrapped():
+    v = np.eye(3)
+    with pytest.raises(ValueError, match="triangles: 18446744073709551615 is beyond the int64 range"):
+        crux.Mesh(v, np.array([[0, 1, 2**64 - 1]], dtype=np.uint64))
+    assert len(crux.Mesh(v, np.array([[0, 1, 2]], dtype=np.uint64))) == 1
+
