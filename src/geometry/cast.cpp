@@ -123,15 +123,12 @@ Real roundDown(double t) {
   return r;
 }
 
-/// Grows the box [lo, hi] by a placed shape (its core vertices, grown by its radius).
+/// Grows the box [lo, hi] by a placed shape (its core box grown by its radius).
 void growBox(const Placed& p, V3& lo, V3& hi) {
-  for (int i = 0; i < p.vertexCount(); ++i) {
-    const V3 v = p.vertex(i);
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
-  lo.array() -= p.radius;
-  hi.array() += p.radius;
+  V3 coreLo = V3::Constant(std::numeric_limits<double>::infinity()), coreHi = -coreLo;
+  p.growCoreBox(coreLo, coreHi);
+  lo = lo.cwiseMin(V3(coreLo.array() - p.radius));
+  hi = hi.cwiseMax(V3(coreHi.array() + p.radius));
 }
 
 /// The contact tolerance δ of a cast of A (at its start) against B over a motion of the given

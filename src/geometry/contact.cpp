@@ -293,7 +293,7 @@ bool polytopeWithin(const Placed& P, const V3* q, int nq, double rP, double rQ, 
 bool polytopesWithin(const Placed& P, const Placed& Q, double rP, double rQ, double margin, double slack) {
   if (polytopeHolds(P, Q.vertex(0)) || polytopeHolds(Q, P.vertex(0))) return true;
   V3 lo = Q.vertex(0), hi = lo;
-  for (int i = 1; i < Q.vertexCount(); ++i) lo = lo.cwiseMin(Q.vertex(i)), hi = hi.cwiseMax(Q.vertex(i));
+  Q.growCoreBox(lo, hi);
   const double reach = rP + rQ + margin + slack;
   return anyBoundaryTriangleIn(P, lo.array() - reach, hi.array() + reach, [&](const V3& a, const V3& b, const V3& c) {
     const V3 t[3] = {a, b, c};

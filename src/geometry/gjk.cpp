@@ -110,6 +110,14 @@ V3 Placed::support(const V3& d, int* index) const {
   return vertex(best);
 }
 
+void Placed::growCoreBox(V3& lo, V3& hi) const {
+  for (int i = 0; i < vertexCount(); ++i) {
+    const V3 v = vertex(i);
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+}
+
 V3 Placed::center() const {
   switch (shape->kind) {
     case ConvexKind::Sphere:

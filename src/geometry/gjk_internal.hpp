@@ -33,6 +33,8 @@ struct Placed {
   V3 vertex(int i) const;
   /// A point inside the core (the centroid of its defining points).
   V3 center() const;
+  /// Grows the box [lo, hi] by the world core vertices (the radius not included).
+  void growCoreBox(V3& lo, V3& hi) const;
   int vertexCount() const { return shape->vertexCount(); }
 
  private:
